@@ -1,0 +1,62 @@
+# mtaccuracy: every target creates .venv from environment.txt when it is missing.
+#   make reproduce              all notebooks, in order, in place; then the scorecard
+#   make reproduce NB=03        one notebook (a number, a stem or a path)
+#   make reproduce NB=03 PARAMS="n_samples=1000 seed=7"   with validated parameters
+#   make test | lab | bench | clean | lock
+
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed-$(shell cat environment.txt pyproject.toml | cksum | cut -d' ' -f1)
+NB ?= all
+PARAMS ?=
+PIP := $(PY) -m pip --disable-pip-version-check --no-input
+
+.PHONY: reproduce test lab bench clean distclean lint venv lock
+
+venv: $(STAMP)
+
+$(STAMP): environment.txt pyproject.toml
+	@echo "==> setting up $(VENV) from environment.txt (first time: a few minutes)"
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	@$(PIP) install --quiet "$$(grep -E '^pip==' environment.txt)"
+	@$(PIP) install --quiet -r environment.txt
+	@$(PIP) install --quiet --no-deps --no-build-isolation -e .
+	@rm -f $(VENV)/.installed-*
+	@touch $@
+	@echo "==> $(VENV) ready"
+
+reproduce: $(STAMP)
+	$(PY) -m mtaccuracy.runner $(NB) $(PARAMS)
+	$(PY) -m mtaccuracy.reproduction gather
+
+test: $(STAMP)
+	$(PY) -m ruff check lib tests notebooks conftest.py
+	$(PY) -m pytest --nbval-lax
+
+lint: $(STAMP)
+	$(PY) -m ruff check lib tests notebooks conftest.py
+
+lab: $(STAMP)
+	$(VENV)/bin/jupyter lab notebooks
+
+bench: $(STAMP)
+	$(PY) -m mtaccuracy.bench
+
+# Regenerate the lock from the direct requirements in a throw-away venv.
+lock:
+	rm -rf /tmp/mtaccuracy-lock && $(PYTHON) -m venv /tmp/mtaccuracy-lock
+	/tmp/mtaccuracy-lock/bin/pip install --quiet --upgrade pip setuptools
+	/tmp/mtaccuracy-lock/bin/pip install --quiet jupyterlab papermill numpy scipy SALib chaospy \
+	    pandas matplotlib nbval scikit-learn ipykernel pytest ruff sympy
+	{ head -3 environment.txt; /tmp/mtaccuracy-lock/bin/pip freeze --all; } > environment.txt.new
+	mv environment.txt.new environment.txt
+
+clean:
+	rm -rf notebooks/.running notebooks/.failed .pytest_cache .ruff_cache .test-output build
+	find . -path ./.venv -prune -o -name __pycache__ -type d -exec rm -rf {} +
+	find . -path ./.venv -prune -o -name .ipynb_checkpoints -type d -exec rm -rf {} +
+
+distclean: clean
+	rm -rf $(VENV) notebooks/.backup lib/*.egg-info

@@ -1,0 +1,33 @@
+"""Test-session setup shared by the unit tests and the notebook (nbval) items.
+
+Executed notebooks write their figures and tables under ``.test-output/`` (through
+``$MTACCURACY_OUTPUT_BASE``), never over the committed ``figures/``; items marked
+``after_notebooks`` run after every notebook item, so they can compare what the notebooks
+just regenerated with what is committed.
+"""
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent
+TEST_OUTPUT = ROOT / ".test-output"
+
+
+def pytest_configure(config):
+    if os.environ.get("PYTEST_XDIST_WORKER") is None:
+        shutil.rmtree(TEST_OUTPUT, ignore_errors=True)
+    TEST_OUTPUT.mkdir(exist_ok=True)
+    os.environ["MTACCURACY_OUTPUT_BASE"] = str(TEST_OUTPUT)
+
+
+def pytest_collection_modifyitems(config, items):
+    late = [i for i in items if i.get_closest_marker("after_notebooks")]
+    items[:] = [i for i in items if i not in late] + late
+
+
+@pytest.fixture(scope="session")
+def test_output() -> Path:
+    return TEST_OUTPUT

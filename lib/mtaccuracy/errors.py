@@ -1,0 +1,128 @@
+"""Error catalogues: paper symbols, ISO 230-1 codes, kinds and units.
+
+A catalogue is an ordered tuple of :class:`ErrorSpec`; its order is the paper's order and
+the column order of every ``(n, n_errors)`` error array.  The library works in mm and rad;
+``paper_unit`` and ``to_library`` say how the paper's numbers convert.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import paths
+
+#: Paper units -> library units (mm, rad).
+UNIT_SCALE = {"um": 1e-3, "mm": 1.0, "rad": 1.0, "urad": 1e-6, "um/m": 1e-6,
+              "arcsec": np.pi / 180 / 3600}
+
+_ROT = {"x": "A", "y": "B", "z": "C"}
+
+
+@dataclass(frozen=True)
+class ErrorSpec:
+    """One geometric error.
+
+    symbol: the paper's symbol in ASCII (``dx(z)``: x-direction error of the Z axis);
+    iso_code: ISO 230-1 code (``EXZ``); kind: positioning, straightness, angular or squareness;
+    axis: the moving axis it belongs to (for squareness: the pair, e.g. ``xy``);
+    direction: the coordinate it acts along (translations) or about (rotations);
+    translational: True for a displacement (mm), False for an angle (rad);
+    position_dependent: True for error motions, False for location errors (squareness);
+    paper_unit: the unit of the paper's ranges for this error.
+    """
+
+    symbol: str
+    iso_code: str
+    kind: str
+    axis: str
+    direction: str
+    translational: bool
+    position_dependent: bool
+    paper_unit: str
+
+    @property
+    def to_library(self) -> float:
+        """Factor that converts a value in ``paper_unit`` to mm or rad."""
+        return UNIT_SCALE[self.paper_unit]
+
+
+def _motion(kind: str, direction: str, axis: str, angular_unit: str) -> ErrorSpec:
+    if kind == "angular":
+        return ErrorSpec(f"e{direction}({axis})", f"E{_ROT[direction]}{axis.upper()}", kind,
+                         axis, direction, False, True, angular_unit)
+    return ErrorSpec(f"d{direction}({axis})", f"E{direction.upper()}{axis.upper()}", kind, axis,
+                     direction, True, True, "um")
+
+
+def three_axis_catalogue(angular_unit: str = "rad") -> tuple[ErrorSpec, ...]:
+    """The 21 errors of a three-axis machine in the order of Guo et al. 2016, Table 1.
+
+    3 positioning, 6 straightness, 9 angular error motions, 3 squareness errors.  Squareness
+    ``S_ij`` is the out-of-squareness of axes i and j, as an angle in um/m; its ISO 230-1 code
+    follows ../iso230-names.csv (``S_xy`` -> EC0Y: Y to X about Z, X the reference).
+    """
+    cat = [_motion("positioning", a, a, angular_unit) for a in "xyz"]
+    cat += [_motion("straightness", d, a, angular_unit)
+            for a, d in (("x", "y"), ("x", "z"), ("y", "x"), ("y", "z"), ("z", "x"), ("z", "y"))]
+    cat += [_motion("angular", d, a, angular_unit) for a in "xyz" for d in "xyz"]
+    cat += [
+        ErrorSpec("S_xy", "EC0Y", "squareness", "xy", "z", False, False, "um/m"),
+        ErrorSpec("S_yz", "EA0Z", "squareness", "yz", "x", False, False, "um/m"),
+        ErrorSpec("S_xz", "EB0Z", "squareness", "xz", "y", False, False, "um/m"),
+    ]
+    return tuple(cat)
+
+
+def symbols(catalogue: tuple[ErrorSpec, ...]) -> list[str]:
+    """Paper symbols of a catalogue, in order."""
+    return [e.symbol for e in catalogue]
+
+
+def iso_names(path=None) -> dict[str, str]:
+    """The working map paper symbol -> ISO 230-1 code from ``data/iso230/iso230_names.csv``.
+
+    That file writes the symbols as ``d_xz`` (x error of Z) and ``e_zx``; this returns them
+    as given there.
+    """
+    path = path or paths.DATA / "iso230" / "iso230_names.csv"
+    with open(path, newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    missing = {"paper_symbol", "iso230_code"} - set(rows[0] if rows else {})
+    if missing:
+        raise ValueError(f"{path}: missing columns {sorted(missing)}")
+    return {r["paper_symbol"]: r["iso230_code"] for r in rows}
+
+
+def uniform_bounds(catalogue: tuple[ErrorSpec, ...],
+                   ranges: dict[str, tuple[float, float]]) -> np.ndarray:
+    """Lower and upper bounds (2, n_errors) in library units from per-kind ranges.
+
+    ``ranges`` maps each kind present in the catalogue (positioning, straightness, angular,
+    squareness) to ``(low, high)`` in the paper's unit of that kind.
+    """
+    kinds = {e.kind for e in catalogue}
+    unknown = set(ranges) - kinds
+    if unknown:
+        raise ValueError(f"unknown error kind(s) {sorted(unknown)}; allowed: {sorted(kinds)}")
+    missing = kinds - set(ranges)
+    if missing:
+        raise ValueError(f"no range given for error kind(s) {sorted(missing)}")
+    out = np.empty((2, len(catalogue)))
+    for j, e in enumerate(catalogue):
+        lo, hi = ranges[e.kind]
+        if not hi > lo:
+            raise ValueError(f"range for {e.kind} must have high > low, got ({lo}, {hi})")
+        out[:, j] = lo * e.to_library, hi * e.to_library
+    return out
+
+
+def select(catalogue: tuple[ErrorSpec, ...], names) -> list[int]:
+    """Column indices of the named errors; an unknown name raises with the allowed ones."""
+    syms = symbols(catalogue)
+    bad = [n for n in names if n not in syms]
+    if bad:
+        raise ValueError(f"unknown error name(s) {bad}; allowed: {', '.join(syms)}")
+    return [syms.index(n) for n in names]

@@ -1,0 +1,121 @@
+"""Rigid-body motion, batched over a leading sample axis.
+
+Every function takes arrays whose *last* axes carry the geometry (3-vectors, 4x4 matrices)
+and broadcasts over any leading axes, so ``(n, 3)`` error samples give ``(n, 4, 4)``
+transforms without a Python loop.  Units: mm and rad.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def hat(w: np.ndarray) -> np.ndarray:
+    """Skew-symmetric matrix ``[w]x`` of 3-vectors ``w`` (..., 3) -> (..., 3, 3)."""
+    w = np.asarray(w, dtype=float)
+    z = np.zeros(w.shape[:-1])
+    wx, wy, wz = w[..., 0], w[..., 1], w[..., 2]
+    return np.stack(
+        [
+            np.stack([z, -wz, wy], axis=-1),
+            np.stack([wz, z, -wx], axis=-1),
+            np.stack([-wy, wx, z], axis=-1),
+        ],
+        axis=-2,
+    )
+
+
+def vee(m: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`hat` applied to the skew-symmetric part of ``m`` (..., 3, 3)."""
+    m = np.asarray(m, dtype=float)
+    s = 0.5 * (m - np.swapaxes(m, -1, -2))
+    return np.stack([s[..., 2, 1], s[..., 0, 2], s[..., 1, 0]], axis=-1)
+
+
+def rotation_exp(w: np.ndarray) -> np.ndarray:
+    """Exact rotation matrix of rotation vectors ``w`` (Rodrigues), (..., 3) -> (..., 3, 3)."""
+    w = np.asarray(w, dtype=float)
+    theta = np.linalg.norm(w, axis=-1)[..., None, None]
+    k = hat(w)
+    small = theta < 1e-8
+    safe = np.where(small, 1.0, theta)
+    a = np.where(small, 1.0 - theta**2 / 6.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - theta**2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    return np.eye(3) + a * k + b * (k @ k)
+
+
+def homogeneous(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
+    """Assemble (..., 4, 4) transforms from rotations (..., 3, 3) and translations (..., 3)."""
+    rotation = np.asarray(rotation, dtype=float)
+    translation = np.asarray(translation, dtype=float)
+    shape = np.broadcast_shapes(rotation.shape[:-2], translation.shape[:-1])
+    t = np.zeros(shape + (4, 4))
+    t[..., :3, :3] = rotation
+    t[..., :3, 3] = translation
+    t[..., 3, 3] = 1.0
+    return t
+
+
+def translation(v: np.ndarray) -> np.ndarray:
+    """Pure translations, (..., 3) -> (..., 4, 4)."""
+    v = np.asarray(v, dtype=float)
+    return homogeneous(np.broadcast_to(np.eye(3), v.shape[:-1] + (3, 3)), v)
+
+
+def error_transform(delta: np.ndarray, eps: np.ndarray, *, exact: bool = False) -> np.ndarray:
+    """Transform of a small error motion: translation ``delta`` and rotation ``eps``.
+
+    ``exact=False`` gives the first-order (small-angle) matrix that the papers print,
+    ``[[1, -ez, ey, dx], [ez, 1, -ex, dy], [-ey, ex, 1, dz], [0, 0, 0, 1]]``;
+    ``exact=True`` uses the exact rotation ``exp([eps]x)``.
+    """
+    delta = np.asarray(delta, dtype=float)
+    eps = np.asarray(eps, dtype=float)
+    rot = rotation_exp(eps) if exact else np.eye(3) + hat(eps)
+    return homogeneous(rot, delta)
+
+
+def twist_exp(omega: np.ndarray, v: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Exponential of the twist (omega, v) times ``theta``: the screw motion as (..., 4, 4).
+
+    ``omega`` (..., 3) is a unit axis direction (or zero for a prismatic joint), ``v`` (..., 3)
+    the linear part, ``theta`` (...) the joint value (rad for revolute, mm for prismatic).
+    """
+    omega = np.asarray(omega, dtype=float)
+    v = np.asarray(v, dtype=float)
+    theta = np.asarray(theta, dtype=float)[..., None]
+    w = omega * theta
+    rot = rotation_exp(w)
+    k = hat(omega)
+    th = theta[..., None]
+    # Translation part: (I*theta + (1-cos)K + (theta - sin)K^2) v for a unit axis; theta*v
+    # for a prismatic joint (omega = 0, where K = 0 makes the same formula exact).
+    g = np.eye(3) * th + (1.0 - np.cos(th)) * k + (th - np.sin(th)) * (k @ k)
+    p = (g @ v[..., None])[..., 0]
+    return homogeneous(rot, p)
+
+
+def chain(*transforms: np.ndarray) -> np.ndarray:
+    """Product of (..., 4, 4) transforms from left to right, broadcasting leading axes."""
+    out = np.asarray(transforms[0], dtype=float)
+    for t in transforms[1:]:
+        out = out @ t
+    return out
+
+
+def apply(transform: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """Apply (..., 4, 4) transforms to points (..., 3)."""
+    point = np.asarray(point, dtype=float)
+    return (transform[..., :3, :3] @ point[..., None])[..., 0] + transform[..., :3, 3]
+
+
+def pose_difference(actual: np.ndarray, ideal: np.ndarray) -> np.ndarray:
+    """Six-component pose error of ``actual`` against ``ideal`` (..., 4, 4) -> (..., 6).
+
+    ``[Px, Py, Pz]`` is the difference of the origins (mm); ``[Vx, Vy, Vz]`` is the small
+    rotation vector ``vee(R_actual R_ideal^T)`` (rad, first order), both in the reference frame
+    of the transforms.
+    """
+    p = actual[..., :3, 3] - ideal[..., :3, 3]
+    r = actual[..., :3, :3] @ np.swapaxes(ideal[..., :3, :3], -1, -2)
+    return np.concatenate([p, vee(r)], axis=-1)

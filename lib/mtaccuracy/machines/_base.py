@@ -1,0 +1,73 @@
+"""What every machine shares: the error catalogue, pose checking and the pose error."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from .. import errors as _errors
+from ..kinematics import pose_difference
+
+POSE_COMPONENTS = ("Px", "Py", "Pz", "Vx", "Vy", "Vz")
+
+
+class Machine:
+    """Base class: subclasses set ``name``, ``axes``, ``tool_offsets``, ``catalogue`` and
+    implement ``transforms(errors, pose) -> (actual, ideal)`` (each ``(n, 4, 4)``: the tool
+    frame in the workpiece frame)."""
+
+    name: str = ""
+    axes: tuple[str, ...] = ()
+    tool_offsets: tuple[str, ...] = ()
+    catalogue: tuple[_errors.ErrorSpec, ...] = ()
+
+    @property
+    def error_names(self) -> list[str]:
+        return _errors.symbols(self.catalogue)
+
+    @property
+    def n_errors(self) -> int:
+        return len(self.catalogue)
+
+    def check_errors(self, errors) -> np.ndarray:
+        e = np.asarray(errors, dtype=float)
+        if e.ndim != 2 or e.shape[1] != self.n_errors:
+            raise ValueError(
+                f"errors for {self.name} must have shape (n, {self.n_errors}) "
+                f"(columns: {', '.join(self.error_names)}), got {e.shape}"
+            )
+        return e
+
+    def check_pose(self, pose: Mapping, n: int) -> dict[str, np.ndarray]:
+        """Validate a pose mapping; axes are required, tool offsets default to 0."""
+        if not isinstance(pose, Mapping):
+            raise TypeError(f"pose must be a mapping of {self.axes + self.tool_offsets}")
+        allowed = self.axes + self.tool_offsets
+        unknown = [k for k in pose if k not in allowed]
+        if unknown:
+            raise ValueError(f"unknown pose name(s) {unknown} for {self.name}; "
+                             f"allowed: {', '.join(allowed)}")
+        missing = [a for a in self.axes if a not in pose]
+        if missing:
+            raise ValueError(f"pose for {self.name} lacks axis value(s) {missing}")
+        out = {}
+        for k in allowed:
+            v = np.asarray(pose.get(k, 0.0), dtype=float)
+            if v.ndim > 1 or (v.ndim == 1 and v.shape[0] not in (1, n)):
+                raise ValueError(f"pose[{k!r}] must be a scalar or have shape ({n},), "
+                                 f"got {v.shape}")
+            out[k] = np.broadcast_to(v, (n,))
+        return out
+
+    def transforms(self, errors: np.ndarray, pose: Mapping) -> tuple[np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+    def pose_error(self, errors, pose: Mapping) -> np.ndarray:
+        """(n, 6) pose error ``Px, Py, Pz`` (mm), ``Vx, Vy, Vz`` (rad) of the tool in the
+        workpiece frame, actual minus ideal, from the full (untruncated) matrix product."""
+        actual, ideal = self.transforms(errors, pose)
+        return pose_difference(actual, ideal)
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r}: {self.n_errors} errors, axes {self.axes}>"

@@ -1,0 +1,205 @@
+"""The three-axis vertical XYFZ machine of Guo et al. 2016 (Fig. 2, Eqs. 1-13).
+
+Topology (Fig. 2): the workpiece sits on the X table, which rides on the Y carriage on the bed
+(R); the spindle (S) and tool (T) are carried by the Z ram on the bed.  The paper chains the
+frames in one series, workpiece <- X <- Y <- R <- Z <- S <- T (Eq. 9), with each axis' ideal
+motion followed by its error matrix (Eqs. 6-8):
+
+    W_T = T(x) E_X  T(y) E_Y  T(z) E_Z  T(D1, D2, D3)
+
+and the tool-tip error E = (W_T^e - W_T^i) [0 0 0 1]^T (Eq. 10).  In this convention x, y, z
+are the commanded *relative* tool-to-workpiece coordinates and every error enters with the
+sign the paper prints; the squareness errors enter the translations of Y and Z as
+``dx(y) - y S_xy``, ``dx(z) - z S_xz``, ``dy(z) - z S_yz`` (Eqs. 7-8).
+
+The library evaluates the full product of the paper's small-angle matrices (no truncation);
+``exact=True`` uses exact rotations instead.  :func:`printed_closed_form` transcribes the
+paper's second-order Eqs. 11-13 as printed, typos included, and :func:`second_order` derives
+the correct second-order expansion with sympy, so the two can be compared term by term
+(:func:`closed_form_typos`).  This module is hand-written because the error model is the
+paper's own contribution; sympy does the algebra.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from .. import errors as _errors
+from ..kinematics import chain, error_transform, translation
+from ._base import Machine
+
+AXES = ("x", "y", "z")
+TOOL_OFFSETS = ("D1", "D2", "D3")
+
+
+class VerticalXYFZ(Machine):
+    """Guo et al. 2016's XYFZ vertical machine; ``exact=True`` for exact rotation matrices."""
+
+    name = "vertical_xyfz"
+    axes = AXES
+    tool_offsets = TOOL_OFFSETS
+
+    def __init__(self, exact: bool = False):
+        self.catalogue = _errors.three_axis_catalogue()
+        self.exact = bool(exact)
+        idx = {s: j for j, s in enumerate(self.error_names)}
+        self._delta = {a: [idx[f"d{d}({a})"] for d in AXES] for a in AXES}
+        self._eps = {a: [idx[f"e{d}({a})"] for d in AXES] for a in AXES}
+        self._sq = {s: idx[s] for s in ("S_xy", "S_yz", "S_xz")}
+
+    def transforms(self, errors, pose: Mapping) -> tuple[np.ndarray, np.ndarray]:
+        e = self.check_errors(errors)
+        n = e.shape[0]
+        p = self.check_pose(pose, n)
+        zero = np.zeros(n)
+        x, y, z = p["x"], p["y"], p["z"]
+        d = {a: e[:, self._delta[a]].copy() for a in AXES}
+        d["y"][:, 0] -= y * e[:, self._sq["S_xy"]]
+        d["z"][:, 0] -= z * e[:, self._sq["S_xz"]]
+        d["z"][:, 1] -= z * e[:, self._sq["S_yz"]]
+        err = {a: error_transform(d[a], e[:, self._eps[a]], exact=self.exact) for a in AXES}
+        t_x = translation(np.stack([x, zero, zero], axis=-1))
+        t_y = translation(np.stack([zero, y, zero], axis=-1))
+        t_z = translation(np.stack([zero, zero, z], axis=-1))
+        t_d = translation(np.stack([p["D1"], p["D2"], p["D3"]], axis=-1))
+        actual = chain(t_x, err["x"], t_y, err["y"], t_z, err["z"], t_d)
+        ideal = chain(t_x, t_y, t_z, t_d)
+        return actual, ideal
+
+
+# --------------------------------------------------------------------------------------
+# The paper's printed closed form (Eqs. 11-13), transcribed as printed.
+# --------------------------------------------------------------------------------------
+
+def printed_closed_form(e: Mapping, x, y, z, D1, D2, D3):
+    """Eqs. 11-13 exactly as printed in Guo et al. 2016, typos included.
+
+    ``e`` maps paper symbols to values; works with numpy arrays and with sympy symbols.
+    Ambiguous brackets are read as follows: in Eq. 13, ``y(ey(x) S_xy + ex(x)`` is closed
+    after ``ex(x)``.  Returns ``(Ex, Ey, Ez)``.
+    """
+    d = lambda s: e[s]  # noqa: E731  (short alias keeps the transcription readable)
+    ex = (d("dx(z)") + d("dx(x)") + d("dx(y)") - y * (d("ez(x)") + d("S_xy"))
+          + D1 + d("ey(x)") * (d("dz(y)") + d("dz(z)")) + d("ey(y)") * d("dz(z)")
+          + D2 * (-d("ez(x)") - d("ez(y)") - d("ez(z)"))
+          - d("ez(x)") * (d("dy(y)") + d("dy(y)"))
+          + z * (d("ey(x)") + d("ey(y)") - d("S_xz") + d("ez(x)") * d("ex(y)")
+                 + d("ez(x)") * d("S_yz") + d("ez(y)") * d("S_yz"))
+          + D3 * (d("ey(x)") + d("ey(y)") + d("ey(z)") + d("ex(y)") * d("ez(x)")
+                  + d("ex(z)") * d("ez(x)") + d("ex(z)") * d("ez(y)"))
+          - d("ez(y)") * d("dy(z)"))
+    ey = (d("dy(z)") + d("dy(x)") + d("dy(y)") + D1 * (d("ez(y)") + d("ez(x)") + d("ez(z)"))
+          + D2 + d("dz(x)") * (d("dx(y)") + d("dx(z)")) - y * d("ez(x)") * d("S_xy")
+          - d("ex(y)") * d("dz(z)")
+          - z * (d("ex(x)") + d("ex(y)") + d("S_yz") - d("ey(y)") * d("ez(x)")
+                 + d("ez(x)") * d("S_xz") + d("ez(y)") * d("S_xz"))
+          - D3 * (d("ex(x)") + d("ex(y)") + d("ex(z)") - d("ey(y)") * d("ez(x)")
+                  - d("ey(z)") * d("ez(x)") - d("ey(z)") * d("ez(y)"))
+          + d("dx(z)") * d("ez(y)") - d("ex(x)") * (d("dz(y)") + d("dz(z)")))
+    ez = (d("dz(x)") + d("dz(y)") + d("dz(z)") + y * (d("ey(x)") * d("S_xy") + d("ex(x)"))
+          + d("ex(x)") * (d("dy(y)") + d("dy(z)")) - d("dx(z)") * d("ey(y)")
+          - z * (d("ex(x)") * d("S_yz") + d("ex(y)") * d("ex(x)") - d("ey(x)") * d("ey(y)")
+                 - d("ey(y)") * d("S_xz") + d("ex(y)") * d("S_yz"))
+          - d("ey(x)") * (d("dx(y)") + d("dx(z)"))
+          - D3 * (d("ex(y)") * d("ex(x)") + d("ex(z)") * d("ex(x)") + d("ey(y)") * d("ey(x)")
+                  + d("ey(z)") * d("ey(x)") + d("ex(y)") * d("ex(z)") + d("ey(y)") * d("ey(z)"))
+          + d("ex(y)") * d("dy(z)") + D1 * (-d("ey(x)") - d("ey(y)") - d("ey(z)"))
+          + D2 * (d("ex(x)") + d("ex(y)") + d("ex(z)")))
+    return ex, ey, ez
+
+
+# Eq. 8 as printed: the (3,1) entry reads -ey(y) where the pattern of Eqs. 6-7 needs -ey(z).
+PRINTED_EQ8_ROW3 = ("-ey(y)", "ex(z)", "1", "dz(z)")
+
+
+# --------------------------------------------------------------------------------------
+# Symbolic derivation (sympy).
+# --------------------------------------------------------------------------------------
+
+def symbols():
+    """sympy symbols: a dict of the 21 errors by paper symbol, and the pose symbols."""
+    import sympy as sp
+
+    cat = _errors.three_axis_catalogue()
+    err = {e.symbol: sp.Symbol(e.symbol, real=True) for e in cat}
+    pose = {k: sp.Symbol(k, real=True) for k in AXES + TOOL_OFFSETS}
+    return err, pose
+
+
+def symbolic_position_error():
+    """Exact symbolic (Ex, Ey, Ez) of the full product of the paper's matrices (Eqs. 1-10,
+    Eq. 8 corrected), as sympy expressions in the error and pose symbols."""
+    import sympy as sp
+
+    e, p = symbols()
+
+    def t(vx, vy, vz):
+        return sp.Matrix([[1, 0, 0, vx], [0, 1, 0, vy], [0, 0, 1, vz], [0, 0, 0, 1]])
+
+    def err(a, dx, dy, dz):
+        ex, ey, ez = e[f"ex({a})"], e[f"ey({a})"], e[f"ez({a})"]
+        return sp.Matrix([[1, -ez, ey, dx], [ez, 1, -ex, dy], [-ey, ex, 1, dz], [0, 0, 0, 1]])
+
+    x, y, z = p["x"], p["y"], p["z"]
+    ex_ = err("x", e["dx(x)"], e["dy(x)"], e["dz(x)"])
+    ey_ = err("y", e["dx(y)"] - y * e["S_xy"], e["dy(y)"], e["dz(y)"])
+    ez_ = err("z", e["dx(z)"] - z * e["S_xz"], e["dy(z)"] - z * e["S_yz"], e["dz(z)"])
+    tool = t(p["D1"], p["D2"], p["D3"])
+    actual = t(x, 0, 0) * ex_ * t(0, y, 0) * ey_ * t(0, 0, z) * ez_ * tool
+    ideal = t(x, 0, 0) * t(0, y, 0) * t(0, 0, z) * tool
+    diff = (actual - ideal)[:3, 3]
+    return tuple(sp.expand(diff[i]) for i in range(3))
+
+
+def truncate(expr, order: int = 2):
+    """Drop every term of ``expr`` whose total degree in the 21 error symbols exceeds
+    ``order`` (pose symbols do not count)."""
+    import sympy as sp
+
+    e, _ = symbols()
+    gens = list(e.values())
+    poly = sp.Poly(sp.expand(expr), *gens)
+    return sp.Add(*[c * sp.Mul(*[g**k for g, k in zip(gens, m, strict=True)])
+                    for m, c in poly.terms() if sum(m) <= order])
+
+
+def second_order():
+    """The correct second-order closed form (Ex, Ey, Ez) derived from the matrix product."""
+    return tuple(truncate(c, 2) for c in symbolic_position_error())
+
+
+def closed_form_typos():
+    """Compare the printed Eqs. 11-13 with the derived second-order expansion, term by term.
+
+    Returns a list of dicts ``equation, component, term, degree, printed, derived, kind``
+    where a term is a monomial in the error symbols (with its pose factor folded into the
+    coefficients) and kind is ``spurious`` (printed, not derived), ``missing`` (derived, not
+    printed) or ``coefficient`` (both, different coefficient).  Eq. 8's (3,1) entry is
+    checked against the skew-symmetric pattern of Eqs. 6-7 and reported too.
+    """
+    import sympy as sp
+
+    e, p = symbols()
+    gens = list(e.values())
+    printed = printed_closed_form(e, p["x"], p["y"], p["z"], p["D1"], p["D2"], p["D3"])
+    derived = second_order()
+    rows = []
+    if PRINTED_EQ8_ROW3[0] != "-ey(z)":
+        rows.append(dict(equation="Eq. 8", component="Z error matrix, row 3, column 1",
+                         term="-ey(z)", degree=1, printed=PRINTED_EQ8_ROW3[0],
+                         derived="-ey(z)", kind="coefficient"))
+    for eq, comp, pr, de in zip(("Eq. 11", "Eq. 12", "Eq. 13"), ("Ex", "Ey", "Ez"),
+                                printed, derived, strict=True):
+        tp = dict(sp.Poly(sp.expand(pr), *gens).terms())
+        td = dict(sp.Poly(sp.expand(de), *gens).terms())
+        for mono in sorted(set(tp) | set(td), key=lambda m: (sum(m), str(m))):
+            cp, cd = sp.expand(tp.get(mono, 0)), sp.expand(td.get(mono, 0))
+            if sp.simplify(cp - cd) == 0:
+                continue
+            term = sp.Mul(*[g**k for g, k in zip(gens, mono, strict=True)])
+            kind = "spurious" if cd == 0 else ("missing" if cp == 0 else "coefficient")
+            rows.append(dict(equation=eq, component=comp, term=str(term), degree=sum(mono),
+                             printed=str(cp), derived=str(cd), kind=kind))
+    return rows

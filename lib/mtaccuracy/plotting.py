@@ -1,0 +1,61 @@
+"""One figure style and deterministic saving.
+
+``save(fig, folder, name)`` writes PNG and SVG with no timestamps (SVG ``Date`` removed, a
+fixed ``svg.hashsalt`` for element ids), so the same figure gives the same bytes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib as mpl
+import matplotlib.pyplot as plt
+
+STYLE = {
+    "figure.dpi": 100,
+    "savefig.dpi": 150,
+    "font.size": 9,
+    "axes.titlesize": 10,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "legend.frameon": False,
+    "svg.hashsalt": "mtaccuracy",
+    "svg.fonttype": "path",
+    "path.simplify": False,
+}
+
+#: Colours for the published (paper) and reproduced (ours) series, used by every notebook.
+PUBLISHED = "#d95f02"
+REPRODUCED = "#1b9e77"
+
+
+def use_style() -> None:
+    """Apply the compendium's figure style to matplotlib's global settings."""
+    mpl.rcParams.update(STYLE)
+
+
+def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = None) -> list[Path]:
+    """Save ``fig`` as ``folder/name.<fmt>`` for each format, without timestamps."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for fmt in formats:
+        path = folder / f"{name}.{fmt}"
+        if fmt == "svg":
+            meta = {"Date": None, "Creator": "mtaccuracy"}
+        elif fmt == "png":
+            meta = {"Software": "mtaccuracy"}
+        else:
+            meta = {}
+        if title:
+            meta["Title"] = title
+        with mpl.rc_context(STYLE):
+            fig.savefig(path, format=fmt, metadata=meta, bbox_inches="tight")
+        out.append(path)
+    return out
+
+
+def close(fig) -> None:
+    plt.close(fig)

@@ -1,0 +1,64 @@
+import numpy as np
+import pytest
+from scipy import stats
+
+from mtaccuracy import sensitivity as S
+from mtaccuracy.machines import build
+
+RNG = np.random.default_rng(1)
+
+
+def test_spearman_matches_scipy_and_broadcasts():
+    x, y = RNG.normal(size=(3, 40, 4)), RNG.normal(size=(3, 40, 2))
+    y[..., 1] = np.exp(x[..., 0]) + 0.1 * y[..., 1]
+    got = S.spearman(x, y)
+    assert got.shape == (3, 4, 2)
+    for r in range(3):
+        ref = stats.spearmanr(np.c_[x[r], y[r]]).statistic[:4, 4:]
+        assert np.allclose(got[r], ref)
+
+
+def test_spearman_of_monotone_transform_is_one_and_handles_ties():
+    x = RNG.uniform(size=(50, 1))
+    assert S.spearman(x, -np.log(x))[0, 0] == pytest.approx(-1.0)
+    t = np.array([[1.0], [1.0], [2.0], [3.0]])
+    assert S.spearman(t, t**3)[0, 0] == pytest.approx(1.0)
+
+
+def test_latin_hypercube_puts_one_point_in_every_stratum():
+    b = np.array([[0.0, -1.0, 10.0], [1.0, 1.0, 20.0]])
+    x = S.latin_hypercube(25, b, 3)
+    u = (x - b[0]) / (b[1] - b[0])
+    for j in range(3):
+        assert sorted(np.floor(u[:, j] * 25).astype(int)) == list(range(25))
+
+
+def test_latin_hypercube_refuses_bad_input():
+    with pytest.raises(ValueError, match="n must be an integer >= 2"):
+        S.latin_hypercube(-5, np.zeros((2, 3)), 0)
+    with pytest.raises(ValueError, match="bounds must have shape"):
+        S.latin_hypercube(5, np.zeros((3, 2)), 0)
+
+
+def test_repeated_designs_are_deterministic_and_prefix_stable():
+    b = np.array([[0.0, 0.0], [1.0, 1.0]])
+    a = S.repeated_latin_hypercube(10, b, 4, 7)
+    assert np.array_equal(a, S.repeated_latin_hypercube(10, b, 4, 7))
+    assert np.array_equal(a[:2], S.repeated_latin_hypercube(10, b, 2, 7))
+    assert not np.array_equal(a[0], a[1])
+
+
+def test_rank_and_weak_rule():
+    assert S.rank_by_magnitude(np.array([0.1, -0.5, 0.3]), ["a", "b", "c"])[0] == ("b", -0.5)
+    rho = np.array([[0.9, 0.8], [0.1, 0.7], [0.05, 0.02]])
+    assert S.below_group_mean(rho).tolist() == [False, False, True]
+
+
+def test_spearman_over_poses_equals_one_pose_at_a_time():
+    m = build("vertical_xyfz")
+    x = RNG.uniform(0, 1e-3, size=(60, 21)) * np.r_[np.ones(9), 0.03 * np.ones(12)]
+    poses = {"x": np.zeros(3), "y": np.array([0.0, 100.0, 300.0]), "z": np.array([50.0, 0, 9])}
+    got = S.spearman_over_poses(m, x, poses, chunk=2)
+    for p in range(3):
+        one = {k: v[p] for k, v in poses.items()}
+        assert np.allclose(got[p], S.spearman(x, S.position_outputs(m.pose_error(x, one))))
