@@ -52,7 +52,7 @@ class Parameter:
     help: str
 
     def describe(self) -> str:
-        cons = ", ".join(f"{op} {v}" if op not in ("in", "errors") else
+        cons = ", ".join(f"{op} {v:g}" if op not in ("in", "errors") else
                          (f"one of {'|'.join(v)}" if op == "in" else f"error names of {v}")
                          for op, v in self.constraints)
         kind = type(self.default).__name__ if self.default is not None else "any"
