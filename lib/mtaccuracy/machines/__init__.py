@@ -5,28 +5,41 @@
 and ``.pose_error(errors, pose)``: an ``(n, n_errors)`` array (mm, rad) and a pose mapping
 (axis and tool-offset names to mm or rad, scalars or ``(n,)`` arrays) to an ``(n, 6)`` array
 ``Px, Py, Pz`` (mm) and ``Vx, Vy, Vz`` (rad).
+
+One module per machine; the registry imports it on first use.
 """
 
 from __future__ import annotations
 
-from ._base import POSE_COMPONENTS, Machine
-from .vertical_xyfz import VerticalXYFZ
+import importlib
+import importlib.util
 
-_REGISTRY = {VerticalXYFZ.name: VerticalXYFZ}
+from ._base import POSE_COMPONENTS, Machine
+
+#: machine name -> (module, class)
+_REGISTRY = {
+    "vertical_xyfz": ("vertical_xyfz", "VerticalXYFZ"),          # Guo et al. 2016
+    "ac_double_turntable": ("ac_double_turntable", "ACDoubleTurntable"),  # Zheng et al. 2024
+    "horizontal_3axis": ("horizontal_3axis", "Horizontal3Axis"),  # Rong et al.
+}
+
+
+def _available() -> dict[str, tuple[str, str]]:
+    spec = importlib.util.find_spec
+    return {k: v for k, v in _REGISTRY.items() if spec(f"{__name__}.{v[0]}") is not None}
 
 
 def names() -> list[str]:
     """Names accepted by :func:`build`."""
-    return sorted(_REGISTRY)
+    return sorted(_available())
 
 
 def build(name: str, **options) -> Machine:
     """Build the machine called ``name`` (see :func:`names`)."""
-    try:
-        cls = _REGISTRY[name]
-    except KeyError:
-        raise ValueError(f"unknown machine {name!r}; allowed: {', '.join(names())}") from None
-    return cls(**options)
+    if name not in _available():
+        raise ValueError(f"unknown machine {name!r}; allowed: {', '.join(names())}")
+    module, cls = _REGISTRY[name]
+    return getattr(importlib.import_module(f"{__name__}.{module}"), cls)(**options)
 
 
-__all__ = ["Machine", "POSE_COMPONENTS", "build", "names", "VerticalXYFZ"]
+__all__ = ["Machine", "POSE_COMPONENTS", "build", "names"]

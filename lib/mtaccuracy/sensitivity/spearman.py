@@ -7,6 +7,9 @@ key-error rules join it with the later papers.  Latin hypercube sampling is scip
 
 from __future__ import annotations
 
+__all__ = ["as_generator", "latin_hypercube", "repeated_latin_hypercube", "spearman",
+           "rank_by_magnitude", "below_group_mean", "position_outputs", "spearman_over_poses"]
+
 import numpy as np
 from scipy import stats
 from scipy.stats import qmc

@@ -1,0 +1,15 @@
+"""Sensitivity analysis: samplers, Spearman ranking, Sobol indices, sparse PCE, key-error rules.
+
+One submodule per method; everything is re-exported here, so notebooks write
+``from mtaccuracy import sensitivity`` and call ``sensitivity.spearman(...)``.
+
+| submodule | what |
+| --- | --- |
+| ``spearman`` | Latin hypercube sampling (scipy.qmc), Spearman ranking (Guo et al. 2016) |
+| ``sobol`` | Sobol first-order and total indices (Saltelli/Jansen), chunked model evaluation |
+| ``pce`` | sparse polynomial chaos (OMP) and Sobol indices from its coefficients (issue 3) |
+| ``screening`` | key-error selection rules and reduced models (issue 4) |
+"""
+
+from .sobol import *  # noqa: F403
+from .spearman import *  # noqa: F403
