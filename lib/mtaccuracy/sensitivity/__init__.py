@@ -7,9 +7,11 @@ One submodule per method; everything is re-exported here, so notebooks write
 | --- | --- |
 | ``spearman`` | Latin hypercube sampling (scipy.qmc), Spearman ranking (Guo et al. 2016) |
 | ``sobol`` | Sobol first-order and total indices (Saltelli/Jansen), chunked model evaluation |
-| ``pce`` | sparse polynomial chaos (OMP) and Sobol indices from its coefficients (issue 3) |
-| ``screening`` | key-error selection rules and reduced models (issue 4) |
+| ``pce`` | sparse polynomial chaos (OMP) and Sobol indices from its coefficients (Zheng et al.) |
+| ``screening`` | key-error selection rules and reduced models (Rong et al.) |
 """
 
+from .pce import *  # noqa: F403
+from .screening import *  # noqa: F403
 from .sobol import *  # noqa: F403
 from .spearman import *  # noqa: F403
