@@ -6,7 +6,10 @@ the notebooks were not collected (``pytest tests``), it executes them itself wit
 
 Tolerance: numbers must agree to the six significant digits the CSVs are written with
 (relative 1e-5, absolute 1e-12), so a last-digit rounding flip on another BLAS does not fail
-the test; text cells must be equal.  On one machine the files are byte-identical.
+the test; text cells must be equal.  On one machine the files are byte-identical, with one
+documented exception: wall-clock timings (Zheng et al.'s Table 3), which are measurements of the
+machine, not results of the parameters.  They live in ``*timing*.csv`` columns named ``ours_*``
+and in scorecard rows whose quantity says "(measured)"; those values are not compared.
 """
 
 import os
@@ -30,9 +33,18 @@ def _regenerated(stem, base):
     return out
 
 
+def _deterministic_part(df, name):
+    """Drop the measured wall-clock values (see the module docstring)."""
+    if "timing" in name:
+        df = df[[c for c in df.columns if not c.startswith("ours_")]]
+    if name == "reproduction.csv":
+        df = df[~df["quantity"].str.contains("(measured)", regex=False)]
+    return df.reset_index(drop=True)
+
+
 def _assert_tables_equal(a_path, b_path):
-    a = pd.read_csv(a_path, dtype=str, keep_default_na=False)
-    b = pd.read_csv(b_path, dtype=str, keep_default_na=False)
+    a = _deterministic_part(pd.read_csv(a_path, dtype=str, keep_default_na=False), a_path.name)
+    b = _deterministic_part(pd.read_csv(b_path, dtype=str, keep_default_na=False), b_path.name)
     assert list(a.columns) == list(b.columns), a_path.name
     assert a.shape == b.shape, a_path.name
     for c in a.columns:

@@ -126,3 +126,35 @@ def select(catalogue: tuple[ErrorSpec, ...], names) -> list[int]:
     if bad:
         raise ValueError(f"unknown error name(s) {bad}; allowed: {', '.join(syms)}")
     return [syms.index(n) for n in names]
+
+
+def five_axis_ac_catalogue() -> tuple[ErrorSpec, ...]:
+    """The 41 errors of Zheng et al. 2024, Table 1, in its numbering (AC double turntable).
+
+    30 error motions (6 per axis X, Y, Z, A, C), 3 squareness errors, 6 location errors of A
+    with respect to the machine and 2 of C with respect to A.  Symbols as in
+    ``data/papers/zheng2024_table1_errors.csv`` (``d_xc``: x error motion of C; ``a_AM``,
+    ``b_AM``, ``g_AM``: alpha, beta, gamma of A); ISO 230-1 codes from ``data/iso230``.
+    Translational errors are in um, angular ones in arcsec (the paper's ranges).
+    """
+    iso = iso_names()
+    cat = []
+    for axis in "xyzac":
+        moving = axis.upper()
+        trans = [axis, *[d for d in "xyz" if d != axis]] if axis in "xyz" else list("xyz")
+        for d in trans:
+            cat.append(ErrorSpec(f"d_{d}{axis}", iso[f"d_{d}{axis}"], "error motion", moving, d,
+                                 True, True, "um"))
+        for d in trans:
+            cat.append(ErrorSpec(f"e_{d}{axis}", iso[f"e_{d}{axis}"], "error motion", moving, d,
+                                 False, True, "arcsec"))
+    for sym, d in (("S_xy", "z"), ("S_yz", "x"), ("S_xz", "y")):
+        cat.append(ErrorSpec(sym, iso[sym], "squareness", "XYZ", d, False, False, "arcsec"))
+    for sym, d, tr in (("d_xAM", "x", True), ("d_yAM", "y", True), ("d_zAM", "z", True),
+                       ("a_AM", "x", False), ("b_AM", "y", False), ("g_AM", "z", False)):
+        unit = "um" if tr else "arcsec"
+        cat.append(ErrorSpec(sym, iso[sym], "location", "A", d, tr, False, unit))
+    for sym, d, tr in (("d_yCA", "y", True), ("b_CA", "y", False)):
+        unit = "um" if tr else "arcsec"
+        cat.append(ErrorSpec(sym, iso[sym], "location", "C", d, tr, False, unit))
+    return tuple(cat)

@@ -71,3 +71,20 @@ class Machine:
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r}: {self.n_errors} errors, axes {self.axes}>"
+
+    def jacobian(self, pose: Mapping, step: float = 1e-6) -> np.ndarray:
+        """d(pose error)/d(errors) at zero errors by central differences: (P, 6, n_errors)
+        for pose arrays of length P (or (1, 6, n_errors) for a scalar pose).  ``step`` is in
+        mm or rad; the model is smooth, so the result is exact to about step^2."""
+        vals = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
+        n_poses = max(v.shape[0] for v in vals.values())
+        d = self.n_errors
+        eye = np.eye(d) * step
+        e = np.concatenate([eye, -eye])                                   # (2d, d)
+        rows = np.tile(e, (n_poses, 1))
+        rep = {k: np.repeat(np.broadcast_to(v, (n_poses,)), 2 * d) for k, v in vals.items()}
+        pe = self.pose_error_reference(rows, rep) if hasattr(self, "pose_error_reference") \
+            else self.pose_error(rows, rep)
+        pe = pe.reshape(n_poses, 2, d, 6)
+        return np.swapaxes((pe[:, 0] - pe[:, 1]) / (2 * step), 1, 2)
+

@@ -1,3 +1,329 @@
-"""Placeholder: filled by the issue that owns it (see sensitivity/__init__.py)."""
+"""Key-error screening by total Sobol indices, and the reduced model (Rong et al.).
 
-__all__: list[str] = []
+The rule (Rong et al., Section 3): sort the total indices in descending order and keep the
+smallest top set whose share of the sum of all total indices *exceeds* the threshold (90 % in
+the paper).  The errors kept are the key errors; the reduced model sets every other error to
+zero on the same samples.  The simplification rate is the share of errors removed,
+``(D - k) / D``.
+
+For a model additive in the errors (the error models here are, to first order, also when the pose
+is a further random input) with zero-mean errors, the reduced model's residual is the sum of the
+dropped terms, so its mean square is the dropped share of the variance:
+``E[residual^2] / Var(full) = sum_{dropped} ST_i / sum ST_i``.  Keeping a share ``s`` of the total
+indices therefore leaves an RMS residual of ``sqrt(1 - s)`` of the full model's RMS
+(:func:`expected_rms_ratio`); the threshold sweep shows it.
+
+Written by hand because the rule is the paper's own (a few lines); the indices come from
+:mod:`.sobol`.
+"""
+
+from __future__ import annotations
+
+__all__ = ["KeySet", "key_errors", "key_errors_by_output", "union_key_set",
+           "simplification_rate", "pooled_indices", "zero_non_key", "reduced_model",
+           "residual_summary", "expected_rms_ratio", "threshold_sweep", "key_set_bootstrap"]
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from .sobol import sobol_estimate
+
+#: A share counts as exceeding the threshold only if it is larger by more than this (so that a
+#: share equal to the threshold up to rounding, e.g. 0.6 + 0.3 against 0.9, does not count).
+EXCEED_TOL = 1e-12
+
+
+@dataclass(frozen=True)
+class KeySet:
+    """The key errors chosen by :func:`key_errors`.
+
+    ``names`` and ``index`` list the key errors in descending order of the index; ``share`` is
+    their share of the sum of all indices; ``n_total`` the number of candidate errors.
+    """
+
+    names: tuple[str, ...]
+    index: tuple[int, ...]
+    share: float
+    threshold: float
+    n_total: int
+
+    @property
+    def n_key(self) -> int:
+        return len(self.index)
+
+    @property
+    def simplification_rate(self) -> float:
+        """Share of the errors removed, ``(n_total - n_key) / n_total``."""
+        return simplification_rate(self.n_key, self.n_total)
+
+
+def _check_threshold(threshold) -> float:
+    t = float(threshold)
+    if not 0.0 < t < 1.0:
+        raise ValueError(f"threshold must be a share strictly between 0 and 1 (0.9 for 90 %), "
+                         f"got {threshold!r}")
+    return t
+
+
+def _check_indices(st, ndim: int, what: str = "total indices") -> np.ndarray:
+    a = np.asarray(st, dtype=float)
+    if a.ndim != ndim or a.shape[0] == 0:
+        shape = "(D,)" if ndim == 1 else "(D, q)"
+        raise ValueError(f"{what} must be a non-empty array of shape {shape}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{what} contain NaN or infinite values")
+    if np.any(a < 0):
+        raise ValueError(f"{what} must be >= 0 (a total index is a share of variance); got "
+                         f"minimum {a.min():.3g}; clip small negative estimates first")
+    return a
+
+
+def _names(names, d: int) -> list[str]:
+    if names is None:
+        return [str(i) for i in range(d)]
+    names = [str(n) for n in names]
+    if len(names) != d:
+        raise ValueError(f"{len(names)} names for {d} indices")
+    if len(set(names)) != d:
+        raise ValueError("error names must be unique")
+    return names
+
+
+def key_errors(st, names: Sequence[str] | None = None, threshold: float = 0.9,
+               tie_tol: float | None = None) -> KeySet:
+    """The smallest top set of errors whose share of ``sum(st)`` exceeds ``threshold``.
+
+    ``st`` (D,) are total indices (>= 0); ties are broken by the original order (a stable
+    sort), so the result is deterministic.  ``tie_tol`` (not in the paper): also keep every
+    further error whose index is within this relative distance of the last one kept, so that
+    errors that enter the model identically are kept or dropped together (``share`` is then the
+    share of the enlarged set).  Raises ValueError for indices that sum to zero, a threshold
+    outside (0, 1) or names that do not match.
+    """
+    a = _check_indices(st, 1)
+    t = _check_threshold(threshold)
+    names = _names(names, a.size)
+    total = a.sum()
+    if total <= 0:
+        raise ValueError("total indices sum to zero: the output does not depend on any error")
+    order = np.argsort(-a, kind="stable")
+    share = np.cumsum(a[order]) / total
+    k = int(np.argmax(share > t + EXCEED_TOL)) + 1 if np.any(share > t + EXCEED_TOL) else a.size
+    if tie_tol is not None:
+        if not 0 <= tie_tol < 1:
+            raise ValueError(f"tie_tol must be in [0, 1), got {tie_tol!r}")
+        last = a[order[k - 1]]
+        while k < a.size and a[order[k]] > 0 and a[order[k]] >= (1 - tie_tol) * last:
+            k += 1
+    keep = order[:k]
+    return KeySet(tuple(names[i] for i in keep), tuple(int(i) for i in keep),
+                  float(share[k - 1]), t, a.size)
+
+
+def key_errors_by_output(st, names: Sequence[str] | None = None,
+                         outputs: Sequence[str] | None = None,
+                         threshold: float = 0.9, tie_tol: float | None = None
+                         ) -> dict[str, KeySet]:
+    """:func:`key_errors` for every output column of ``st`` (D, q)."""
+    a = _check_indices(st, 2)
+    outputs = list(outputs) if outputs is not None else [f"y{k}" for k in range(a.shape[1])]
+    if len(outputs) != a.shape[1]:
+        raise ValueError(f"{len(outputs)} output names for {a.shape[1]} columns")
+    return {o: key_errors(a[:, k], names, threshold, tie_tol) for k, o in enumerate(outputs)}
+
+
+def union_key_set(sets, names: Sequence[str]) -> tuple[str, ...]:
+    """Errors that are key for at least one output, in the order of ``names``."""
+    sets = list(sets.values()) if isinstance(sets, dict) else list(sets)
+    chosen = {n for s in sets for n in s.names}
+    unknown = chosen - set(names)
+    if unknown:
+        raise ValueError(f"key errors {sorted(unknown)} are not among the names given")
+    return tuple(n for n in names if n in chosen)
+
+
+def simplification_rate(n_key: int, n_total: int) -> float:
+    """Share of errors removed by the reduced model, ``(n_total - n_key) / n_total``."""
+    if int(n_total) != n_total or n_total < 1:
+        raise ValueError(f"n_total must be a positive integer, got {n_total!r}")
+    if int(n_key) != n_key or not 0 <= n_key <= n_total:
+        raise ValueError(f"n_key must be an integer in [0, {n_total}], got {n_key!r}")
+    return (n_total - n_key) / n_total
+
+
+def pooled_indices(indices, variances) -> np.ndarray:
+    """Variance-weighted mean of indices over a trailing axis (outputs or poses).
+
+    ``indices`` (..., D, m) and ``variances`` (..., m) of the m outputs (or poses): returns
+    (..., D) ``sum_m V_m S_im / sum_m V_m``, the share of the summed variance that each error
+    explains (for outputs: the indices of the squared-norm-like total; for poses: of the
+    workspace-mean variance).
+    """
+    s = np.asarray(indices, dtype=float)
+    v = np.asarray(variances, dtype=float)
+    if s.ndim < 2 or v.shape != s.shape[:-2] + s.shape[-1:]:
+        raise ValueError(f"variances {v.shape} must match indices {s.shape} without the D axis")
+    if np.any(v < 0) or not np.all(v.sum(-1) > 0):
+        raise ValueError("variances must be >= 0 with a positive sum")
+    return (s * v[..., None, :]).sum(-1) / v.sum(-1)[..., None]
+
+
+def _keep_index(keep, d: int, names: Sequence[str] | None) -> np.ndarray:
+    if isinstance(keep, KeySet):
+        keep = keep.index
+    keep = list(keep)
+    if keep and all(isinstance(k, str) for k in keep):
+        if names is None:
+            raise ValueError("key errors given by name need the list of names")
+        names = list(names)
+        bad = [k for k in keep if k not in names]
+        if bad:
+            raise ValueError(f"unknown error name(s) {bad}; allowed: {', '.join(names)}")
+        keep = [names.index(k) for k in keep]
+    idx = np.asarray(keep, dtype=int)
+    if idx.size and (idx.min() < 0 or idx.max() >= d):
+        raise ValueError(f"key error indices must be in [0, {d}), got {sorted(set(keep))}")
+    return idx
+
+
+def zero_non_key(x, keep, names: Sequence[str] | None = None) -> np.ndarray:
+    """A copy of the samples ``x`` (n, D) with every column not in ``keep`` set to zero.
+
+    ``keep``: a :class:`KeySet`, column indices, or error names (then ``names`` is needed).
+    """
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 2:
+        raise ValueError(f"samples must have shape (n, D), got {x.shape}")
+    idx = _keep_index(keep, x.shape[1], names)
+    out = np.zeros_like(x)
+    out[:, idx] = x[:, idx]
+    return out
+
+
+def reduced_model(model: Callable[[np.ndarray], np.ndarray], keep,
+                  names: Sequence[str] | None = None) -> Callable[[np.ndarray], np.ndarray]:
+    """The model with every non-key error set to zero: ``x -> model(zero_non_key(x, keep))``."""
+    def reduced(x):
+        return model(zero_non_key(x, keep, names))
+    return reduced
+
+
+def residual_summary(full, reduced, outputs: Sequence[str] | None = None) -> pd.DataFrame:
+    """Per output: ranges of the full and reduced predictions and of the residual
+    ``full - reduced``, its RMS, and the RMS and max-abs ratios to the full model."""
+    f = np.asarray(full, dtype=float)
+    r = np.asarray(reduced, dtype=float)
+    f = f[:, None] if f.ndim == 1 else f
+    r = r[:, None] if r.ndim == 1 else r
+    if f.shape != r.shape or f.ndim != 2 or f.shape[0] < 2:
+        raise ValueError(f"full and reduced predictions must be (n, q) of one shape with n >= 2, "
+                         f"got {np.shape(full)} and {np.shape(reduced)}")
+    outputs = list(outputs) if outputs is not None else [f"y{k}" for k in range(f.shape[1])]
+    if len(outputs) != f.shape[1]:
+        raise ValueError(f"{len(outputs)} output names for {f.shape[1]} columns")
+    res = f - r
+    rms_full = np.sqrt(np.mean(f**2, axis=0))
+    rms_res = np.sqrt(np.mean(res**2, axis=0))
+    return pd.DataFrame({
+        "output": outputs,
+        "full_min": f.min(0), "full_max": f.max(0),
+        "reduced_min": r.min(0), "reduced_max": r.max(0),
+        "residual_min": res.min(0), "residual_max": res.max(0),
+        "residual_rms": rms_res,
+        "rms_ratio": rms_res / np.where(rms_full > 0, rms_full, np.nan),
+        "maxabs_ratio": np.abs(res).max(0) / np.where(np.abs(f).max(0) > 0, np.abs(f).max(0),
+                                                      np.nan),
+    })
+
+
+def expected_rms_ratio(share) -> np.ndarray:
+    """``sqrt(1 - share)``: the RMS of the reduced model's residual relative to the full model
+    for a model additive in zero-mean errors, when the kept errors carry ``share`` of the sum of
+    the total indices (see the module docstring)."""
+    s = np.asarray(share, dtype=float)
+    if np.any((s < 0) | (s > 1 + 1e-9)):
+        raise ValueError("share must be in [0, 1]")
+    return np.sqrt(np.clip(1.0 - s, 0.0, None))
+
+
+def threshold_sweep(st, thresholds, x, model: Callable[[np.ndarray], np.ndarray],
+                    names: Sequence[str], outputs: Sequence[str] | None = None,
+                    full=None) -> pd.DataFrame:
+    """Key sets and reduced-model residuals as the threshold varies.
+
+    For each threshold: the key set of every output (``st`` (D, q)) and their union; the reduced
+    model (non-union errors set to zero) on the samples ``x`` (n, D); per output the residual's
+    max |.| and RMS, also relative to the full model.  ``full`` (n, q) may pass the full-model
+    predictions if already computed.  One row per (threshold, output).
+    """
+    a = _check_indices(st, 2)
+    names = _names(names, a.shape[0])
+    outputs = list(outputs) if outputs is not None else [f"y{k}" for k in range(a.shape[1])]
+    ts = [_check_threshold(t) for t in np.atleast_1d(thresholds)]
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 2 or x.shape[1] != len(names):
+        raise ValueError(f"samples must have shape (n, {len(names)}), got {x.shape}")
+    f = np.asarray(model(x), dtype=float) if full is None else np.asarray(full, dtype=float)
+    f = f[:, None] if f.ndim == 1 else f
+    rows = []
+    cache: dict[tuple[str, ...], pd.DataFrame] = {}
+    for t in ts:
+        sets = key_errors_by_output(a, names, outputs, t)
+        union = union_key_set(sets, names)
+        if union not in cache:
+            cache[union] = residual_summary(f, np.asarray(model(zero_non_key(x, union, names)))
+                                            .reshape(f.shape), outputs)
+        summ = cache[union]
+        for k, o in enumerate(outputs):
+            s = summ.iloc[k]
+            rows.append(dict(
+                threshold=t, output=o, n_key_output=sets[o].n_key, share_output=sets[o].share,
+                n_key=len(union), simplification_rate=simplification_rate(len(union), len(names)),
+                residual_maxabs=max(abs(s.residual_min), abs(s.residual_max)),
+                residual_rms=s.residual_rms, rms_ratio=s.rms_ratio, maxabs_ratio=s.maxabs_ratio,
+                key_errors=" ".join(union)))
+    return pd.DataFrame(rows)
+
+
+def key_set_bootstrap(ya, yb, yab, names: Sequence[str], n_boot: int, seed,
+                      outputs: Sequence[str] | None = None, threshold: float = 0.9,
+                      chunk: int = 20) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """How stable is the key set?  Resample the N base rows ``n_boot`` times (as
+    :func:`mtaccuracy.sensitivity.sobol_bootstrap` does), re-estimate the total indices and
+    re-apply :func:`key_errors`.
+
+    Only the first ``len(names)`` inputs are candidates (further inputs, e.g. the pose, are
+    left out of the rule).  Returns ``freq`` (one row per error: the share of resamples in which
+    it is key for each output and for the union) and ``counts`` (one row per resample: the
+    number of key errors per output and in the union).
+    """
+    names = list(names)
+    if int(n_boot) != n_boot or n_boot < 1:
+        raise ValueError(f"n_boot must be a positive integer, got {n_boot!r}")
+    ya = np.asarray(ya, dtype=float)
+    yab = np.asarray(yab, dtype=float)
+    if yab.shape[0] < len(names):
+        raise ValueError(f"{len(names)} names but only {yab.shape[0]} inputs in yab")
+    q = ya.shape[1]
+    outputs = list(outputs) if outputs is not None else [f"y{k}" for k in range(q)]
+    rng = np.random.default_rng(seed)
+    n = ya.shape[0]
+    hits = {o: np.zeros(len(names)) for o in [*outputs, "union"]}
+    counts = []
+    for start in range(0, int(n_boot), chunk):
+        k = min(chunk, int(n_boot) - start)
+        idx = rng.integers(0, n, size=(k, n))
+        _, st = sobol_estimate(ya[idx], np.asarray(yb)[idx], np.moveaxis(yab[:, idx], 0, 1))
+        for b in range(k):
+            sets = key_errors_by_output(np.clip(st[b, :len(names)], 0, None), names, outputs,
+                                        threshold)
+            union = union_key_set(sets, names)
+            for o, s in sets.items():
+                hits[o][list(s.index)] += 1
+            hits["union"][[names.index(u) for u in union]] += 1
+            counts.append({**{o: s.n_key for o, s in sets.items()}, "union": len(union)})
+    freq = pd.DataFrame({"symbol": names, **{o: h / n_boot for o, h in hits.items()}})
+    return freq, pd.DataFrame(counts)

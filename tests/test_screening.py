@@ -1,0 +1,168 @@
+"""Key-error screening (Rong et al.): the 90 % rule, simplification rate, reduced model."""
+
+import numpy as np
+import pytest
+
+from mtaccuracy import sensitivity as S
+
+NAMES = ["a", "b", "c", "d"]
+
+
+def test_rule_on_hand_checkable_cases():
+    # cumulative shares 0.5, 0.8, 0.95, 1.0: the smallest top set exceeding 0.9 has 3 errors
+    k = S.key_errors([0.15, 0.5, 0.05, 0.3], NAMES, 0.9)
+    assert k.names == ("b", "d", "a") and k.index == (1, 3, 0)
+    assert k.n_key == 3 and k.share == pytest.approx(0.95) and k.n_total == 4
+    assert k.simplification_rate == pytest.approx(0.25)
+    assert S.key_errors([0.15, 0.5, 0.05, 0.3], NAMES, 0.7).names == ("b", "d")  # 0.8 > 0.7
+    assert S.key_errors([0.15, 0.5, 0.05, 0.3], NAMES, 0.4).names == ("b",)      # 0.5 > 0.4
+    assert S.key_errors([0.15, 0.5, 0.05, 0.3], NAMES, 0.99).n_key == 4
+
+
+def test_share_must_exceed_the_threshold_not_equal_it():
+    # 6/10 + 3/10 is 0.9 exactly (to rounding): "exceeds 90 %" needs the third error
+    assert S.key_errors([6, 3, 1], threshold=0.9).n_key == 3
+    assert S.key_errors([0.6, 0.3, 0.1], threshold=0.9).n_key == 3
+    assert S.key_errors([0.6, 0.3, 0.1], threshold=0.89).n_key == 2
+
+
+def test_shares_are_of_the_sum_so_scale_does_not_matter():
+    st = np.array([0.42, 0.31, 0.2, 0.07])
+    a, b = S.key_errors(st, NAMES), S.key_errors(10 * st, NAMES)
+    assert a.names == b.names == ("a", "b", "c") and a.share == pytest.approx(b.share)
+    # total indices of an interacting model sum to more than 1: shares are still of the sum
+    assert S.key_errors(st * 1.7, NAMES).names == a.names
+
+
+def test_ties_are_broken_by_the_original_order_and_zeros_never_count():
+    assert S.key_errors([0.25, 0.25, 0.25, 0.25], NAMES, 0.6).names == ("a", "b", "c")
+    assert S.key_errors([0.0, 1.0, 0.0, 0.0], NAMES, 0.9).names == ("b",)
+    assert S.key_errors([0.0, 0.5, 0.5, 0.0], NAMES, 0.9).names == ("b", "c")
+
+
+def test_tie_tolerance_keeps_exchangeable_errors_together():
+    st = [0.4, 0.3, 0.1, 0.1, 0.1]
+    names = ["a", "b", "c", "d", "e"]
+    assert S.key_errors(st, names, 0.75).names == ("a", "b", "c")         # 0.8 > 0.75
+    k = S.key_errors(st, names, 0.75, tie_tol=0.0)
+    assert k.names == ("a", "b", "c", "d", "e") and k.share == pytest.approx(1.0)
+    assert S.key_errors([0.4, 0.3, 0.1, 0.098, 0.05], names, 0.75, 0.05).n_key == 4
+    assert S.key_errors([0.4, 0.3, 0.1, 0.09, 0.05], names, 0.75, 0.05).n_key == 3
+    assert S.key_errors([1.0, 0.0, 0.0], tie_tol=0.5).n_key == 1          # zeros never join
+    with pytest.raises(ValueError, match="tie_tol"):
+        S.key_errors(st, names, 0.75, tie_tol=1.0)
+
+
+def test_by_output_and_union():
+    st = np.array([[0.7, 0.0], [0.25, 0.05], [0.05, 0.0], [0.0, 0.95]])
+    sets = S.key_errors_by_output(st, NAMES, ["Ex", "Ey"], 0.9)
+    assert sets["Ex"].names == ("a", "b") and sets["Ey"].names == ("d",)
+    assert S.union_key_set(sets, NAMES) == ("a", "b", "d")
+    assert S.union_key_set(list(sets.values()), NAMES[::-1]) == ("d", "b", "a")
+
+
+def test_simplification_rate_and_the_papers_numbers():
+    assert S.simplification_rate(12, 21) == pytest.approx(9 / 21)   # 42.9 %, not 48 %
+    assert S.simplification_rate(11, 21) == pytest.approx(10 / 21)  # 47.6 %: the paper's 48 %
+    assert S.simplification_rate(0, 5) == 1.0 and S.simplification_rate(5, 5) == 0.0
+
+
+def test_pooled_indices_weight_by_variance():
+    s = np.array([[1.0, 0.0], [0.0, 1.0]])        # error 0 explains output 0, error 1 output 1
+    assert np.allclose(S.pooled_indices(s, [3.0, 1.0]), [0.75, 0.25])
+    stacked = np.stack([s, s[::-1]])              # leading axis (e.g. two cases)
+    assert np.allclose(S.pooled_indices(stacked, [[3.0, 1.0], [1.0, 1.0]]),
+                       [[0.75, 0.25], [0.5, 0.5]])
+
+
+def test_zero_non_key_and_reduced_model():
+    x = np.arange(12.0).reshape(3, 4) + 1
+    z = S.zero_non_key(x, ["b", "d"], NAMES)
+    assert np.array_equal(z[:, [1, 3]], x[:, [1, 3]]) and not z[:, [0, 2]].any()
+    assert np.array_equal(S.zero_non_key(x, [3, 1]), z)
+    assert np.array_equal(S.zero_non_key(x, S.key_errors([0, 1, 0, 1.0], NAMES)), z)
+    assert x[0, 0] == 1  # the input is not modified
+    f = S.reduced_model(lambda v: v.sum(1), ["a"], NAMES)
+    assert np.array_equal(f(x), x[:, 0])
+
+
+def test_reduced_additive_model_leaves_the_dropped_variance():
+    """y = sum c_i x_i with uniform x: the residual RMS ratio is sqrt(1 - kept share)."""
+    rng = np.random.default_rng(0)
+    c = np.array([4.0, 2.0, 1.0, 0.5])
+    x = rng.uniform(-1, 1, size=(200_000, 4))
+    model = lambda v: (v @ c)[:, None]  # noqa: E731
+    st = (c**2 / (c**2).sum())[:, None]
+    k = S.key_errors(st[:, 0], NAMES, 0.9)
+    assert k.names == ("a", "b")
+    summ = S.residual_summary(model(x), S.reduced_model(model, k)(x), ["y"])
+    assert summ.rms_ratio.iloc[0] == pytest.approx(S.expected_rms_ratio(k.share), rel=0.01)
+    assert summ.residual_max.iloc[0] == pytest.approx(1.5, abs=0.01)  # |x_c| + 0.5 |x_d| <= 1.5
+
+
+def test_threshold_sweep_is_monotone():
+    rng = np.random.default_rng(1)
+    c = np.array([[4.0, 0.1], [2.0, 3.0], [1.0, 0.2], [0.5, 1.0]])
+    x = rng.uniform(-1, 1, size=(5000, 4))
+    model = lambda v: v @ c  # noqa: E731
+    st = c**2 / (c**2).sum(0)
+    sweep = S.threshold_sweep(st, np.arange(0.5, 0.995, 0.05), x, model, NAMES, ["y0", "y1"])
+    assert len(sweep) == 2 * 10 and set(sweep.output) == {"y0", "y1"}
+    for _, d in sweep.groupby("output"):
+        assert np.all(np.diff(d.n_key) >= 0) and np.all(np.diff(d.residual_rms) <= 1e-15)
+    last = sweep[sweep.threshold == sweep.threshold.max()]
+    assert (last.n_key == 4).all() and np.allclose(last.residual_rms, 0)
+
+
+def test_key_set_bootstrap_is_stable_for_a_clear_case():
+    rng = np.random.default_rng(3)
+    ua, ub = S.base_samples(512, 4, "sobol", 3)
+    model = lambda v: (v - 0.5) @ np.array([[4.0], [2.0], [0.3], [0.1]])  # noqa: E731
+    ya, yb, yab = S.sobol_evaluate(model, ua, ub)
+    freq, counts = S.key_set_bootstrap(ya, yb, yab, NAMES, 50, rng, ["y"])
+    assert list(freq.y) == [1.0, 1.0, 0.0, 0.0] and (counts.union == 2).all()
+    assert list(freq.columns) == ["symbol", "y", "union"] and len(counts) == 50
+
+
+@pytest.mark.parametrize("st, threshold, message", [
+    ([0.5, -0.1, 0.6], 0.9, ">= 0"),
+    ([0.5, np.nan, 0.6], 0.9, "NaN"),
+    ([0.0, 0.0, 0.0], 0.9, "sum to zero"),
+    ([0.5, 0.5, 0.1], 1.0, "strictly between 0 and 1"),
+    ([0.5, 0.5, 0.1], 0.0, "strictly between 0 and 1"),
+    ([0.5, 0.5, 0.1], 90, "strictly between 0 and 1"),
+    ([[0.5, 0.5]], 0.9, r"shape \(D,\)"),
+    ([], 0.9, "non-empty"),
+])
+def test_bad_inputs_of_the_rule(st, threshold, message):
+    with pytest.raises(ValueError, match=message):
+        S.key_errors(st, threshold=threshold)
+
+
+def test_other_bad_inputs():
+    with pytest.raises(ValueError, match="3 names for 4"):
+        S.key_errors([1, 2, 3, 4], ["a", "b", "c"])
+    with pytest.raises(ValueError, match="unique"):
+        S.key_errors([1, 2, 3, 4], ["a", "a", "c", "d"])
+    with pytest.raises(ValueError, match="n_key must be"):
+        S.simplification_rate(22, 21)
+    with pytest.raises(ValueError, match="n_total must be"):
+        S.simplification_rate(0, 0)
+    with pytest.raises(ValueError, match="unknown error name"):
+        S.zero_non_key(np.ones((2, 4)), ["e"], NAMES)
+    with pytest.raises(ValueError, match="need the list of names"):
+        S.zero_non_key(np.ones((2, 4)), ["a"])
+    with pytest.raises(ValueError, match=r"in \[0, 4\)"):
+        S.zero_non_key(np.ones((2, 4)), [4])
+    with pytest.raises(ValueError, match="one shape"):
+        S.residual_summary(np.ones((5, 2)), np.ones((5, 3)))
+    with pytest.raises(ValueError, match="not among the names"):
+        S.union_key_set([S.key_errors([1, 0], ["p", "q"])], NAMES)
+    with pytest.raises(ValueError, match="must match"):
+        S.pooled_indices(np.ones((3, 2)), np.ones(3))
+    with pytest.raises(ValueError, match="share must be"):
+        S.expected_rms_ratio(1.5)
+    with pytest.raises(ValueError, match=r"shape \(n, 4\)"):
+        S.threshold_sweep(np.ones((4, 1)), [0.9], np.ones((3, 5)), lambda v: v, NAMES)
+    with pytest.raises(ValueError, match="n_boot"):
+        S.key_set_bootstrap(np.ones((4, 1)), np.ones((4, 1)), np.ones((4, 4, 1)), NAMES, 0, 0)

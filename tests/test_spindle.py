@@ -1,0 +1,246 @@
+"""Four-point separation, transfer function, bound of H, GAs, roundness (Yang et al. 2021)."""
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+from mtaccuracy import spindle as S
+
+N = 128
+POS = [0, 14, 65, 116]
+
+
+def _layout(rng, n=N):
+    """A random layout on the sampling grid with weights from Eq. 15 (well away from degenerate)."""
+    while True:
+        p = np.r_[0, np.sort(rng.choice(np.arange(1, n), 3, replace=False))]
+        phi = S.probe_angles(p, n)
+        if abs(np.sin(phi[2] - phi[1])) > 0.2:
+            w = S.full_weights(phi, rng.uniform(0.3, 2.0))
+            lam = np.abs(S.eigenvalues(phi, w, np.arange(n)))
+            lam[[1, n - 1]] = np.inf
+            if lam.min() > 1e-3:          # no harmonic but the first cancelled
+                return p, phi, w
+
+
+def _motion_without_fundamental(rng, n=N):
+    t = 2 * np.pi * np.arange(n) / n
+    z = rng.standard_normal(n) + 1j * rng.standard_normal(n)
+    z -= (z * np.exp(1j * t)).mean() * np.exp(-1j * t)
+    return z.real, z.imag
+
+
+def test_weights_cancel_the_first_harmonic_and_match_eq5():
+    rng = np.random.default_rng(1)
+    phi = rng.uniform(0, 2 * np.pi, (50, 3))
+    a3 = rng.uniform(-2, 2, 50)
+    w = S.full_weights(phi, a3)
+    lam1 = S.eigenvalues(phi, w, [1])[:, 0]
+    assert np.abs(lam1).max() < 1e-10
+    # Eq. 5 written with sample positions p, for the paper's layout
+    p1, p2, p3 = POS[1:]
+    a1 = (1.953 * np.sin(2 * np.pi * (p3 - p2) / N) - np.sin(2 * np.pi * p2 / N)) \
+        / np.sin(2 * np.pi * (p2 - p1) / N)
+    a2 = -(1.953 * np.sin(2 * np.pi * (p3 - p1) / N) - np.sin(2 * np.pi * p1 / N)) \
+        / np.sin(2 * np.pi * (p2 - p1) / N)
+    assert np.allclose(S.weights(S.probe_angles(POS, N), 1.953), (a1, a2), atol=1e-14)
+
+
+@pytest.mark.parametrize("trial", range(5))
+def test_exact_separation_of_random_profiles_and_motions(trial):
+    """Noise-free: profile (all harmonics) and a motion without the workpiece-synchronous
+    fundamental come back to round-off, for random layouts, batched."""
+    rng = np.random.default_rng(100 + trial)
+    p, phi, w = _layout(rng)
+    r = rng.standard_normal((3, N))
+    dxy = np.array([_motion_without_fundamental(rng) for _ in range(3)])
+    y = S.probe_signals(r, dxy[:, 0], dxy[:, 1], p)
+    prof, dx, dy = S.separate(y, phi, w)
+    scale = np.abs(r).max()
+    assert np.abs(prof - r).max() < 1e-10 * scale
+    assert np.abs(dx - dxy[:, 0]).max() < 1e-10 * scale
+    assert np.abs(dy - dxy[:, 1]).max() < 1e-10 * scale
+
+
+def test_radial_convention_recovers_a_radial_motion_and_the_first_harmonic():
+    rng = np.random.default_rng(7)
+    p, phi, w = _layout(rng)
+    t = 2 * np.pi * np.arange(N) / N
+    r = rng.standard_normal(N) + 1.2 * np.cos(t) - 0.8 * np.sin(t)
+    delta = rng.standard_normal(N) + 1.3
+    dx, dy, back = S.motion_from_scalar(delta, "radial")
+    s = S.separate_details(S.probe_signals(r, dx, dy, p), phi, w, first_harmonic="radial")
+    assert np.abs(s.profile - r).max() < 1e-10
+    assert np.abs(back(s.dx, s.dy) - delta).max() < 1e-10
+    assert np.allclose(S.rotation_error(s.dx, s.dy), delta, atol=1e-10)
+    # the eccentricity convention moves the exp(-i theta) part of this motion into the profile,
+    # and the sum of what the probes see is unchanged
+    e = S.separate_details(S.probe_signals(r, dx, dy, p), phi, w)
+    assert np.abs(e.profile - r).max() > 1e-3
+    assert np.allclose(S.probe_signals(e.profile, e.dx, e.dy, p),
+                       S.probe_signals(r, dx, dy, p), atol=1e-10)
+
+
+def test_the_matrix_has_rank_n_minus_2_and_lstsq_equals_the_fft_solution():
+    phi = S.probe_angles(POS, N)
+    w = S.full_weights(phi, 1.953)
+    a = S.circulant_matrix(POS, w, N)
+    assert np.linalg.matrix_rank(a) == N - 2
+    assert np.allclose(np.sort(np.abs(np.linalg.eigvals(a))),
+                       np.sort(np.abs(S.eigenvalues(phi, w, np.arange(N)))), atol=1e-9)
+    rng = np.random.default_rng(3)
+    y = S.probe_signals(rng.standard_normal(N), *_motion_without_fundamental(rng), POS)
+    s = S.separate_details(y, phi, w)
+    assert s.rank == N - 2 and list(s.cancelled) == [1]
+    ls = scipy.linalg.lstsq(a, w @ y, cond=1e-9)[0]
+    assert np.abs(ls - s.profile_no_first).max() < 1e-10
+    # a symmetric layout cancels every odd harmonic: rank N/2
+    sym = S.probe_angles([0, 32, 64, 96], N)
+    ws = S.full_weights(sym, 1.3)
+    assert np.linalg.matrix_rank(S.circulant_matrix([0, 32, 64, 96], ws, N)) == N // 2
+    ss = S.separate_details(S.probe_signals(rng.standard_normal(N), 0 * y[0], 0 * y[0],
+                                            [0, 32, 64, 96]), sym, ws)
+    assert list(ss.cancelled) == list(range(1, N // 2, 2))
+
+
+def test_transfer_function_predicts_the_noise_of_the_harmonics():
+    rng = np.random.default_rng(11)
+    phi = S.probe_angles(POS, N)
+    w = S.full_weights(phi, 1.953)
+    sigma, m = 0.3, 4000
+    y = rng.standard_normal((m, 4, N)) * sigma
+    s = S.separate_details(y, phi, w)
+    ks = np.array([2, 5, 20, 40])
+    a_k, b_k = S.harmonic_coefficients(s.profile_no_first, ks)
+    pred = 2 * S.transfer(phi, w, ks) * sigma ** 2 / N          # Eq. 18 with its 1/N
+    assert np.allclose(a_k.var(axis=0), pred, rtol=0.1)
+    assert np.allclose(b_k.var(axis=0), pred, rtol=0.1)
+    assert np.isinf(S.transfer(phi, w, [1])[0])
+
+
+def test_lower_bound_of_h_holds_and_is_reached_at_even_k():
+    rng = np.random.default_rng(5)
+    x = np.column_stack([rng.uniform(0, 2 * np.pi, (20000, 3)), rng.uniform(-3, 3, 20000)])
+    for k in (2, 3, 7, 20, 41):
+        assert S.objective_H(x, k).min() >= S.lower_bound_H(4) - 1e-12
+    for k in (2, 10, 20, 80):
+        assert S.objective_H(S.bound_layout(k), k) == pytest.approx(0.25, abs=1e-12)
+    # odd k: the bound is not reached (numerical optimum stays above 1/4)
+    h3, _ = S.reference_optimum(3, S.FULL_BOX, n_starts=1)
+    assert h3 > 0.27
+    with pytest.raises(ValueError, match="even k"):
+        S.bound_layout(7)
+
+
+def test_optimal_a3_matches_a_scan():
+    rng = np.random.default_rng(2)
+    phi = rng.uniform(0, 2 * np.pi, (20, 3))
+    a3, h = S.optimal_a3(phi, 12, (0.1, 3.0))
+    grid = np.linspace(0.1, 3.0, 20001)
+    hs = S.objective_H(np.concatenate([np.repeat(phi[:, None], grid.size, 1),
+                                       np.broadcast_to(grid[None, :, None], (20, grid.size, 1))],
+                                      -1), 12)
+    assert np.all(h <= hs.min(axis=1) + 1e-9)
+    assert np.allclose(h, hs.min(axis=1), rtol=1e-4)
+
+
+def test_worst_case_bound_for_grid_layouts():
+    rng = np.random.default_rng(9)
+    n = 64
+    for _ in range(200):
+        p = np.r_[0, rng.choice(np.arange(1, n), 3, replace=False)]
+        phi = S.probe_angles(p, n)
+        if abs(np.sin(phi[2] - phi[1])) < 1e-6:
+            continue
+        q2 = S.transfer(phi, S.full_weights(phi, rng.uniform(-2, 2)), np.arange(2, n - 1))
+        assert q2.max() >= S.worst_case_bound(n) - 1e-12
+
+
+def test_adaptive_probabilities_follow_eqs_22_23():
+    f = np.array([0.5, 1.0, 2.0])
+    pc, pm = S.adaptive_probabilities(f, 1.0, 50, 200)
+    assert np.allclose(pc, [0.99, 0.99 - 0.59 * 0.25, 0.99 - 0.59 * 0.25])
+    assert np.allclose(pm, [0.005, 0.005 + 0.085 * 0.25, 0.005 + 0.085 * 0.25])
+    pc0, pm0 = S.adaptive_probabilities(f, 1.0, 0, 200)
+    pc1, pm1 = S.adaptive_probabilities(f, 1.0, 200, 200)
+    assert np.allclose(pc0, 0.99) and np.allclose(pm0, 0.005)
+    assert np.allclose(pc1, [0.99, 0.4, 0.4]) and np.allclose(pm1, [0.005, 0.09, 0.09])
+    # printed Eq. 23: a negative probability for every fit individual after generation 0
+    _, pmp = S.adaptive_probabilities(f, 1.0, 50, 200, eq23="printed")
+    assert pmp[0] == pytest.approx(0.005) and np.all(pmp[1:] < 0)
+
+
+def test_ga_runs_are_batched_reproducible_and_use_the_probabilities():
+    kw = dict(n_runs=6, pop_size=20, generations=30, seed=4)
+    a = S.run_ga(20, **kw)
+    b = S.run_ga(20, **kw)
+    assert np.array_equal(a.history, b.history) and a.history.shape == (31, 6)
+    assert np.all(np.diff(a.history, axis=0) <= 0)          # elitism: best-so-far never worsens
+    assert np.allclose(S.objective_H(a.best_x, 20), a.best_h)
+    assert np.all(a.best_h >= 0.25)
+    lo, hi = np.array(S.PAPER_BOX).T
+    assert np.all((a.best_x >= lo) & (a.best_x <= hi))
+    # the mean rates used: Pc falls from 0.99, Pm rises from 0.005 (corrected Eq. 23)
+    assert a.pc[1] > a.pc[-1] and a.pm[-1] > a.pm[1] and a.pm.max() <= 0.09 + 1e-12
+    t = S.run_ga(20, adaptive=False, pc=0.7, pm=0.02, encoding="real", **kw)
+    assert np.allclose(t.pc[1:], 0.7) and np.allclose(t.pm[1:], 0.02)
+    per_run_k = S.run_ga(np.array([4, 4, 4, 10, 10, 10]), **kw)
+    assert per_run_k.best_h.shape == (6,)
+
+
+def test_convergence_generation():
+    hist = np.array([[1.0, 1.0], [0.5, 0.9], [0.26, 0.8], [0.25, 0.8]])
+    assert list(S.convergence_generation(hist, 0.25, 0.05)) == [2, -1]
+
+
+def test_roundness_lsc_and_minimum_zone():
+    t = 2 * np.pi * np.arange(258) / 258        # the trilobe's extremes fall on samples
+    r = 0.5 * np.cos(3 * t) + 0.2 + 0.3 * np.cos(t) - 0.1 * np.sin(t)     # eccentric trilobe
+    lsc, coef = S.lsc_roundness(r)
+    mz, _ = S.mz_roundness(r)
+    assert lsc == pytest.approx(1.0) and mz == pytest.approx(1.0, abs=1e-9)
+    assert np.allclose(coef, [0.2, 0.3, -0.1])
+    rng = np.random.default_rng(0)
+    rr = S.lowpass(rng.standard_normal((10, 256)), 30)
+    assert np.all(S.mz_roundness(rr)[0] <= S.lsc_roundness(rr)[0] + 1e-12)
+    prof = S.random_profile(128, np.arange(2, 30), rng, roundness=3.0)
+    assert S.mz_roundness(prof)[0] == pytest.approx(3.0)
+
+
+def test_simulated_measurements_average_the_noise():
+    rng = np.random.default_rng(1)
+    r = np.zeros(N)
+    y1 = S.simulate_measurements(r, r, r, POS, n_rev=2, interleave=2, async_sd=0.0,
+                                 noise_sd=1.0, n_measurements=400, rng=rng)
+    y8 = S.simulate_measurements(r, r, r, POS, n_rev=16, interleave=2, async_sd=0.0,
+                                 noise_sd=1.0, n_measurements=400, rng=rng)
+    assert y1.shape == (400, 4, N)
+    assert y1.std() == pytest.approx(1.0, rel=0.05) and y8.std() == pytest.approx(1 / 8 ** 0.5,
+                                                                                  rel=0.05)
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: S.weights([0.3, 0.3, 2.0], 1.0), "coincident or opposite"),
+    (lambda: S.weights([0.1, 0.3, 0.5, 2.0], 1.0), "phi_0 must be 0"),
+    (lambda: S.weights([0.3, 2.0], 1.0), "last axis 3"),
+    (lambda: S.probe_angles([0, 14.5, 65, 116], 128), "integer sample"),
+    (lambda: S.separate(np.zeros((3, 128)), S.probe_angles(POS, 128), [1, 1, 1]),
+     r"\(\.\.\., 4, N\)"),
+    (lambda: S.separate(np.zeros((4, 128)), [0.1, 2.0, 5.0], [1, 1, 1]), "integer p"),
+    (lambda: S.separate(np.zeros((4, 128)), S.probe_angles(POS, 128), [1.7487, 2.8273, 1.953]),
+     "do not cancel the first harmonic"),
+    (lambda: S.separate(np.full((4, 128), np.nan), S.probe_angles(POS, 128), [1, 1, 1]), "NaN"),
+    (lambda: S.objective_H(np.array([0.3, 2.0, 5.0, 1.0]), 1), "k = 1 is cancelled"),
+    (lambda: S.run_ga(20, pop_size=7), "even"),
+    (lambda: S.run_ga(20, generations=0), "generations"),
+    (lambda: S.run_ga(20, pc=1.5), "probabilities"),
+    (lambda: S.run_ga(20, bounds=[(0, 1)] * 3), "four"),
+    (lambda: S.run_ga(20, harmonics=[2, 3]), "either k"),
+    (lambda: S.adaptive_probabilities(1.0, 1.0, 5, 4), "generation"),
+    (lambda: S.adaptive_probabilities(1.0, 1.0, 1, 4, eq23="minus"), "eq23"),
+    (lambda: S.motion_from_scalar(np.zeros(8), "polar"), "unknown mapping"),
+    (lambda: S.lowpass(np.zeros(16), 9), "max_harmonic"),
+])
+def test_bad_inputs_are_refused_clearly(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
