@@ -13,14 +13,19 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent
-TEST_OUTPUT = ROOT / ".test-output"
+# One folder per test session, so that two sessions running at once cannot clear each other's
+# regenerated outputs; it is removed when the session ends.
+TEST_OUTPUT = ROOT / ".test-output" / f"session-{os.getpid()}"
 
 
 def pytest_configure(config):
-    if os.environ.get("PYTEST_XDIST_WORKER") is None:
-        shutil.rmtree(TEST_OUTPUT, ignore_errors=True)
-    TEST_OUTPUT.mkdir(exist_ok=True)
+    shutil.rmtree(TEST_OUTPUT, ignore_errors=True)
+    TEST_OUTPUT.mkdir(parents=True)
     os.environ["MTACCURACY_OUTPUT_BASE"] = str(TEST_OUTPUT)
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(TEST_OUTPUT, ignore_errors=True)
 
 
 def pytest_collection_modifyitems(config, items):

@@ -51,27 +51,18 @@ def _zheng_rows():
     yield ("Zheng 2024", "ac_double_turntable pose error", "1e6 samples", t,
            ">= 1 M samples/s", f"{1e6 / t / 1e6:.2f} M samples/s", None)
 
-    def pce():
-        u = sensitivity.base_samples(1000, 41, "lhs", 1)[0]
-        xi = sensitivity.from_unit_normal(u, np.ones(41))
-        yv = m.pose_error(xi * sd, pose)
-        alphas = sensitivity.multi_indices(41, 3)
-        psi = sensitivity.design_matrix(xi, alphas)
-        fit = sensitivity.fit_pce(xi, yv[:, 0], psi=psi, alphas=alphas)
-        return sensitivity.pce_sobol(fit)
-    t = _median(pce)
-    yield ("Zheng 2024", "PCE pipeline, one component", "1e3 samples, 13244-term basis, OMP",
-           t, "<= 1.5 s", "", 7.8761)
-
-    def pce6():
+    def pce(components):
         u = sensitivity.base_samples(1000, 41, "lhs", 1)[0]
         xi = sensitivity.from_unit_normal(u, np.ones(41))
         yv = m.pose_error(xi * sd, pose)
         alphas = sensitivity.multi_indices(41, 3)
         psi = sensitivity.design_matrix(xi, alphas)
         return [sensitivity.pce_sobol(sensitivity.fit_pce(xi, yv[:, k], psi=psi, alphas=alphas))
-                for k in range(6)]
-    t = _median(pce6, 1)
+                for k in components]
+    t = _median(lambda: pce([0]))
+    yield ("Zheng 2024", "PCE pipeline, one component", "1e3 samples, 13244-term basis, OMP",
+           t, "<= 1.5 s", "", 7.8761)
+    t = _median(lambda: pce(range(6)), 1)
     yield ("Zheng 2024", "PCE pipeline, all six components", "1e3 samples, degree 3", t, "", "",
            7.8761)
 

@@ -327,8 +327,8 @@ def calibrate(papers_folder=None, max_nfev: int = 20000, eq8_weight: float = 1.0
       of :data:`CALIBRATION_TIES` equal within a factor exp(0.1); all bounded at 3 prior sd.
 
     Not run by the notebook (it takes about a minute): the rounded result is stored in
-    :data:`SENSORS` and
-    :data:`GROUP_OFFSETS`, so generation needs no optimiser.
+    :data:`SENSORS` and :data:`GROUP_OFFSETS`, so generation needs no optimiser; run again, it
+    gives back the stored values.
     Returns (sensors, group_offsets, scipy result).
     """
     from scipy.optimize import least_squares

@@ -1,0 +1,394 @@
+"""Thermal module (Xu et al. 2022): decoupling, fuzzy clustering, grey relational grade,
+the CSV schema and its validation, the models, and the reconstructed dataset."""
+
+import shutil
+
+import numpy as np
+import pandas as pd
+import papermill as pm
+import pytest
+
+from mtaccuracy import paths, reproduction, thermal, thermal_data
+
+COMMITTED = paths.ROOT / thermal_data.DEFAULT_DIR
+RNG = np.random.default_rng(5)
+
+
+# ------------------------------------------------------------------ decoupling (Eq. 6, Eq. 7)
+
+def test_decouple_recovers_known_lines_exactly():
+    x = np.arange(0.0, 261.0, 20.0)
+    k = np.array([-9.8, 0.0, 12.5])
+    b = np.array([0.1, -4.0, 2.0])
+    y = thermal.compose(k, b, x)
+    assert y.shape == (3, 14) and y[0, -1] == pytest.approx(-9.8 * 0.26 + 0.1)
+    k2, b2 = thermal.decouple(x, y)
+    assert np.allclose(k2, k) and np.allclose(b2, b)
+
+
+def test_decouple_ignores_residuals_orthogonal_to_lines_and_matches_polyfit():
+    x = np.arange(185.0, 446.0, 20.0) - 185.0
+    basis = np.column_stack([np.ones_like(x), x])
+    noise = RNG.normal(size=(5, len(x)))
+    noise -= noise @ (basis @ np.linalg.pinv(basis)).T          # project out 1 and x
+    y = thermal.compose([1.0, -2.0, 3.0, -4.0, 5.0], [0.5, 0, 0, 0, -1], x) + noise
+    k, b = thermal.decouple(x, y)
+    assert np.allclose(k, [1, -2, 3, -4, 5]) and np.allclose(b, [0.5, 0, 0, 0, -1])
+    rough = y + RNG.normal(size=y.shape)
+    k, b = thermal.decouple(x, rough)
+    ref = np.array([np.polyfit(x, r, 1) for r in rough])
+    assert np.allclose(k, ref[:, 0] * 1000) and np.allclose(b, ref[:, 1])
+
+
+def test_decouple_refuses_mismatched_positions():
+    with pytest.raises(ValueError, match="distinct positions"):
+        thermal.decouple(np.zeros(3), np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="matching the last axis"):
+        thermal.decouple(np.arange(4.0), np.zeros((2, 3)))
+
+
+def test_printed_model_reads_rises_for_d_terms():
+    coef = {"intercept": 1.0, "T1": 2.0, "dT2": -3.0}
+    assert thermal_data.printed_model(coef, {"T1": np.array([1.0]), "T2": np.array([0.5])}) == \
+        pytest.approx([1.5])
+
+
+def test_metrics_by_hand():
+    m = thermal.metrics([1.0, -3.0, 0.0, 2.0])
+    assert m == pytest.approx({"rmse": np.sqrt(14 / 4), "max_residual": 3.0, "mae": 1.5})
+
+
+# ------------------------------------------------------------------ fuzzy clustering (Eqs. 1-3)
+
+def test_similarity_matrix_by_hand_is_blind_to_sign():
+    x = np.array([[1.0, 3.0, 1.0], [2.0, 2.0, 1.0], [3.0, 1.0, 4.0]])   # a, b = reversed a, c
+    r = thermal.similarity_matrix(x)
+    assert np.allclose(np.diag(r), 1.0)
+    assert r[0, 1] == pytest.approx(1.0)                        # |dev| patterns identical
+    assert r[0, 2] == pytest.approx(3 / np.sqrt(12))            # (1*1 + 0*1 + 1*2) / (sqrt2 sqrt6)
+    assert np.allclose(r, r.T)
+    with pytest.raises(ValueError, match=r"variable\(s\) \[1\] are constant"):
+        thermal.similarity_matrix(np.array([[1.0, 2.0], [2.0, 2.0]]))
+
+
+def test_transitive_closure_by_hand():
+    r = np.array([[1.0, 0.8, 0.2], [0.8, 1.0, 0.5], [0.2, 0.5, 1.0]])
+    assert np.allclose(thermal.max_min_compose(r, r)[0, 2], 0.5)   # max(min(.8,.5), ...)
+    t, k = thermal.transitive_closure(r)
+    assert np.allclose(t, [[1.0, 0.8, 0.5], [0.8, 1.0, 0.5], [0.5, 0.5, 1.0]])
+    assert k == 1                                                   # R^2 = R^4
+    assert np.array_equal(thermal.max_min_compose(t, t), t)
+
+
+def test_lambda_cut_by_hand():
+    t = np.array([[1.0, 0.8, 0.5], [0.8, 1.0, 0.5], [0.5, 0.5, 1.0]])
+    assert thermal.lambda_cut(t, 0.9).tolist() == [0, 1, 2]
+    assert thermal.lambda_cut(t, 0.8).tolist() == [0, 0, 1]
+    assert thermal.lambda_cut(t, 0.5).tolist() == [0, 0, 0]
+
+
+def test_fuzzy_clusters_recover_three_obvious_groups():
+    t = np.linspace(0, 1, 12)
+    shapes = [t, np.exp(-5 * (t - 0.5) ** 2), np.sin(9 * t) + 3 * t]
+    cols, names = [], []
+    for g, s in enumerate(shapes):
+        for j in range(3):
+            cols.append(s * (1 + 0.3 * j) + 0.002 * RNG.normal(size=t.size))
+            names.append(f"g{g}s{j}")
+    order = RNG.permutation(len(names))
+    cl = thermal.fuzzy_clusters(np.column_stack(cols)[:, order], [names[i] for i in order], 3)
+    assert len(cl.groups) == 3
+    assert sorted(sorted(g) for g in cl.groups) == [[f"g{g}s{j}" for j in range(3)]
+                                                   for g in range(3)]
+    assert 0 < cl.lam <= 1 and cl.squarings >= 1
+
+
+def test_fuzzy_clusters_refuses_impossible_counts():
+    with pytest.raises(ValueError, match="n_clusters must be in 1..2"):
+        thermal.fuzzy_clusters(RNG.normal(size=(5, 2)), ["a", "b"], 3)
+
+
+# ------------------------------------------------------------------ grey relational grade (Eq. 4)
+
+def test_grey_relational_grade_by_hand():
+    x0 = np.array([1.0, 0.5, 0.0])
+    x = np.array([[1.0, 0.0], [0.5, 0.5], [0.0, 1.0]])
+    # column 1 equals x0: every coefficient is 1; column 2: deltas 1, 0, 1 with min 0, max 1:
+    # (0 + 0.5) / (1 + 0.5) = 1/3, 1, 1/3 -> 5/9
+    assert np.allclose(thermal.grey_relational_grade(x0, x, 0.5), [1.0, 5 / 9])
+    # rho = 1: 1/2, 1, 1/2 -> 2/3
+    assert np.allclose(thermal.grey_relational_grade(x0, x, 1.0), [1.0, 2 / 3])
+    assert np.allclose(thermal.grey_relational_grade(x0, x0[:, None]), [1.0])
+    with pytest.raises(ValueError, match="rho must be in"):
+        thermal.grey_relational_grade(x0, x, 0.0)
+
+
+def test_selection_keeps_the_best_graded_sensor_per_cluster_and_mirrors_falling_ones():
+    t = np.linspace(0.0, 1.0, 10)
+    target = t**2
+    temps = pd.DataFrame({"A1": t**2 + 0.001 * t, "A2": t**1.2, "B1": -(t**2) * 3,
+                          "B2": -t * 3 + 0.2 * np.sin(7 * t), "C1": np.sin(6 * t)})
+    sel = thermal.select_sensitive_points(temps, target, 3, 0.5)
+    groups = sorted(sorted(g) for g in sel.clusters)
+    assert ["C1"] in groups
+    assert set(sel.selected) >= {"C1"}
+    for g in sel.clusters:                                   # the winner has the top grade
+        best = max(g, key=lambda s: sel.grades[s])
+        assert best in sel.selected
+    assert "B1" in sel.mirrored and "A1" not in sel.mirrored
+    assert sel.grades["A1"] == pytest.approx(1.0, abs=1e-3)
+    assert sel.grades["B1"] == pytest.approx(1.0, abs=1e-3)  # mirrored, same shape
+
+
+def test_most_frequent_breaks_ties_by_sensor_order():
+    picks = [["T1", "T6", "T12"], ["T1", "T7", "T12"], ["T2", "T6", "T11"]]
+    assert thermal.most_frequent(picks, 3, order=[f"T{i}" for i in range(1, 13)]) == \
+        ["T1", "T6", "T12"]
+
+
+# ------------------------------------------------------------------ the CSV schema
+
+@pytest.fixture
+def good_dir(tmp_path):
+    d = tmp_path / "good"
+    shutil.copytree(COMMITTED, d, ignore=shutil.ignore_patterns("*.md"))
+    return d
+
+
+def _edit(path, fn):
+    df = pd.read_csv(path, dtype=str, keep_default_na=False)
+    fn(df).to_csv(path, index=False)
+
+
+def test_reads_the_committed_reconstruction(good_dir):
+    d = thermal.read_measurements(good_dir)
+    assert d.temperatures.shape == (32, 12) and d.errors.shape == (32, 14)
+    assert d.sensors[0] == "T1" and d.sensors[-1] == "T12"
+    assert d.positions_mm[0] == 185 and d.positions_mm[-1] == 445
+    assert d.feeds == {1: 2000, 2: 4000, 3: 6000, 4: 8000}
+    assert np.allclose(d.rises().groupby(d.index.experiment).first(), 0.0)
+    assert d.subset([4]).experiments == [4]
+
+
+def test_write_then_read_is_byte_stable(good_dir, tmp_path):
+    d = thermal.read_measurements(good_dir)
+    assert thermal.write_measurements(d, good_dir) == []          # nothing changes
+    out = tmp_path / "copy"
+    assert len(thermal.write_measurements(d, out)) == 3
+    for f in COMMITTED.glob("*.csv"):
+        assert (out / f.name).read_bytes() == f.read_bytes()
+
+
+@pytest.mark.parametrize("file, change, message", [
+    ("errors.csv", lambda df: df.drop(columns="error_um"),
+     r"errors.csv: missing column\(s\) \['error_um'\]"),
+    ("temperatures.csv", lambda df: df.drop(columns="measurement"),
+     r"temperatures.csv: missing column\(s\) \['measurement'\]"),
+    ("errors.csv", lambda df: df.rename(columns={"error_um": "error_mm"}),
+     r"errors.csv: column 'error_mm' gives error in 'mm'; the schema needs 'error_um'"),
+    ("errors.csv", lambda df: df.rename(columns={"position_mm": "position_m"}),
+     r"column 'position_m' gives position in 'm'; the schema needs 'position_mm'"),
+    ("temperatures.csv", lambda df: df.rename(columns={"time_min": "time_s"}),
+     r"column 'time_s' gives time in 's'; the schema needs 'time_min'"),
+    ("temperatures.csv", lambda df: df.rename(columns={"T3_degC": "T3_K"}),
+     r"temperatures.csv: column 'T3_K': temperatures must be in degrees Celsius"),
+    ("temperatures.csv", lambda df: df.rename(columns={"T3_degC": "T3"}),
+     r"column 'T3': temperatures must be in degrees Celsius.*found 'no unit'"),
+    ("errors.csv", lambda df: df.assign(error_um=df.error_um.mask(df.index == 7, "NaN")),
+     r"errors.csv: column 'error_um' has a missing, NaN or non-numeric value \('NaN'\) "
+     r"on line\(s\) \[9\]"),
+    ("temperatures.csv", lambda df: df.assign(T5_degC=df.T5_degC.mask(df.index == 2, "")),
+     r"temperatures.csv: column 'T5_degC' has a missing, NaN or non-numeric value"),
+    ("errors.csv", lambda df: df.drop(index=30),
+     r"errors.csv: unequal lengths: experiment 1 measurement 3 has 13 positions, the data "
+     r"hold 14 \(missing 225 mm\)"),
+    ("temperatures.csv", lambda df: df.drop(index=31),
+     r"unequal lengths: the files do not list the same measurements.*only in errors.csv: "
+     r"\[\(4, 8\)\]"),
+    ("temperatures.csv", lambda df: pd.concat([df, df.iloc[[0]]]),
+     r"temperatures.csv: experiment 1 measurement 1 appears more than once"),
+    ("errors.csv", lambda df: pd.concat([df, df.iloc[[0]]]),
+     r"errors.csv: experiment 1 measurement 1 lists position 185 mm twice"),
+    ("temperatures.csv", lambda df: df.assign(time_min=df.time_min.mask(df.index == 3, "10")),
+     r"temperatures.csv: experiment 1: time_min must increase"),
+    ("temperatures.csv", lambda df: df[["experiment", "measurement", "time_min", "T1_degC"]],
+     r"needs at least 3 temperature columns"),
+])
+def test_malformed_files_are_refused_naming_file_and_problem(good_dir, file, change, message):
+    _edit(good_dir / file, change)
+    with pytest.raises(thermal.DataFormatError, match=message):
+        thermal.read_measurements(good_dir)
+
+
+def test_missing_file_and_folder_are_refused(good_dir, tmp_path):
+    (good_dir / "errors.csv").unlink()
+    with pytest.raises(thermal.DataFormatError, match=r"errors.csv: file not found"):
+        thermal.read_measurements(good_dir)
+    with pytest.raises(thermal.DataFormatError, match="not a folder"):
+        thermal.read_measurements(tmp_path / "nowhere")
+
+
+# ------------------------------------------------------------------ models
+
+def _synthetic(n_exp=4, n_meas=6, seed=0):
+    """Temperatures with k and b exactly linear in them (k from absolute T1, T2; b from rises
+    of T3): every model family should recover the relations."""
+    rng = np.random.default_rng(seed)
+    rows, temps, errors = [], [], []
+    x = np.arange(0.0, 100.0, 20.0)
+    for e in range(1, n_exp + 1):
+        base = rng.normal(25, 1, size=4)
+        for j in range(n_meas):
+            t = base + rng.normal(0, 0.5, size=4) + [0.3 * j, 0.2 * j, 0.4 * j, 0.0]
+            temps.append(t)
+            rows.append((e, j + 1, 10.0 * j))
+        block = np.array(temps[-n_meas:])
+        k = 2.0 * block[:, 0] - 1.0 * block[:, 1]
+        b = -3.0 * (block[:, 2] - block[0, 2]) + 0.5
+        errors.append(thermal.compose(k, b, x))
+    index = pd.DataFrame(rows, columns=["experiment", "measurement", "time_min"])
+    return thermal.ThermalData(index, pd.DataFrame(temps, columns=["T1", "T2", "T3", "T4"]),
+                               np.vstack(errors), x + 100.0)
+
+
+def test_decoupled_mlr_recovers_exact_linear_relations():
+    d = _synthetic()
+    m = thermal.Decoupled(["T1", "T2"], ["T3"]).fit(d.subset([1, 2, 3]))
+    c = m.coefficients().set_index(["target", "term"]).coefficient
+    assert c[("k (um/m)", "T1")] == pytest.approx(2.0) and c[("k (um/m)", "T2")] == \
+        pytest.approx(-1.0)
+    assert c[("b (um)", "dT3")] == pytest.approx(-3.0) and c[("b (um)", "intercept")] == \
+        pytest.approx(0.5)
+    test = d.subset(4)
+    assert np.allclose(m.predict(test), test.errors)
+
+
+def test_point_by_point_is_one_regression_per_position():
+    d = _synthetic()
+    p = thermal.PointByPoint(["T1", "T3"]).fit(d.subset([1, 2, 3]))
+    assert len(p.models) == len(d.positions_mm)
+    assert p.predict(d.subset(4)).shape == d.subset(4).errors.shape
+    assert list(p.coefficients(d.positions_mm).columns) == ["position_mm", "intercept", "T1",
+                                                            "T3"]
+
+
+def test_svr_search_is_grouped_and_deterministic():
+    d = _synthetic()
+    tr = d.subset([1, 2, 3])
+    k, _ = thermal.decouple(tr.offsets_mm(), tr.errors)
+    x = tr.temperatures[["T1", "T2"]].to_numpy()
+    a = thermal.svr_search(x, k, tr.groups)
+    b = thermal.svr_search(x, k, tr.groups)
+    assert a.best_params_ == b.best_params_ and a.best_score_ == b.best_score_
+    assert a.n_splits_ == 3                                       # one fold per experiment
+    assert a.best_params_["regressor__svr__kernel"] == "linear"   # the truth is linear
+    with pytest.raises(ValueError, match="at least 2 training experiments"):
+        thermal.svr_search(x, k, np.ones(len(k)))
+
+
+def test_evaluate_split_refuses_unknown_sensors_and_experiments():
+    d = _synthetic()
+    with pytest.raises(ValueError, match=r"no sensor\(s\) \['T9'\]"):
+        thermal.evaluate_split(d, [1, 2, 3], [4], sensors={"k": ["T9"]})
+    with pytest.raises(ValueError, match=r"unknown experiment\(s\) \[7\]"):
+        d.subset([7])
+
+
+# ------------------------------------------------------------------ the reconstruction
+
+@pytest.fixture(scope="module")
+def recon():
+    return thermal_data.reconstruct()
+
+
+def test_generator_regenerates_the_committed_files_byte_identically(recon, tmp_path):
+    written = thermal.write_measurements(recon, tmp_path)
+    assert sorted(p.name for p in written) == sorted(p.name for p in COMMITTED.glob("*.csv"))
+    for f in COMMITTED.glob("*.csv"):
+        assert (tmp_path / f.name).read_bytes() == f.read_bytes(), f.name
+    assert thermal.write_measurements(thermal_data.reconstruct(), tmp_path) == []
+
+
+def test_decoupling_the_reconstruction_gives_table5(recon):
+    k5, b5, _ = thermal_data.published_targets()
+    k, b = thermal.decouple(recon.offsets_mm(), recon.errors)
+    assert np.abs(k - k5.ravel()).max() <= 0.05
+    assert np.abs(b - b5.ravel()).max() <= 0.05
+    first = recon.index.measurement.to_numpy() == 1
+    assert np.all(recon.errors[first, 0] == 0.0)          # laser zeroed at the first target
+
+
+def test_the_printed_models_fit_the_reconstruction_within_the_published_residuals(recon):
+    models = reproduction.published("xu2022_models")
+    c = thermal_data.eq9_consistency(recon, models)
+    assert c.k_residual.abs().max() <= 3.6                # Table 7, largest slope residual
+    assert c.b_residual.abs().max() <= 0.8                # Table 7, largest intercept residual
+    rms4 = np.sqrt(np.mean(c[c.experiment == 4].k_residual ** 2))
+    assert 2.0 <= rms4 <= 3.2                             # Table 7: RMSE 2.6 um/m
+    r8 = thermal_data.eq8_residuals(recon, models)
+    assert sorted(r8.position_mm.unique()) == [185, 205, 225, 445]
+    assert r8.residual.abs().max() <= 4.3                 # Table 4, largest residual
+
+
+def test_reconstruction_is_physically_plausible(recon):
+    _, _, t1 = thermal_data.published_targets()
+    for _, r in t1.iterrows():
+        air = recon.subset(int(r.experiment)).temperatures["T10"]
+        assert abs(air.min() - r.ambient_min_C) <= 0.05 and abs(air.max() - r.ambient_max_C) <= 0.05
+    heat = ["T6", "T7", "T11", "T12"]
+    ends = recon.temperatures[heat].groupby(recon.index.experiment).agg(["first", "last"])
+    for s in heat:                                        # heat sources warm up
+        assert (ends[(s, "last")] > ends[(s, "first")]).all(), s
+    hottest = recon.temperatures.groupby(recon.index.experiment).max().max().idxmax()
+    assert hottest in ("T7", "T12")                       # the motor runs hottest
+    assert np.all(np.diff(recon.index.time_min.to_numpy().reshape(4, 8)) > 0)
+
+
+def test_prepare_never_writes_a_readers_folder(good_dir):
+    before = {f.name: (f.read_bytes(), f.stat().st_mtime_ns) for f in good_dir.iterdir()}
+    folder, changed, what = thermal_data.prepare(str(good_dir), regenerate=True, seed=7)
+    assert folder == good_dir and changed == [] and "read only" in what
+    assert {f.name: (f.read_bytes(), f.stat().st_mtime_ns) for f in good_dir.iterdir()} == before
+
+
+def test_prepare_regenerates_only_the_default_folder(tmp_path, monkeypatch):
+    monkeypatch.setenv(paths.OUTPUT_BASE_ENV, str(tmp_path))
+    folder, changed, what = thermal_data.prepare("data/thermal", regenerate=True)
+    assert folder == tmp_path / "data" / "thermal" and len(changed) == 3
+    assert "seed 2022" in what
+    assert thermal_data.prepare("data/thermal", regenerate=True)[1] == []   # byte-identical
+    assert thermal_data.prepare("data/thermal", regenerate=False)[0] == COMMITTED
+    assert thermal_data.is_default_dir(str(COMMITTED)) and not thermal_data.is_default_dir("x")
+
+
+def test_published_inputs_decoupled_beats_point_by_point_on_the_paper_split(recon):
+    fixed = {"point": ["T1", "T11", "T12"], "k": ["T1", "T6", "T12"], "b": ["T2", "T7", "T11"]}
+    r = thermal.evaluate_split(recon, [1, 2, 3], [4], kinds=("mlr",), sensors=fixed)
+    t = r.table.set_index(["method", "target"]).rmse
+    assert t[("decoupled_mlr", "thermal positioning error")] < 1.0
+    assert t[("decoupled_mlr", "thermal positioning error")] < \
+        t[("point_by_point_mlr", "thermal positioning error")]
+    assert r.inputs == fixed and len(r.position_selections) == 14
+
+
+# ------------------------------------------------------------------ the notebook on a reader's data
+
+def test_notebook_refuses_a_malformed_data_dir_and_leaves_it_alone(good_dir, tmp_path):
+    _edit(good_dir / "errors.csv", lambda df: df.rename(columns={"error_um": "error_mm"}))
+    before = {f.name: f.read_bytes() for f in good_dir.iterdir()}
+    with pytest.raises(pm.PapermillExecutionError, match="error_mm"):
+        pm.execute_notebook(str(paths.NOTEBOOKS / "04_xu2022_thermal_mlr_svr.ipynb"),
+                            str(tmp_path / "nb.ipynb"), cwd=str(paths.NOTEBOOKS),
+                            parameters={"data_dir": str(good_dir), "output_dir": str(tmp_path)},
+                            kernel_name="python3", progress_bar=False)
+    assert {f.name: f.read_bytes() for f in good_dir.iterdir()} == before
+
+
+@pytest.mark.after_notebooks
+def test_notebook_regenerated_the_committed_dataset(test_output):
+    """After the nbval run of notebook 04 (regenerating into .test-output/data/thermal)."""
+    fresh = test_output / thermal_data.DEFAULT_DIR
+    if not fresh.exists():
+        pytest.skip("notebook 04 did not run in this session")
+    for f in COMMITTED.glob("*.csv"):
+        assert (fresh / f.name).read_bytes() == f.read_bytes(), f.name
