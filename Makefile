@@ -13,7 +13,7 @@ NB ?= all
 PARAMS ?=
 PIP := $(PY) -m pip --disable-pip-version-check --no-input
 
-.PHONY: reproduce test lab bench clean distclean lint venv lock
+.PHONY: reproduce report browser test lab bench clean distclean lint venv lock
 
 venv: $(STAMP)
 
@@ -30,6 +30,15 @@ $(STAMP): environment.txt pyproject.toml
 reproduce: $(STAMP)
 	$(PY) -m mtaccuracy.runner $(NB) $(PARAMS)
 	$(PY) -m mtaccuracy.reproduction gather
+	$(PY) -m mtaccuracy.report
+
+# The static report (figures/index.html) from what is in figures/ now, without running anything.
+report: $(STAMP)
+	$(PY) -m mtaccuracy.report
+
+# Debian's Chromium and ChromeDriver for the browser test (root; apt-get; never a browser download).
+browser:
+	bash .ci/install-browser
 
 test: $(STAMP)
 	$(PY) -m ruff check lib tests notebooks conftest.py
@@ -49,12 +58,13 @@ lock:
 	rm -rf /tmp/mtaccuracy-lock && $(PYTHON) -m venv /tmp/mtaccuracy-lock
 	/tmp/mtaccuracy-lock/bin/pip install --quiet --upgrade pip setuptools
 	/tmp/mtaccuracy-lock/bin/pip install --quiet jupyterlab papermill numpy scipy SALib chaospy \
-	    pandas matplotlib nbval scikit-learn ipykernel pytest ruff sympy
+	    pandas matplotlib nbval scikit-learn ipykernel pytest ruff sympy playwright
 	{ head -3 environment.txt; /tmp/mtaccuracy-lock/bin/pip freeze --all; } > environment.txt.new
 	mv environment.txt.new environment.txt
 
 clean:
 	rm -rf notebooks/.running notebooks/.failed .pytest_cache .ruff_cache .test-output build
+	rm -rf figures/index.html figures/html figures/.runtimes.json
 	find . -path ./.venv -prune -o -name __pycache__ -type d -exec rm -rf {} +
 	find . -path ./.venv -prune -o -name .ipynb_checkpoints -type d -exec rm -rf {} +
 

@@ -14,7 +14,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent
 # One folder per test session, so that two sessions running at once cannot clear each other's
-# regenerated outputs; it is removed when the session ends.
+# regenerated outputs; it is removed when the session ends, except the browser test's
+# screenshot, kept in .test-output/report/.
 TEST_OUTPUT = ROOT / ".test-output" / f"session-{os.getpid()}"
 
 
@@ -25,6 +26,12 @@ def pytest_configure(config):
 
 
 def pytest_unconfigure(config):
+    # keep the browser test's screenshot (.test-output/report/index.png), drop the rest
+    kept = TEST_OUTPUT / "report"
+    if kept.is_dir():
+        target = TEST_OUTPUT.parent / "report"
+        shutil.rmtree(target, ignore_errors=True)
+        shutil.move(str(kept), target)
     shutil.rmtree(TEST_OUTPUT, ignore_errors=True)
 
 

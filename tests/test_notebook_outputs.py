@@ -66,8 +66,9 @@ def test_regenerated_tables_equal_committed(stem, test_output):
         _assert_tables_equal(fresh / p.name, p)
 
 
-def test_two_runs_give_byte_identical_tables(tmp_path):
-    """Notebook 03 with small parameters, twice: every CSV identical to the byte."""
+def test_two_runs_give_byte_identical_outputs(tmp_path):
+    """Notebook 03 with small parameters, twice: every CSV, PNG, SVG and the provenance
+    sidecar identical to the byte (output_dir differs, and is not part of the provenance)."""
     small = dict(n_samples=40, n_repeats=3, n_search_poses=16, n_search_samples=100,
                  grid_step_mm=250.0)
     outs = []
@@ -77,7 +78,10 @@ def test_two_runs_give_byte_identical_tables(tmp_path):
                             str(tmp_path / f"nb{k}.ipynb"), cwd=str(paths.NOTEBOOKS),
                             parameters=dict(small, output_dir=str(out)), kernel_name="python3",
                             progress_bar=False)
-        outs.append({p.name: p.read_bytes() for p in sorted(out.glob("*.csv"))})
-    assert outs[0].keys() == outs[1].keys() and len(outs[0]) >= 8
-    assert outs[0] == outs[1]
+        outs.append({p.name: p.read_bytes() for p in sorted(out.iterdir())})
+    assert outs[0].keys() == outs[1].keys()
+    assert {".csv", ".png", ".svg", ".json"} <= {p.rsplit(".", 1)[1] and "." + p.rsplit(".", 1)[1]
+                                                 for p in outs[0]}
+    different = [name for name in outs[0] if outs[0][name] != outs[1][name]]
+    assert different == []  # CSVs, figures (with provenance) and provenance.json alike
     assert os.environ.get(paths.OUTPUT_BASE_ENV)  # conftest redirected relative outputs

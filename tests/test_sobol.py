@@ -71,3 +71,15 @@ def test_bad_input():
         S.base_samples(8, 2, "halton", 0)
     with pytest.raises(ValueError, match="one shape"):
         S.sobol_evaluate(ishigami, np.zeros((4, 3)), np.zeros((5, 3)))
+
+
+def test_linear_indices_equal_the_sampling_estimate_of_a_linear_model():
+    jac = np.array([[2.0, -1.0, 0.5], [0.0, 0.0, 0.0]])
+    sd = np.array([1.0, 3.0, 2.0])
+    lin = S.linear_indices(jac, sd)
+    assert np.allclose(lin[0], [4.0, 9.0, 1.0] / np.float64(14.0)) and not lin[1].any()
+    ua, ub = S.base_samples(2**14, 3, "sobol", 5)
+    s1, st = S.sobol_indices(lambda x: x @ jac[0], S.from_unit_normal(ua, sd),
+                             S.from_unit_normal(ub, sd))
+    assert np.allclose(st[:, 0], lin[0], atol=0.02) and np.allclose(s1[:, 0], lin[0], atol=0.02)
+

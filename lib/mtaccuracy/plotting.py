@@ -1,7 +1,9 @@
 """One figure style and deterministic saving.
 
 ``save(fig, folder, name)`` writes PNG and SVG with no timestamps (SVG ``Date`` removed, a
-fixed ``svg.hashsalt`` for element ids), so the same figure gives the same bytes.
+fixed ``svg.hashsalt`` for element ids), so the same figure gives the same bytes, and stamps the
+run's provenance into each file (PNG text chunk ``mtaccuracy:provenance``, SVG
+``Description``; see :mod:`mtaccuracy.provenance`).
 """
 
 from __future__ import annotations
@@ -10,6 +12,8 @@ from pathlib import Path
 
 import matplotlib as mpl
 import matplotlib.pyplot as plt
+
+from . import provenance
 
 STYLE = {
     "figure.dpi": 100,
@@ -40,19 +44,21 @@ def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = Non
     """Save ``fig`` as ``folder/name.<fmt>`` for each format, without timestamps."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    stamp = provenance.as_text()
     out = []
     for fmt in formats:
         path = folder / f"{name}.{fmt}"
         if fmt == "svg":
-            meta = {"Date": None, "Creator": "mtaccuracy"}
+            meta = {"Date": None, "Creator": "mtaccuracy", "Description": stamp}
         elif fmt == "png":
-            meta = {"Software": "mtaccuracy"}
+            meta = {"Software": "mtaccuracy", "mtaccuracy:provenance": stamp}
         else:
             meta = {}
         if title:
             meta["Title"] = title
         with mpl.rc_context(STYLE):
             fig.savefig(path, format=fmt, metadata=meta, bbox_inches="tight")
+        provenance.register_output(path)
         out.append(path)
     return out
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from . import paths
+from . import paths, provenance
 
 COLUMNS = ["item", "quantity", "published", "reproduced", "unit", "tolerance", "verdict", "note"]
 VERDICTS = ("reproduced", "close", "differs", "not reproducible")
@@ -35,6 +35,7 @@ def published(name: str, required: list[str] | None = None, folder=None) -> pd.D
         have = sorted(p.stem for p in path.parent.glob("*.csv"))
         raise FileNotFoundError(f"no published table {path}; available: {', '.join(have)}")
     df = pd.read_csv(path, dtype=str, keep_default_na=False)
+    provenance.track(path)
     missing = [c for c in (required or []) if c not in df.columns]
     if missing:
         raise ValueError(f"{path}: missing column(s) {missing}; has {list(df.columns)}")
@@ -71,7 +72,8 @@ def write_card(rows: list[dict], path) -> pd.DataFrame:
 
 
 def save_table(df: pd.DataFrame, path, float_format: str = "%.6g") -> Path:
-    """Write a CSV deterministically: fixed float format, '\\n' line ends, no index."""
+    """Write a CSV deterministically (fixed float format, '\\n' line ends, no index) and record
+    it, with its hash, in the folder's ``provenance.json``."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
@@ -79,6 +81,7 @@ def save_table(df: pd.DataFrame, path, float_format: str = "%.6g") -> Path:
     data = buf.getvalue().encode("utf-8")
     if not path.exists() or path.read_bytes() != data:
         path.write_bytes(data)
+    provenance.register_output(path)
     return path
 
 

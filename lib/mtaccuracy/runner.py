@@ -210,11 +210,16 @@ def validate(notebook: str | Path, overrides: dict) -> dict:
 
 
 def check_parameters(namespace: dict, notebook: str) -> None:
-    """Inside a notebook: check the current values of its declared parameters."""
-    for name, p in read_parameters(notebook).items():
+    """Inside a notebook: check the current values of its declared parameters, and start the
+    provenance record of this run (:mod:`mtaccuracy.provenance`)."""
+    from . import provenance
+
+    declared = read_parameters(notebook)
+    for name, p in declared.items():
         if name not in namespace:
             raise ParameterError(f"{notebook}: parameter {name!r} is not defined")
         _check_one(p, namespace[name], notebook)
+    provenance.start(notebook_path(notebook).stem, {k: namespace[k] for k in declared})
 
 
 def _strip_injected(nb: dict) -> dict:
@@ -274,7 +279,18 @@ def run(notebook: str | Path, overrides: dict | None = None, progress: bool = Tr
     shutil.copy2(path, backup / path.name)
     path.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     out.unlink()
+    _record_runtime(path.stem, seconds)
     return seconds
+
+
+def _record_runtime(stem: str, seconds: float) -> None:
+    """Keep the last run time of each notebook for the report (``figures/.runtimes.json``,
+    not committed: it is a measurement of this machine)."""
+    rt = paths.FIGURES / ".runtimes.json"
+    data = json.loads(rt.read_text(encoding="utf-8")) if rt.exists() else {}
+    data[stem] = round(seconds, 1)
+    rt.parent.mkdir(parents=True, exist_ok=True)
+    rt.write_text(json.dumps(dict(sorted(data.items())), indent=1) + "\n", encoding="utf-8")
 
 
 def main(argv=None) -> int:

@@ -35,7 +35,7 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVR
 
-from . import reproduction
+from . import provenance, reproduction
 
 __all__ = [
     "DataFormatError", "ThermalData", "read_measurements", "write_measurements",
@@ -128,6 +128,7 @@ def _read_csv(path: Path) -> pd.DataFrame:
                              "see data/thermal/README.md)")
     try:
         df = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
+        provenance.track(path)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         raise _problem(path, f"not a readable CSV file ({exc})") from None
     df.columns = [c.strip() for c in df.columns]

@@ -14,7 +14,7 @@ with column i taken from B).
 from __future__ import annotations
 
 __all__ = ["base_samples", "from_unit_uniform", "from_unit_normal", "sobol_evaluate",
-           "sobol_estimate", "sobol_bootstrap", "sobol_indices"]
+           "sobol_estimate", "sobol_bootstrap", "sobol_indices", "linear_indices"]
 
 from collections.abc import Callable
 
@@ -137,3 +137,14 @@ def sobol_bootstrap(ya, yb, yab, n_boot: int, seed, conf: float = 0.95, chunk: i
 def sobol_indices(model, a, b, chunk: int = 200_000, progress=None):
     """Convenience: :func:`sobol_evaluate` then :func:`sobol_estimate`; returns (S1, ST)."""
     return sobol_estimate(*sobol_evaluate(model, a, b, chunk=chunk, progress=progress))
+
+
+def linear_indices(jacobian: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """Sobol indices of a linear model with independent inputs: for output k and input i,
+    ``J_ki^2 sd_i^2 / sum_j J_kj^2 sd_j^2`` (first-order = total; any distribution).
+
+    ``jacobian`` (..., q, d), ``sd`` (d,).  An output with zero variance gets zeros.
+    """
+    v = (np.asarray(jacobian, dtype=float) * np.asarray(sd, dtype=float)) ** 2
+    tot = v.sum(axis=-1, keepdims=True)
+    return np.divide(v, tot, out=np.zeros_like(v), where=tot > 0)

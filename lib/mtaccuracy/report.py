@@ -1,0 +1,213 @@
+"""The static reproduction report: ``figures/index.html``, opened from disk, no server needed.
+
+Per paper: its citation, the scorecard (published vs reproduced, the verdict by colour and by
+word, the note), every regenerated figure captioned with the paper's figure number and what
+the scorecard says differs, its provenance (from the PNG itself), links to every CSV table and
+to an HTML export of the executed notebook (``figures/html/<stem>.html``).  A top section sums
+the verdicts over all papers and gives the last run time of each notebook (recorded by the
+runner in ``figures/.runtimes.json``; the only run-dependent content, and only when present).
+
+The report uses no script and no external resource; the notebook exports have their CDN script
+tags removed, so they open offline too (LaTeX then shows as source).  ``python -m
+mtaccuracy.report`` builds it; ``make reproduce`` does so at the end.
+"""
+
+from __future__ import annotations
+
+import argparse
+import html
+import json
+import re
+from pathlib import Path
+
+import pandas as pd
+from PIL import Image
+
+from . import paths, provenance, reproduction
+
+RUNTIMES = ".runtimes.json"
+COLOURS = {"reproduced": "#1a9850", "close": "#d9a400", "differs": "#d73027",
+           "not reproducible": "#7f7f7f"}
+CSS = """
+body { font-family: system-ui, sans-serif; margin: 2rem auto; max-width: 1200px; color: #222;
+       line-height: 1.4; padding: 0 1rem; }
+h1 { margin-bottom: 0.2rem; } h2 { border-bottom: 2px solid #ddd; padding-bottom: 0.2rem;
+       margin-top: 3rem; }
+table { border-collapse: collapse; margin: 0.5rem 0 1rem; font-size: 0.85rem; }
+th, td { border: 1px solid #ddd; padding: 0.25rem 0.5rem; vertical-align: top; text-align: left; }
+th { background: #f3f3f3; } td.num { text-align: right; }
+.verdict { display: inline-block; color: #fff; border-radius: 3px; padding: 0 0.4rem;
+           white-space: nowrap; font-weight: 600; }
+figure { margin: 1.5rem 0; border: 1px solid #eee; padding: 0.5rem; }
+figure img { max-width: 100%; height: auto; }
+figcaption { font-size: 0.9rem; } details { font-size: 0.8rem; } code { font-size: 0.8rem; }
+.citation { color: #555; } .links a { margin-right: 0.8rem; }
+"""
+
+
+def _e(text) -> str:
+    return html.escape(str(text), quote=True)
+
+
+def _badge(verdict: str) -> str:
+    return (f'<span class="verdict" style="background:{COLOURS.get(verdict, "#444")}">'
+            f"{_e(verdict)}</span>")
+
+
+def _figure_label(name: str) -> str:
+    """``fig05_...`` -> "Fig. 5"; ``fig08_09_...`` -> "Figs. 8-9"; other names as they are."""
+    m = re.match(r"figs?(\d+)(?:_(\d+))?(?:_|$)", name)
+    if not m:
+        return name
+    a, b = int(m.group(1)), m.group(2)
+    return f"Figs. {a}-{int(b)}" if b and b.isdigit() and len(b) <= 2 else f"Fig. {a}"
+
+
+def _numbers(label: str) -> set[int]:
+    nums = [int(x) for x in re.findall(r"\d+", label)]
+    return set(range(nums[0], nums[-1] + 1)) if len(nums) >= 2 and "-" in label else set(nums)
+
+
+def _differs_for(card: pd.DataFrame, label: str) -> str:
+    """What the scorecard says about a figure: verdict counts of the rows naming its number."""
+    if card.empty or not label.startswith("Fig"):
+        return ""
+    want = _numbers(label)
+    rows = card[[bool(want & _numbers(str(i))) and str(i).lower().startswith("fig")
+                 for i in card["item"]]]
+    if rows.empty:
+        return "No scorecard row names this figure."
+    counts = rows["verdict"].value_counts()
+    text = ", ".join(f"{n} {v}" for v, n in counts.items())
+    bad = rows[rows["verdict"].isin(["differs", "close", "not reproducible"])]
+    note = f" First difference: {bad.iloc[0]['quantity']} ({bad.iloc[0]['note']})." \
+        if not bad.empty else ""
+    return f"Scorecard rows for {label}: {text}.{note}"
+
+
+def _provenance_html(rec: dict) -> str:
+    if not rec:
+        return ""
+    params = ", ".join(f"{k}={v}" for k, v in rec.get("parameters", {}).items())
+    inputs = "".join(f"<li><code>{_e(k)}</code> sha256 {_e(v[:16])}…</li>"
+                     for k, v in rec.get("inputs", {}).items())
+    pkgs = ", ".join(f"{k} {v}" for k, v in rec.get("packages", {}).items())
+    return (f"<details><summary>provenance</summary><ul>"
+            f"<li>commit <code>{_e(rec.get('commit', ''))}</code>, library sha256 "
+            f"<code>{_e(str(rec.get('library_sha256', ''))[:16])}…</code></li>"
+            f"<li>notebook <code>{_e(rec.get('notebook', ''))}</code></li>"
+            f"<li>parameters: {_e(params)}</li><li>inputs:<ul>{inputs}</ul></li>"
+            f"<li>packages: {_e(pkgs)}</li></ul></details>")
+
+
+def export_notebook(nb: Path, out: Path) -> Path:
+    """HTML export of an executed notebook (no execution), with external scripts removed."""
+    from nbconvert import HTMLExporter
+
+    body, _ = HTMLExporter(template_name="lab").from_filename(str(nb))
+    body = re.sub(r'<script[^>]*src="https?://[^"]*"[^>]*>\s*</script>', "", body)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(body, encoding="utf-8")
+    return out
+
+
+def build(figures=None, notebooks=None) -> Path:
+    """Write ``<figures>/index.html`` and ``<figures>/html/<stem>.html``; returns the index."""
+    figures = Path(figures or paths.FIGURES)
+    notebooks = Path(notebooks or paths.NOTEBOOKS)
+    index = {}
+    with open(paths.PAPERS / "index.csv", encoding="utf-8") as fh:
+        for r in pd.read_csv(fh, dtype=str, keep_default_na=False).to_dict("records"):
+            index[r["notebook"]] = r
+    cards = reproduction.collect(figures)
+    summary = reproduction.summary(cards)
+    rt_path = figures / RUNTIMES
+    runtimes = json.loads(rt_path.read_text(encoding="utf-8")) if rt_path.exists() else {}
+    stems = sorted(p.parent.name for p in figures.glob("*/reproduction.csv"))
+
+    out = ['<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">',
+           "<title>mtaccuracy: reproduction report</title>",
+           f"<style>{CSS}</style></head><body>",
+           "<h1>mtaccuracy: reproduction report</h1>",
+           "<p>Every table and figure of five machine-tool accuracy papers, regenerated by "
+           "<code>make reproduce</code>, beside the published values. Verdicts: "
+           + " ".join(_badge(v) for v in reproduction.VERDICTS)
+           + ' (<a href="REPRODUCTION.md">scorecard as Markdown</a>).</p>',
+           '<table class="summary"><tr><th>paper</th><th>notebook</th>'
+           + "".join(f"<th>{_badge(v)}</th>" for v in reproduction.VERDICTS)
+           + "<th>total</th><th>last run time</th></tr>"]
+    for _, r in summary.iterrows():
+        rt = runtimes.get(r["notebook"])
+        out.append(f'<tr><td><a href="#{_e(r["notebook"])}">{_e(r["paper"])}</a></td>'
+                   f"<td><code>{_e(r['notebook'])}</code></td>"
+                   + "".join(f'<td class="num">{r[v]}</td>' for v in reproduction.VERDICTS)
+                   + f'<td class="num">{r["total"]}</td>'
+                   + f'<td class="num">{f"{rt:.0f} s" if rt is not None else "not run here"}'
+                   + "</td></tr>")
+    tot = summary[list(reproduction.VERDICTS) + ["total"]].sum() if not summary.empty else None
+    if tot is not None:
+        total_rt = f"{sum(runtimes.values()):.0f} s" if runtimes else ""
+        out.append("<tr><th>all papers</th><th></th>"
+                   + "".join(f'<th class="num">{tot[v]}</th>' for v in reproduction.VERDICTS)
+                   + f'<th class="num">{tot["total"]}</th><th class="num">{total_rt}</th></tr>')
+    out.append("</table>")
+
+    for stem in stems:
+        folder = figures / stem
+        meta = index.get(stem, {})
+        card = cards[cards["notebook"] == stem]
+        nb = notebooks / f"{stem}.ipynb"
+        links = ['<a href="' + _e(f"html/{stem}.html") + '">executed notebook (HTML)</a>'] \
+            if nb.exists() else []
+        if nb.exists():
+            export_notebook(nb, figures / "html" / f"{stem}.html")
+        links += [f'<a href="{_e(stem)}/{_e(p.name)}">{_e(p.name)}</a>'
+                  for p in sorted(folder.glob("*.csv"))]
+        out += [f'<section class="paper" id="{_e(stem)}">',
+                f"<h2>{_e(meta.get('paper', stem))}</h2>",
+                f'<p class="citation">{_e(meta.get("citation", ""))}</p>',
+                f'<p class="links">{" ".join(links)}</p>',
+                "<h3>Scorecard</h3><table><tr><th>item</th><th>quantity</th><th>published</th>"
+                "<th>reproduced</th><th>unit</th><th>tolerance</th><th>verdict</th>"
+                "<th>note</th></tr>"]
+        for _, r in card.iterrows():
+            out.append(f'<tr class="score-row" data-notebook="{_e(stem)}" '
+                       f'data-verdict="{_e(r["verdict"])}"><td>{_e(r["item"])}</td>'
+                       f"<td>{_e(r['quantity'])}</td><td>{_e(r['published'])}</td>"
+                       f"<td>{_e(r['reproduced'])}</td><td>{_e(r['unit'])}</td>"
+                       f"<td>{_e(r['tolerance'])}</td><td>{_badge(r['verdict'])}</td>"
+                       f"<td>{_e(r['note'])}</td></tr>")
+        out.append("</table><h3>Figures</h3>")
+        for png in sorted(folder.glob("*.png")):
+            label = _figure_label(png.stem)
+            with Image.open(png) as im:
+                title = im.info.get("Title", "")
+            svg = png.with_suffix(".svg")
+            out.append(
+                f'<figure id="{_e(stem)}-{_e(png.stem)}"><img class="figure" '
+                f'src="{_e(stem)}/{_e(png.name)}" alt="{_e(label)}: {_e(title or png.stem)}">'
+                f"<figcaption><strong>{_e(label)}</strong>"
+                f"{': ' + _e(title) if title else ''}. {_e(_differs_for(card, label))} "
+                + (f'<a href="{_e(stem)}/{_e(svg.name)}">SVG</a>' if svg.exists() else "")
+                + f"{_provenance_html(provenance.from_png(png))}</figcaption></figure>")
+        out.append("</section>")
+    out.append("</body></html>")
+    path = figures / "index.html"
+    text = "\n".join(out) + "\n"
+    if not path.exists() or path.read_text(encoding="utf-8") != text:
+        path.write_text(text, encoding="utf-8")
+    return path
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.report")
+    ap.add_argument("--figures", default=None, help="figures folder (default: figures/)")
+    args = ap.parse_args(argv)
+    path = build(args.figures)
+    shown = path.relative_to(paths.ROOT) if path.is_relative_to(paths.ROOT) else path
+    print(f"report: {shown}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
