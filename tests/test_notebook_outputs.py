@@ -85,3 +85,10 @@ def test_two_runs_give_byte_identical_outputs(tmp_path):
     different = [name for name in outs[0] if outs[0][name] != outs[1][name]]
     assert different == []  # CSVs, figures (with provenance) and provenance.json alike
     assert os.environ.get(paths.OUTPUT_BASE_ENV)  # conftest redirected relative outputs
+
+
+@pytest.mark.parametrize("stem", STEMS)
+def test_outputs_do_not_depend_on_where_the_repository_lives(stem):
+    """A stored output that shows this checkout's absolute path would differ in every clone."""
+    text = (paths.NOTEBOOKS / f"{stem}.ipynb").read_text(encoding="utf-8")
+    assert str(paths.ROOT) not in text

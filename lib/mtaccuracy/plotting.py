@@ -40,12 +40,12 @@ def use_style() -> None:
     mpl.rcParams.update(STYLE)
 
 
-def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = None) -> list[Path]:
-    """Save ``fig`` as ``folder/name.<fmt>`` for each format, without timestamps."""
+def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = None) -> None:
+    """Save ``fig`` as ``folder/name.<fmt>`` for each format, without timestamps.  Returns
+    nothing, so that a notebook cell ending with it shows no machine-specific path."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     stamp = provenance.as_text()
-    out = []
     for fmt in formats:
         path = folder / f"{name}.{fmt}"
         if fmt == "svg":
@@ -59,8 +59,6 @@ def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = Non
         with mpl.rc_context(STYLE):
             fig.savefig(path, format=fmt, metadata=meta, bbox_inches="tight")
         provenance.register_output(path)
-        out.append(path)
-    return out
 
 
 def close(fig) -> None:

@@ -71,9 +71,10 @@ def write_card(rows: list[dict], path) -> pd.DataFrame:
     return df
 
 
-def save_table(df: pd.DataFrame, path, float_format: str = "%.6g") -> Path:
+def save_table(df: pd.DataFrame, path, float_format: str = "%.6g") -> None:
     """Write a CSV deterministically (fixed float format, '\\n' line ends, no index) and record
-    it, with its hash, in the folder's ``provenance.json``."""
+    it, with its hash, in the folder's ``provenance.json``.  Returns nothing, so that a notebook
+    cell ending with it shows no machine-specific path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
@@ -82,7 +83,6 @@ def save_table(df: pd.DataFrame, path, float_format: str = "%.6g") -> Path:
     if not path.exists() or path.read_bytes() != data:
         path.write_bytes(data)
     provenance.register_output(path)
-    return path
 
 
 def _papers_index() -> dict[str, dict]:

@@ -306,7 +306,8 @@ def write_measurements(data: ThermalData, folder, temperature_decimals: int = 2,
     for name, df, fmt in tables:
         p = folder / name
         before = p.read_bytes() if p.exists() else None
-        if reproduction.save_table(df, p, float_format=fmt).read_bytes() != before:
+        reproduction.save_table(df, p, float_format=fmt)
+        if p.read_bytes() != before:
             changed.append(p)
     return changed
 
