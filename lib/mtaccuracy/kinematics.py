@@ -75,24 +75,31 @@ def error_transform(delta: np.ndarray, eps: np.ndarray, *, exact: bool = False) 
     return homogeneous(rot, delta)
 
 
+def screw_exp(w: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Exponential of the twist with angular part ``w`` and linear part ``u`` (..., 3) each, of
+    any magnitude: ``[[exp([w]x), V u], [0, 1]]`` with
+    ``V = I + (1 - cos t)/t^2 [w]x + (t - sin t)/t^3 [w]x^2``, ``t = |w|`` (series below 1e-6,
+    so a pure translation, w = 0, gives V = I)."""
+    w = np.asarray(w, dtype=float)
+    u = np.asarray(u, dtype=float)
+    k = hat(w)
+    t = np.linalg.norm(w, axis=-1)[..., None, None]
+    small = t < 1e-6
+    safe = np.where(small, 1.0, t)
+    a = np.where(small, 0.5 - t**2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    b = np.where(small, 1.0 / 6.0 - t**2 / 120.0, (safe - np.sin(safe)) / safe**3)
+    v = np.eye(3) + a * k + b * (k @ k)
+    return homogeneous(rotation_exp(w), (v @ u[..., None])[..., 0])
+
+
 def twist_exp(omega: np.ndarray, v: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """Exponential of the twist (omega, v) times ``theta``: the screw motion as (..., 4, 4).
 
     ``omega`` (..., 3) is a unit axis direction (or zero for a prismatic joint), ``v`` (..., 3)
     the linear part, ``theta`` (...) the joint value (rad for revolute, mm for prismatic).
     """
-    omega = np.asarray(omega, dtype=float)
-    v = np.asarray(v, dtype=float)
     theta = np.asarray(theta, dtype=float)[..., None]
-    w = omega * theta
-    rot = rotation_exp(w)
-    k = hat(omega)
-    th = theta[..., None]
-    # Translation part: (I*theta + (1-cos)K + (theta - sin)K^2) v for a unit axis; theta*v
-    # for a prismatic joint (omega = 0, where K = 0 makes the same formula exact).
-    g = np.eye(3) * th + (1.0 - np.cos(th)) * k + (th - np.sin(th)) * (k @ k)
-    p = (g @ v[..., None])[..., 0]
-    return homogeneous(rot, p)
+    return screw_exp(np.asarray(omega, dtype=float) * theta, np.asarray(v, dtype=float) * theta)
 
 
 def chain(*transforms: np.ndarray) -> np.ndarray:

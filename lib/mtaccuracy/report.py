@@ -115,10 +115,7 @@ def build(figures=None, notebooks=None) -> Path:
     """Write ``<figures>/index.html`` and ``<figures>/html/<stem>.html``; returns the index."""
     figures = Path(figures or paths.FIGURES)
     notebooks = Path(notebooks or paths.NOTEBOOKS)
-    index = {}
-    with open(paths.PAPERS / "index.csv", encoding="utf-8") as fh:
-        for r in pd.read_csv(fh, dtype=str, keep_default_na=False).to_dict("records"):
-            index[r["notebook"]] = r
+    index = reproduction.papers_index()
     cards = reproduction.collect(figures)
     summary = reproduction.summary(cards)
     rt_path = figures / RUNTIMES

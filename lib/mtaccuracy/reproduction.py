@@ -85,7 +85,8 @@ def save_table(df: pd.DataFrame, path, float_format: str = "%.6g") -> None:
     provenance.register_output(path)
 
 
-def _papers_index() -> dict[str, dict]:
+def papers_index() -> dict[str, dict]:
+    """``data/papers/index.csv``: notebook stem -> its row (paper, citation, seed)."""
     with open(paths.PAPERS / "index.csv", newline="", encoding="utf-8") as fh:
         return {r["notebook"]: r for r in csv.DictReader(fh)}
 
@@ -97,7 +98,7 @@ def _md_cell(text) -> str:
 def collect(figures=None) -> pd.DataFrame:
     """Every ``figures/<stem>/reproduction.csv``, with a ``paper`` and ``notebook`` column."""
     figures = Path(figures or paths.FIGURES)
-    index = _papers_index()
+    index = papers_index()
     frames = []
     for card in sorted(figures.glob("*/reproduction.csv")):
         stem = card.parent.name

@@ -83,8 +83,6 @@ class Machine:
         e = np.concatenate([eye, -eye])                                   # (2d, d)
         rows = np.tile(e, (n_poses, 1))
         rep = {k: np.repeat(np.broadcast_to(v, (n_poses,)), 2 * d) for k, v in vals.items()}
-        pe = self.pose_error_reference(rows, rep) if hasattr(self, "pose_error_reference") \
-            else self.pose_error(rows, rep)
-        pe = pe.reshape(n_poses, 2, d, 6)
+        pe = self.pose_error(rows, rep).reshape(n_poses, 2, d, 6)
         return np.swapaxes((pe[:, 0] - pe[:, 1]) / (2 * step), 1, 2)
 

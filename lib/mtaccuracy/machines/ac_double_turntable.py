@@ -40,6 +40,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .. import errors as _errors
+from ..kinematics import homogeneous
 from ._base import Machine
 
 AXES = ("x", "y", "z", "A", "C")
@@ -157,13 +158,8 @@ class ACDoubleTurntable(Machine):
         return _compose(_inverse(g_bw), g_bt)
 
     def transforms(self, errors, pose: Mapping):
-        (ra, ta), (ri, ti) = self.relative(errors, pose), self.relative(errors, pose, False)
-        four = np.zeros(ra.shape[:-2] + (4, 4))
-        four[..., 3, 3] = 1.0
-        actual, ideal = four.copy(), four.copy()
-        actual[..., :3, :3], actual[..., :3, 3] = ra, ta
-        ideal[..., :3, :3], ideal[..., :3, 3] = ri, ti
-        return actual, ideal
+        return (homogeneous(*self.relative(errors, pose)),
+                homogeneous(*self.relative(errors, pose, with_errors=False)))
 
     def pose_error(self, errors, pose: Mapping) -> np.ndarray:
         """(n, 6): tool-tip position error Px, Py, Pz (mm) and tool-axis direction error
@@ -223,14 +219,6 @@ _ANGLES = ["e_xy", "e_yy", "e_zy", "S_xy", "e_xx", "e_yx", "e_zx", "S_yz", "S_xz
            "e_xc", "e_yc", "e_zc", "b_CA"]
 
 
-def _h(r, t):
-    out = np.zeros(np.broadcast_shapes(r.shape[:-2], t.shape[:-1]) + (4, 4))
-    out[..., :3, :3] = r
-    out[..., :3, 3] = t
-    out[..., 3, 3] = 1.0
-    return out
-
-
 def _fill_rot_xyz(out, ca, sa, cb, sb, cc, sc):
     """Write Rx Ry Rz into out[..., :3, :3] from cosines and sines."""
     out[:, 0, 0] = cb * cc
@@ -264,8 +252,8 @@ def fast_pose_error(machine: ACDoubleTurntable, errors: np.ndarray, pose: Mappin
     ang = [idx[s] for s in _ANGLES]
     lin = {a: [idx[f"d_x{a}"], idx[f"d_y{a}"], idx[f"d_z{a}"]] for a in "xyzac"}
     am = [idx["d_xAM"], idx["d_yAM"], idx["d_zAM"]]
-    i_a = _h(_rot_xyz(p["A"], 0.0, 0.0), np.zeros(3))
-    i_c = _h(_rot_xyz(0.0, 0.0, p["C"]), np.zeros(3))
+    i_a = homogeneous(_rot_xyz(p["A"], 0.0, 0.0), np.zeros(3))
+    i_c = homogeneous(_rot_xyz(0.0, 0.0, p["C"]), np.zeros(3))
     res = np.empty((n, 6)) if out is None else out
     m = min(chunk, n)
     buf = {k: np.zeros((m, 4, 4)) for k in ("ey", "ex", "sq", "ez", "ea", "la", "ec", "lc",

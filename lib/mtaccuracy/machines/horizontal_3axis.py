@@ -61,7 +61,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .. import errors as _errors
-from ..kinematics import chain, hat, homogeneous, rotation_exp, translation
+from ..kinematics import chain, hat, homogeneous, rotation_exp, screw_exp, translation
 from ._base import Machine
 
 AXES = ("x", "y", "z")
@@ -105,18 +105,9 @@ def error_twist_exp(eps: np.ndarray, delta: np.ndarray, exact: bool = True) -> n
     The exact form is ``[[exp([eps]x), V delta], [0, 1]]`` with
     ``V = I + (1 - cos t)/t^2 [eps]x + (t - sin t)/t^3 [eps]x^2``, ``t = |eps|``.
     """
-    eps = np.asarray(eps, dtype=float)
-    delta = np.asarray(delta, dtype=float)
-    k = hat(eps)
     if not exact:
-        return homogeneous(np.eye(3) + k, delta)
-    t = np.linalg.norm(eps, axis=-1)[..., None, None]
-    small = t < 1e-6
-    safe = np.where(small, 1.0, t)
-    a = np.where(small, 0.5 - t**2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
-    b = np.where(small, 1.0 / 6.0 - t**2 / 120.0, (safe - np.sin(safe)) / safe**3)
-    v = np.eye(3) + a * k + b * (k @ k)
-    return homogeneous(rotation_exp(eps), (v @ delta[..., None])[..., 0])
+        return homogeneous(np.eye(3) + hat(np.asarray(eps, dtype=float)), delta)
+    return screw_exp(eps, delta)
 
 
 def _inverse(g: np.ndarray) -> np.ndarray:
@@ -216,10 +207,7 @@ class Horizontal3Axis(Machine):
         single = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
         if any(v.shape != (1,) for v in single.values()):
             raise ValueError("first_order_coefficients takes one pose (scalars)")
-        steps = h * np.eye(self.n_errors)
-        plus = self.pose_error(steps, {k: v[0] for k, v in single.items()})
-        minus = self.pose_error(-steps, {k: v[0] for k, v in single.items()})
-        return ((plus - minus) / (2 * h)).T
+        return self.jacobian(pose, step=h)[0]
 
 
 def linear_sobol_indices(machine: Horizontal3Axis, bounds, pose: Mapping | None = None,
