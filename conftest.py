@@ -1,13 +1,22 @@
-"""Test-session setup shared by the unit tests and the notebook (nbval) items.
+"""Test-session setup shared by the unit tests and the notebook checks.
 
-Executed notebooks write their figures and tables under ``.test-output/`` (through
-``$MTACCURACY_OUTPUT_BASE``), never over the committed ``figures/``; items marked
-``after_notebooks`` run after every notebook item, so they can compare what the notebooks
-just regenerated with what is committed.
+* Executed notebooks write their figures and tables under ``.test-output/session-<pid>/``
+  (through ``$MTACCURACY_OUTPUT_BASE``), never over the committed ``figures/``.
+* When the session includes tests that use the ``notebook_runs`` fixture
+  (tests/test_notebooks.py), every notebook starts executing in the background as soon as the
+  tests are collected, two at a time (``python -m mtaccuracy.runner NN --copy-to DIR``), while
+  the unit tests run; those tests wait for the run they need.
+* A session-wide guard fails the run if anything in the working tree's ``figures/`` or
+  ``notebooks/`` changed while the tests ran.
 """
 
+import hashlib
 import os
 import shutil
+import subprocess
+import sys
+import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -17,12 +26,141 @@ ROOT = Path(__file__).resolve().parent
 # regenerated outputs; it is removed when the session ends, except the browser test's
 # screenshot, kept in .test-output/report/.
 TEST_OUTPUT = ROOT / ".test-output" / f"session-{os.getpid()}"
+GUARDED = [ROOT / "figures", ROOT / "notebooks"]
+# Ignored by git and written by the runner outside the tests; not part of the guard.
+_UNGUARDED = {".runs.json", "index.html", "html", ".running", ".failed", ".backup",
+              ".ipynb_checkpoints"}
+NOTEBOOK_TIMEOUT_S = 1200
+#: The extra runs of tests/test_notebooks.py: notebook 03 twice with small parameters.
+SMALL_03 = ["n_samples=40", "n_repeats=3", "n_search_poses=16", "n_search_samples=100",
+            "grid_step_mm=250.0"]
+
+
+def _snapshot() -> dict:
+    out = {}
+    for top in GUARDED:
+        for p in sorted(top.rglob("*")):
+            rel = p.relative_to(ROOT)
+            if p.is_file() and not set(rel.parts) & _UNGUARDED and \
+                    not any(part.startswith(".") and ("staging" in part or "old-" in part)
+                            for part in rel.parts):
+                out[str(rel)] = hashlib.sha256(p.read_bytes()).hexdigest()
+    return out
+
+
+class NotebookRuns:
+    """Notebook executions in the background, ``jobs`` at a time."""
+
+    def __init__(self, base: Path, jobs: int):
+        self.base, self.jobs = base, jobs
+        self.env = {k: v for k, v in os.environ.items() if k != "MTACCURACY_STAGING"}
+        self.queue: list[tuple[str, str, list[str]]] = []
+        self.done: dict[str, tuple[int, str, float]] = {}
+        self.cond = threading.Condition()
+        self.thread: threading.Thread | None = None
+
+    def add(self, name: str, notebook: str, params: list[str]) -> None:
+        self.queue.append((name, notebook, params))
+
+    def folder(self, name: str) -> Path:
+        return self.base / name
+
+    def start(self) -> None:
+        self.thread = threading.Thread(target=self._work, daemon=True)
+        self.thread.start()
+
+    def _work(self) -> None:
+        active: dict[str, tuple[subprocess.Popen, float, object]] = {}
+        pending = list(self.queue)
+        while pending or active:
+            while pending and len(active) < self.jobs:
+                name, nb, params = pending.pop(0)
+                log = open(self.base / f"{name}.log", "w+")  # noqa: SIM115 - closed below
+                cmd = [sys.executable, "-m", "mtaccuracy.runner", nb, *params,
+                       f"--copy-to={self.folder(name)}"]
+                # the environment as the session started (a test may be changing os.environ
+                # in the main thread right now)
+                active[name] = (subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
+                                                 cwd=ROOT, env=self.env), time.perf_counter(),
+                                log)
+            time.sleep(0.1)
+            for name, (proc, t0, log) in list(active.items()):
+                timed_out = time.perf_counter() - t0 > NOTEBOOK_TIMEOUT_S
+                if proc.poll() is None and not timed_out:
+                    continue
+                if timed_out:
+                    proc.kill()
+                    proc.wait()
+                log.seek(0)
+                text = log.read()
+                log.close()
+                with self.cond:
+                    self.done[name] = (proc.returncode if not timed_out else -1, text,
+                                       time.perf_counter() - t0)
+                    self.cond.notify_all()
+                del active[name]
+
+    def result(self, name: str) -> tuple[int, str, float]:
+        """Wait for run ``name``: (exit code, its log, seconds)."""
+        with self.cond:
+            self.cond.wait_for(lambda: name in self.done, timeout=NOTEBOOK_TIMEOUT_S + 60)
+        if name not in self.done:
+            pytest.fail(f"notebook run {name} did not finish")
+        return self.done[name]
+
+
+_RUNS: NotebookRuns | None = None
 
 
 def pytest_configure(config):
     shutil.rmtree(TEST_OUTPUT, ignore_errors=True)
     TEST_OUTPUT.mkdir(parents=True)
     os.environ["MTACCURACY_OUTPUT_BASE"] = str(TEST_OUTPUT)
+    config._mtaccuracy_guard = _snapshot()
+
+
+def pytest_collection_modifyitems(config, items):
+    # the notebook checks last, so the unit tests run while the notebooks execute
+    late = [i for i in items if "notebook_runs" in getattr(i, "fixturenames", ())]
+    items[:] = [i for i in items if i not in late] + late
+
+
+def pytest_collection_finish(session):
+    global _RUNS
+    if not any("notebook_runs" in getattr(i, "fixturenames", ()) for i in session.items):
+        return
+    from mtaccuracy import runner
+
+    base = TEST_OUTPUT / "notebooks"
+    base.mkdir(parents=True, exist_ok=True)
+    _RUNS = NotebookRuns(base, jobs=max(1, min(2, os.cpu_count() or 1)))
+    known = runner.last_runs()
+    stems = sorted((p.stem for p in runner.all_notebooks()),  # the longest first
+                   key=lambda s: -float(known.get(s, {}).get("seconds", 0)))
+    for stem in stems:
+        _RUNS.add(stem, stem, [])
+    for k in (1, 2):
+        _RUNS.add(f"03_small_{k}", "03", SMALL_03)
+    _RUNS.start()
+
+
+@pytest.fixture(scope="session")
+def notebook_runs() -> NotebookRuns:
+    if _RUNS is None:
+        pytest.skip("notebook runs were not started")
+    return _RUNS
+
+
+def pytest_sessionfinish(session, exitstatus):
+    before = getattr(session.config, "_mtaccuracy_guard", None)
+    if before is None:
+        return
+    after = _snapshot()
+    changed = sorted(k for k in set(before) | set(after) if before.get(k) != after.get(k))
+    if changed:
+        print(f"\nERROR: the tests changed the working tree's figures/ or notebooks/: "
+              f"{', '.join(changed[:10])}", file=sys.stderr)
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED
 
 
 def pytest_unconfigure(config):
@@ -35,11 +173,19 @@ def pytest_unconfigure(config):
     shutil.rmtree(TEST_OUTPUT, ignore_errors=True)
 
 
-def pytest_collection_modifyitems(config, items):
-    late = [i for i in items if i.get_closest_marker("after_notebooks")]
-    items[:] = [i for i in items if i not in late] + late
-
-
 @pytest.fixture(scope="session")
 def test_output() -> Path:
     return TEST_OUTPUT
+
+
+@pytest.fixture(scope="session")
+def committed_report() -> Path:
+    """The report built once from a copy of the committed ``figures/`` (the notebook exports
+    take most of the time); returns that copy's folder."""
+    from mtaccuracy import report
+
+    figures = TEST_OUTPUT / "committed-report" / "figures"
+    shutil.copytree(ROOT / "figures", figures,
+                    ignore=shutil.ignore_patterns("html", "index.html", ".*"))
+    report.build(figures)
+    return figures

@@ -166,3 +166,21 @@ def test_bad_input():
         M.pose_error(np.zeros((1, 41)), dict(POSE, B=1.0))
     with pytest.raises(ValueError, match="shape \\(n, 41\\)"):
         M.pose_error(np.zeros((1, 21)), POSE)
+
+
+def test_closed_form_jacobian_equals_differences_of_the_full_model():
+    poses = dict(x=RNG.uniform(-400, 400, 6), y=RNG.uniform(-425, 425, 6),
+                 z=RNG.uniform(-275, 275, 6), A=RNG.uniform(-2.2, 2.2, 6),
+                 C=RNG.uniform(0, 6.3, 6), L=RNG.uniform(0, 120, 6))
+    jac = M.linear_jacobian(poses)
+    assert jac.shape == (6, 6, 41)
+    fd = M.jacobian(poses)  # central differences, step 1e-6: about 1e-8 absolute noise
+    assert np.abs(jac - fd).max() < 1e-6
+    # a translational error enters exactly linearly: a 1 mm difference is exact to rounding
+    tr = [j for j, c in enumerate(M.catalogue) if c.translational]
+    fd_big = M.jacobian(poses, step=1.0)
+    assert np.abs(jac[:, :, tr] - fd_big[:, :, tr]).max() < 1e-12
+    # a scalar pose gives one Jacobian; the fixed convention falls back to differences
+    assert M.linear_jacobian(POSE).shape == (1, 6, 41)
+    fixed = build("ac_double_turntable", convention="fixed")
+    assert np.allclose(fixed.linear_jacobian(POSE), fixed.jacobian(POSE))

@@ -205,3 +205,100 @@ def test_bad_inputs():
         h3.linear_sobol_indices(M, np.vstack([-SCALE, SCALE]), pose=dict(x=0.0))
     with pytest.raises(ValueError, match="unknown machine"):
         build("horizontal_5axis")
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+def test_first_order_jacobian_is_exact_and_batched(layout):
+    """Closed-form coefficients: equal to central differences of the full model (which carry
+    ~1e-8 of rounding), batched over poses, and bitwise equal for exchangeable errors."""
+    m = h3.Horizontal3Axis(layout)
+    poses = {k: RNG.uniform(-700, 700, 4) for k in ("x", "y", "z")}
+    poses.update(tool_x=5.0, tool_z=RNG.uniform(-200, 0, 4))
+    jac = m.first_order_jacobian(poses)
+    assert jac.shape == (4, 6, 21)
+    assert not np.any(np.signbit(jac) & (jac == 0))  # tables print 0, not -0
+    for i in range(4):
+        one_pose = {k: (v[i] if np.ndim(v) else v) for k, v in poses.items()}
+        assert np.allclose(jac[i], m.jacobian(one_pose)[0], atol=1e-6)
+        assert np.array_equal(jac[i], m.first_order_coefficients(one_pose))
+    # translations enter with exactly +-1 or 0; straightness pairs along one direction tie exactly
+    for a in "xyz":
+        for b in "xyz":
+            assert set(np.unique(jac[:, :3, NAMES.index(f"d{a}({b})")])) <= {-1.0, 0.0, 1.0}
+    # Ex: dx(y) and dx(z) have coefficients of equal magnitude at every pose
+    dxy, dxz = jac[:, 0, NAMES.index("dx(y)")], jac[:, 0, NAMES.index("dx(z)")]
+    assert np.array_equal(np.abs(dxy), np.abs(dxz))
+
+
+def test_linear_indices_at_poses_equal_one_pose_at_a_time_and_tie_exactly():
+    b = np.vstack([-SCALE, SCALE])
+    poses = dict(x=np.array([0.0, 175.0, 700.0]), y=np.array([0.0, 450.0, 600.0]),
+                 z=np.array([0.0, 125.0, 500.0]))
+    many = h3.linear_indices_at_poses(M, b, poses)
+    assert many.shape == (3, 21, 3)
+    for i in range(3):
+        _, st = h3.linear_sobol_indices(M, b, pose={k: v[i] for k, v in poses.items()})
+        assert np.allclose(many[i], st, rtol=1e-14, atol=0)
+    # exchangeable errors (coefficient +-1, same range) get the same index to the bit
+    assert many[1, NAMES.index("dx(y)"), 0] == many[1, NAMES.index("dx(z)"), 0]
+    assert many[1, NAMES.index("dz(x)"), 2] == many[1, NAMES.index("dz(y)"), 2]
+
+
+def test_a_coincidental_tie_is_broken_by_catalogue_order():
+    """At z = 125 mm the Abbe term of ey(z) (125 mm x 80 urad = 10 um) equals the straightness
+    range of dx(y) and dx(z): three tied indices in Ex, of which the 90 % rule needs one.  The
+    tie is decided by catalogue order (dx(y) first), not by the last bit of the arithmetic."""
+    from mtaccuracy import sensitivity as S
+
+    b = np.vstack([-SCALE, SCALE])
+    st = h3.linear_indices_at_poses(M, b, dict(x=175.0, y=450.0, z=125.0))[0]
+    j = [NAMES.index(s) for s in ("ey(z)", "dx(y)", "dx(z)")]
+    assert np.ptp(st[j, 0]) < 1e-15 * st[j, 0].max()  # equal up to rounding
+    keys = S.key_errors_by_output(S.merge_ties(st), NAMES, ["Ex", "Ey", "Ez"], 0.9)
+    assert keys["Ex"].names == ("ez(x)", "ez(z)", "dx(y)")
+    # whichever of the three the rounding favours, the answer is the same
+    for winner in j:
+        nudged = st.copy()
+        nudged[winner, 0] *= 1 + 4e-16
+        again = S.key_errors_by_output(S.merge_ties(nudged), NAMES, ["Ex", "Ey", "Ez"], 0.9)
+        assert again["Ex"].names == keys["Ex"].names
+
+
+@pytest.mark.parametrize("layout", ["z/xy", "/xyz", "xz/y"])
+@pytest.mark.parametrize("exact", [True, False])
+def test_rotation_translation_path_equals_the_4x4_product(layout, exact):
+    """The (R, t) evaluation against the 4x4 product of the twist exponentials and a general
+    matrix inverse, with errors large enough that every order matters."""
+    m = h3.Horizontal3Axis(layout, exact=exact)
+    n = 7
+    e = RNG.uniform(-1, 1, size=(n, 21)) * SCALE * 100
+    pose = dict(x=RNG.uniform(0, 700, n), y=RNG.uniform(0, 600, n), z=RNG.uniform(0, 500, n),
+                tool_x=3.0, tool_z=RNG.uniform(-200, 0, n))
+    d = m._directions(e)
+
+    def carriage(a, sign):
+        return [kinematics.translation(d[a] * (sign * pose[a])[:, None]),
+                h3.error_twist_exp(e[:, m._eps[a]], e[:, m._delta[a]], exact)]
+
+    tool = [g for a in m.tool_axes for g in carriage(a, 1.0)]
+    tip = np.stack([np.broadcast_to(pose.get(k, 0.0), n) for k in h3.TOOL_OFFSETS], axis=-1)
+    g = kinematics.chain(*tool, kinematics.translation(tip))
+    if m.workpiece_axes:
+        work = kinematics.chain(*[w for a in m.workpiece_axes for w in carriage(a, -1.0)])
+        g = np.linalg.inv(work) @ g
+    ideal = np.stack([pose["x"] + 3.0, pose["y"], pose["z"] + pose["tool_z"]], axis=-1)
+    assert np.allclose(m.position_error(e, pose), g[:, :3, 3] - ideal, rtol=0, atol=1e-12)
+    actual, ideal4 = m.transforms(e, pose)
+    assert np.allclose(actual, g, rtol=0, atol=1e-12)
+    assert np.allclose(ideal4[:, :3, 3], ideal, rtol=0, atol=0)
+
+
+def test_exponential_coefficients_series_and_closed_form_agree():
+    t = np.array([0.0, 1e-6, 9.99e-4, 1e-3, 1.01e-3, 0.3, 2.0])
+    a, b, c = h3._exp_coefficients(t**2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ref = (np.sin(t) / t, (1 - np.cos(t)) / t**2, (t - np.sin(t)) / t**3)
+    for got, want, at0 in zip((a, b, c), ref, (1.0, 0.5, 1 / 6), strict=True):
+        assert got[0] == at0
+        assert np.allclose(got[3:], want[3:], rtol=1e-9, atol=0)  # closed form is exact there
+        assert np.allclose(got[1:3], [at0, want[2]], rtol=1e-6)

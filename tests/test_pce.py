@@ -87,3 +87,52 @@ def test_loo_error_equals_brute_force_leave_one_out():
         c = np.linalg.lstsq(psi[keep], y[keep], rcond=None)[0]
         res.append(y[i] - psi[i] @ c)
     assert err == pytest.approx(np.mean(np.square(res)) / np.var(y), rel=1e-10)
+
+
+def test_loo_path_equals_loo_error_on_every_leading_block():
+    psi = np.c_[np.ones(40), RNG.standard_normal((40, 6))]
+    y = psi @ RNG.standard_normal(7) + 0.05 * RNG.standard_normal(40)
+    path = S.loo_path(psi, y)
+    each = [S.loo_error(psi[:, :k], y)[0] for k in range(1, 8)]
+    assert np.allclose(path, each, rtol=1e-10, atol=0)
+    assert np.allclose(S.loo_path(psi, y, corrected=False),
+                       [S.loo_error(psi[:, :k], y, corrected=False)[0] for k in range(1, 8)],
+                       rtol=1e-10, atol=0)
+
+
+def test_fit_pce_outputs_equals_one_fit_per_column():
+    xi = RNG.standard_normal((120, 4))
+    y = np.c_[interacting(xi[:, [0, 1, 2]]), xi[:, 3] - 0.3 * (xi[:, 0] ** 2 - 1)]
+    both = S.fit_pce_outputs(xi, y, degree=2)
+    for k in range(2):
+        one = S.fit_pce(xi, y[:, k], degree=2)
+        assert np.array_equal(both[k].alphas, one.alphas) and np.allclose(both[k].coef, one.coef)
+        assert both[k].loo == pytest.approx(one.loo, rel=1e-12)
+    with pytest.raises(ValueError, match=r"\(n, q\)"):
+        S.fit_pce_outputs(xi, y[:50])
+
+
+def test_selection_treats_rounding_level_differences_as_ties():
+    # three bases whose LOO errors differ only in the twelfth digit: the smallest basis wins,
+    # whichever happens to be smallest by rounding
+    basis, terms, degree, q = [42, 903, 13244], [32, 32, 32], [1, 2, 3], [1.0, 1.0, 1.0]
+    for loo in ([2e-3 * (1 + 1e-12), 2e-3, 2e-3 * (1 - 1e-12)], [2e-3, 2e-3 * (1 + 1e-12), 2e-3]):
+        assert S.pce_selection_order(loo, basis, terms, degree, q)[0] == 0
+    # a real difference wins over the size of the basis
+    assert S.pce_selection_order([2e-3, 1e-3, 2e-3], basis, terms, degree, q)[0] == 1
+    # below the target accuracy every fit is as good as asked for: ties, even at a factor 2
+    assert S.pce_selection_order([2e-9, 1e-9, 3e-9], basis, terms, degree, q, floor=1e-8)[0] == 0
+    assert S.pce_selection_order([2e-9, 1e-9, 3e-9], basis, terms, degree, q)[0] == 1
+    # equal basis: fewer terms, then lower degree, then smaller q-norm
+    assert S.pce_selection_order([1.0, 1.0], [83, 83], [5, 4], [2, 2], [0.5, 0.5])[0] == 1
+    assert S.pce_selection_order([1.0, 1.0], [83, 83], [5, 5], [2, 2], [0.75, 0.5])[0] == 1
+
+
+def test_select_pce_on_a_linear_model_takes_the_smallest_basis():
+    xi = RNG.standard_normal((200, 5))
+    # linear, but for 2e-5 of the variance
+    y = xi @ np.array([1.0, -0.5, 0.3, 0.0, 2.0]) + 0.01 * (xi[:, 0] * xi[:, 1])
+    # the grid lists the largest basis first: equal LOO errors must not go to the first one
+    best, table = S.select_pce(xi, y, degrees=(3, 2, 1), q_norms=(1.0, 0.5), target=1e-3)
+    assert all(row[4] < 1e-3 for row in table)  # every basis reaches the target accuracy
+    assert (best.degree, best.n_candidates) == (1, 6)

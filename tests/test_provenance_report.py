@@ -2,7 +2,6 @@
 
 import json
 import re
-import shutil
 
 import matplotlib
 import pandas as pd
@@ -25,7 +24,8 @@ def run_record(tmp_path):
 def test_record_is_complete_and_deterministic(run_record):
     rec = provenance.record()
     assert rec == provenance.record()
-    assert set(rec) == {"commit", "library_sha256", "notebook", "parameters", "inputs", "packages"}
+    assert set(rec) == {"library_sha256", "notebook", "notebook_sha256", "parameters", "inputs",
+                        "packages"}  # content hashes only: no git commit in figure bytes
     assert rec["notebook"] == "02_rong_sobol_21_errors"
     assert "output_dir" not in rec["parameters"] and rec["parameters"]["n_base"] == 8192
     assert "data/papers/rong_facts.csv" in rec["inputs"]
@@ -51,11 +51,56 @@ def test_figures_and_tables_carry_it(run_record):
     assert set(side["files"]) == {"fig01_demo.png", "fig01_demo.svg", "t.csv"}
 
 
-def test_report_lists_every_row_and_figure(tmp_path):
+def test_the_record_does_not_change_with_the_commit_or_the_outputs(run_record, tmp_path):
+    rec = provenance.record()
+    assert provenance.git_commit  # still available for the runner's .runs.json
+    nb = json.loads((paths.NOTEBOOKS / "02_rong_sobol_21_errors.ipynb").read_text())
+    for c in nb["cells"]:  # outputs and execution counts are not part of the source hash
+        c.pop("outputs", None)
+        c["execution_count"] = None
+    copy = tmp_path / "02_rong_sobol_21_errors.ipynb"
+    copy.write_text(json.dumps(nb))
+    assert provenance.notebook_source_hash(copy) == rec["notebook_sha256"]
+    nb["cells"][0]["source"] = "changed"
+    copy.write_text(json.dumps(nb))
+    assert provenance.notebook_source_hash(copy) != rec["notebook_sha256"]
+
+
+def _fig(folder, name):
+    fig, ax = plt.subplots()
+    ax.plot([0, 1])
+    plotting.save(fig, folder, name, title="demo")
+    plt.close(fig)
+
+
+def test_report_marks_a_broken_figure_and_fails(run_record, tmp_path, capsys):
     figs = tmp_path / "figures"
-    shutil.copytree(paths.FIGURES, figs, ignore=shutil.ignore_patterns("html", "index.html"))
-    index = report.build(figs)
-    text = index.read_text()
+    folder = figs / "02_rong_sobol_21_errors"
+    folder.mkdir(parents=True)
+    reproduction.write_card([dict(item="Fig. 2", quantity="q", published="1", reproduced="1",
+                                  unit="", tolerance="0", verdict="reproduced", note="")],
+                            folder / "reproduction.csv")
+    _fig(folder, "fig02_good")
+    _fig(folder, "fig03_truncated")
+    _fig(folder, "fig04_replaced")
+    png = folder / "fig03_truncated.png"
+    png.write_bytes(png.read_bytes()[: len(png.read_bytes()) // 4])  # an interrupted write
+    (folder / "fig04_replaced.svg").write_text((folder / "fig04_replaced.svg").read_text()
+                                                .replace("demo", "other"))
+    assert report.main(["--figures", str(figs)]) == 1
+    err = capsys.readouterr().err
+    assert "fig03_truncated.png cannot be read" in err
+    assert "fig04_replaced.svg does not match the hash" in err
+    assert "fig02_good" not in err
+    text = (figs / "index.html").read_text()
+    assert 'src="02_rong_sobol_21_errors/fig02_good.png"' in text
+    assert 'src="02_rong_sobol_21_errors/fig03_truncated.png"' not in text
+    assert text.count('class="broken"') == 2
+
+
+def test_report_lists_every_row_and_figure(committed_report):
+    figs = committed_report
+    text = (figs / "index.html").read_text()
     for card in figs.glob("*/reproduction.csv"):
         stem = card.parent.name
         n = len(pd.read_csv(card))
@@ -65,7 +110,7 @@ def test_report_lists_every_row_and_figure(tmp_path):
         assert (figs / "html" / f"{stem}.html").exists()
     assert "http://" not in text and "https://" not in text and "<script" not in text
     assert not re.search(r'src="https?://', (figs / "html" / f"{stem}.html").read_text())
-    assert report.build(figs).read_text() == text  # deterministic
+    assert report.build(figs, export=False).read_text() == text  # deterministic
 
 
 @pytest.mark.parametrize("name, label", [("fig05_position_total_sobol", "Fig. 5"),

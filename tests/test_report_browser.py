@@ -18,7 +18,6 @@ import collections
 import contextlib
 import functools
 import os
-import shutil
 import threading
 import urllib.error
 import urllib.parse
@@ -32,7 +31,7 @@ import pandas as pd
 import pytest
 from playwright.sync_api import sync_playwright
 
-from mtaccuracy import paths, report, runner
+from mtaccuracy import paths, runner
 
 CHROMIUM = Path("/usr/bin/chromium")
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
@@ -230,10 +229,8 @@ def check_report(browser, figures: Path, stems: list[str], screenshot: Path | No
     return problems
 
 
-def test_report_opens_in_the_browser_with_every_figure_row_and_link(browser, tmp_path):
-    figures = tmp_path / "figures"
-    shutil.copytree(paths.FIGURES, figures)
-    report.build(figures)
+def test_report_opens_in_the_browser_with_every_figure_row_and_link(browser, committed_report):
+    figures = committed_report
     assert (figures / "index.html").is_file(), "report.build wrote no index.html"
     screenshot = Path(os.environ[paths.OUTPUT_BASE_ENV]) / "report" / "index.png"
     problems = check_report(browser, figures, STEMS, screenshot=screenshot)

@@ -166,3 +166,34 @@ def test_other_bad_inputs():
         S.threshold_sweep(np.ones((4, 1)), [0.9], np.ones((3, 5)), lambda v: v, NAMES)
     with pytest.raises(ValueError, match="n_boot"):
         S.key_set_bootstrap(np.ones((4, 1)), np.ones((4, 1)), np.ones((4, 4, 1)), NAMES, 0, 0)
+
+
+def test_rank_with_ties_breaks_near_equal_values_by_the_key_not_by_noise():
+    # two candidates equal up to rounding noise: the key decides, whichever is smaller by noise
+    for noise in (+1e-13, -1e-13):
+        v = [1.0, 1.0 + noise, 2.0]
+        keys = [[5.0], [3.0], [0.0]]
+        assert list(S.rank_with_ties(v, keys, rtol=1e-9)) == [1, 0, 2]
+    # without a tolerance the value decides
+    assert list(S.rank_with_ties([1.0, 1.0 + 1e-13, 2.0], [[5.0], [3.0], [0.0]])) == [0, 1, 2]
+    # a real difference is not a tie, whatever the key says
+    assert list(S.rank_with_ties([1.0, 1.01], [[5.0], [3.0]], rtol=1e-6)) == [0, 1]
+    # the group is anchored at its smallest value: 1.0 and 1.0 + 6e-7 tie, 1.0 + 1.2e-6 does not
+    order = S.rank_with_ties([1.0 + 1.2e-6, 1.0 + 6e-7, 1.0], [[0.0], [1.0], [2.0]], rtol=1e-6)
+    assert list(order) == [1, 2, 0]
+    # absolute tolerance, for values near zero
+    assert list(S.rank_with_ties([1e-20, 0.0], [[0.0], [1.0]], atol=1e-15)) == [0, 1]
+
+
+def test_rank_with_ties_compares_keys_with_a_tolerance_then_by_position():
+    v = np.zeros(3)
+    keys = [[1.0, 9.0], [1.0 + 1e-12, 2.0], [0.5, 0.0]]
+    assert list(S.rank_with_ties(v, keys, key_tol=1e-9)) == [2, 1, 0]  # first keys tie: second
+    assert list(S.rank_with_ties(v, keys)) == [2, 0, 1]                 # exact: first key decides
+    assert list(S.rank_with_ties(v, np.zeros((3, 1)))) == [0, 1, 2]     # all equal: given order
+    with pytest.raises(ValueError, match="NaN"):
+        S.rank_with_ties([1.0, np.nan])
+    with pytest.raises(ValueError, match="3 keys for 2 values"):
+        S.rank_with_ties([1.0, 2.0], np.zeros((3, 1)))
+    with pytest.raises(ValueError, match="rtol"):
+        S.rank_with_ties([1.0], rtol=-1.0)

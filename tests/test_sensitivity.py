@@ -62,3 +62,27 @@ def test_spearman_over_poses_equals_one_pose_at_a_time():
     for p in range(3):
         one = {k: v[p] for k, v in poses.items()}
         assert np.allclose(got[p], S.spearman(x, S.position_outputs(m.pose_error(x, one))))
+
+
+def test_average_ranks_equal_scipy_with_and_without_ties():
+    x = RNG.normal(size=(2, 30, 3))
+    assert np.array_equal(S.average_ranks(x), stats.rankdata(x, axis=-2))
+    t = np.round(x, 0)  # many ties
+    assert np.array_equal(S.average_ranks(t), stats.rankdata(t, axis=-2))
+
+
+def test_equal_spearman_coefficients_are_equal_to_the_bit():
+    """Rank sums are exact, so coefficients that are equal in exact arithmetic are equal in
+    floating point and the ranking breaks the tie by catalogue order."""
+    n = 500
+    r = RNG.permutation(n).astype(float)
+    y = RNG.normal(size=(n, 1))
+    yr = stats.rankdata(y[:, 0])
+    # two columns whose centred ranks against y give numerators of equal magnitude, opposite sign
+    x = np.c_[yr, n + 1 - yr, r]
+    rho = S.spearman(x, y)[:, 0]
+    assert rho[0] == 1.0 and rho[1] == -1.0
+    ranked = S.rank_by_magnitude(rho, ["a", "b", "c"])
+    assert [s for s, _ in ranked[:2]] == ["a", "b"]
+    assert S.rank_by_magnitude(-rho, ["a", "b", "c"])[0][0] == "a"
+

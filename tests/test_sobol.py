@@ -83,3 +83,78 @@ def test_linear_indices_equal_the_sampling_estimate_of_a_linear_model():
                              S.from_unit_normal(ub, sd))
     assert np.allclose(st[:, 0], lin[0], atol=0.02) and np.allclose(s1[:, 0], lin[0], atol=0.02)
 
+
+
+def _direct_bootstrap(ya, yb, yab, n_boot, seed, chunk=20):
+    """The resampling as it used to be done: copy the resampled rows, re-estimate."""
+    rng = np.random.default_rng(seed)
+    s1s, sts = [], []
+    for start in range(0, n_boot, chunk):
+        idx = rng.integers(0, ya.shape[0], size=(min(chunk, n_boot - start), ya.shape[0]))
+        s1, st = S.sobol_estimate(ya[idx], yb[idx], np.moveaxis(yab[:, idx], 0, 1))
+        s1s.append(s1)
+        sts.append(st)
+    return np.concatenate(s1s), np.concatenate(sts)
+
+
+def test_bootstrap_by_counts_equals_resampling_the_rows():
+    ua, ub = S.base_samples(300, 3, "mc", 6)
+    ya, yb, yab = S.sobol_evaluate(lambda x: np.c_[ishigami(x) + 50.0, x[:, 0]],
+                                   S.from_unit_uniform(ua, BOUNDS), S.from_unit_uniform(ub, BOUNDS))
+    ref1, reft = _direct_bootstrap(ya, yb, yab, 45, 9)
+    for block in (2**21, 300 * 7):  # one product, or several (the draws do not change)
+        s1b, stb = S.sobol_bootstrap_samples(ya, yb, yab, 45, 9, block=block)
+        assert s1b.shape == stb.shape == (45, 3, 2)
+        assert np.allclose(s1b, ref1, rtol=0, atol=1e-12)  # an offset of 50 costs no precision
+        assert np.allclose(stb, reft, rtol=0, atol=1e-12)
+    w1, wt = S.sobol_bootstrap(ya, yb, yab, 45, 9)
+    assert np.allclose(w1, S.ci_half_width(ref1)) and np.allclose(wt, S.ci_half_width(reft))
+
+
+def test_bootstrap_counts_are_resamples():
+    blocks = list(S.bootstrap_counts(10, 7, 3, chunk=3, block=20))
+    w = np.concatenate(blocks)
+    assert w.shape == (7, 10) and np.all(w.sum(1) == 10) and len(blocks) > 1
+    with pytest.raises(ValueError, match="positive integer"):
+        next(S.bootstrap_counts(10, 0, 3))
+
+
+def test_merge_ties_makes_the_sort_canonical():
+    st = np.array([0.2, 0.3, 0.3 * (1 + 1e-13), 0.05, 1e-20, 0.0])
+    merged = S.merge_ties(st)
+    assert merged[1] == merged[2] == st[2] and merged[4] == merged[5]
+    assert merged[0] == st[0] and merged[3] == st[3]
+    assert list(np.argsort(-merged, kind="stable")) == [1, 2, 0, 3, 4, 5]
+    # the 90 % rule then takes the tied pair in catalogue order whichever member rounding favours
+    for j in (1, 2):
+        a = st.copy()
+        a[j] = 0.3 * (1 + 2e-13)
+        assert S.key_errors(S.merge_ties(a), threshold=0.5).index == (1, 2)
+    # leading axes (bootstrap) and columns are handled independently
+    many = S.merge_ties(np.stack([np.c_[st, st[::-1]]] * 2))
+    assert many.shape == (2, 6, 2) and np.array_equal(many[1, :, 0], merged)
+    assert np.array_equal(many[0, :, 1], merged[::-1])
+
+
+def test_cumulative_share_margin():
+    st = np.array([[5.0, 4.0, 1.0], [1.0, 1.0, 1.0]]).T
+    assert np.allclose(S.cumulative_share_margin(st, 0.85), [0.05, 0.15])
+    assert S.cumulative_share_margin(np.array([3.0, 1.0]), 0.5)[0] == pytest.approx(0.25)
+
+
+def test_key_set_frequencies_equal_the_screening_bootstrap():
+    ua, ub = S.base_samples(512, 4, "sobol", 1)
+    bounds = np.array([[-1.0] * 4, [1.0] * 4])
+
+    def model(x):
+        return np.c_[x @ [3.0, 2.0, 2.0, 0.5], x @ [0.2, 1.0, 0.0, 3.0]]
+
+    a, b = S.from_unit_uniform(ua, bounds), S.from_unit_uniform(ub, bounds)
+    ya, yb, yab = S.sobol_evaluate(model, a, b)
+    names, outputs = ["a", "b", "c", "d"], ["y0", "y1"]
+    ref_freq, ref_counts = S.key_set_bootstrap(ya, yb, yab, names, 60, 4, outputs, 0.7)
+    _, stb = S.sobol_bootstrap_samples(ya, yb, yab, 60, 4)
+    freq, counts = S.key_set_frequencies(stb, names, outputs, 0.7)
+    assert freq.equals(ref_freq) and counts.equals(ref_counts)
+    # b and c enter y0 alike and the rule needs one of them: each is key in some resamples
+    assert 0 < freq.set_index("symbol").loc["b", "y0"] < 1

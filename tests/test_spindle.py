@@ -1,5 +1,7 @@
 """Four-point separation, transfer function, bound of H, GAs, roundness (Yang et al. 2021)."""
 
+import warnings
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -98,9 +100,59 @@ def test_the_matrix_has_rank_n_minus_2_and_lstsq_equals_the_fft_solution():
     sym = S.probe_angles([0, 32, 64, 96], N)
     ws = S.full_weights(sym, 1.3)
     assert np.linalg.matrix_rank(S.circulant_matrix([0, 32, 64, 96], ws, N)) == N // 2
-    ss = S.separate_details(S.probe_signals(rng.standard_normal(N), 0 * y[0], 0 * y[0],
-                                            [0, 32, 64, 96]), sym, ws)
+    with pytest.warns(S.CancelledHarmonicsWarning, match="every odd one"):
+        ss = S.separate_details(S.probe_signals(rng.standard_normal(N), 0 * y[0], 0 * y[0],
+                                                [0, 32, 64, 96]), sym, ws, allow_cancelled=True)
     assert list(ss.cancelled) == list(range(1, N // 2, 2))
+
+
+def _half_circle_layout():
+    """Probe 3 at 180 degrees with a3 = 1: Eq. 15 gives a1 = a2 = 0, and the weights (1, 0, 0, 1)
+    cancel every odd harmonic, Lambda_k = 1 + (-1)^k."""
+    pos = [0, 20, 50, N // 2]
+    phi = S.probe_angles(pos, N)
+    w = S.full_weights(phi, 1.0)
+    assert np.allclose(w, [1, 0, 0, 1], atol=1e-12)
+    return pos, phi, w
+
+
+def test_separate_refuses_a_layout_that_cancels_more_than_the_first_harmonic():
+    pos, phi, w = _half_circle_layout()
+    rng = np.random.default_rng(21)
+    r = rng.standard_normal(N)
+    y = S.probe_signals(r, *_motion_without_fundamental(rng), pos)
+    with pytest.raises(ValueError, match=r"cancels harmonic\(s\) 3, 5, 7, 9, .*63 \(31 harmonics; "
+                                         r"every odd one\).*allow_cancelled=True"):
+        S.separate(y, phi, w)
+    with pytest.raises(ValueError, match="cancels harmonic"):
+        S.separate_details(y, phi, w, first_harmonic="radial")
+
+
+def test_separate_proceeds_on_request_with_a_warning_naming_the_cancelled_harmonics():
+    pos, phi, w = _half_circle_layout()
+    rng = np.random.default_rng(22)
+    r = rng.standard_normal(N)
+    y = S.probe_signals(r, 0 * r, 0 * r, pos)
+    with pytest.warns(S.CancelledHarmonicsWarning, match=r"3, 5, 7, .*63 \(31 harmonics"):
+        s = S.separate_details(y, phi, w, allow_cancelled=True)
+    assert list(s.cancelled) == list(range(1, N // 2, 2)) and s.rank == N // 2
+    spec = np.fft.rfft(r)
+    spec[1::2] = 0                                   # what is left: the even harmonics
+    assert np.abs(s.profile_no_first - np.fft.irfft(spec, n=N)).max() < 1e-12
+    # harmonics above what the signals contain are no loss: a layout cancelling only those is
+    # accepted without a word when max_harmonic says so.  With every position even, harmonic
+    # N/2 - 1 aliases to -1: Lambda_63 = conj(Lambda_1) = 0 whatever a3.
+    p2 = [0, 2, 24, 118]
+    ph2 = S.probe_angles(p2, N)
+    w2 = S.full_weights(ph2, 1.4173)
+    r2 = S.lowpass(rng.standard_normal(N), 50)
+    y2 = S.probe_signals(r2, 0 * r2, 0 * r2, p2)
+    with pytest.raises(ValueError, match=r"harmonic\(s\) 63 besides the first"):
+        S.separate(y2, ph2, w2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        prof, _, _ = S.separate(y2, ph2, w2, max_harmonic=50)
+    assert np.abs(S.lowpass(prof, 50) - r2).max() < 1e-9
 
 
 def test_transfer_function_predicts_the_noise_of_the_harmonics():
@@ -188,6 +240,82 @@ def test_ga_runs_are_batched_reproducible_and_use_the_probabilities():
     assert per_run_k.best_h.shape == (6,)
 
 
+def test_equivalent_layouts_share_the_objective_and_the_canonical_member():
+    rng = np.random.default_rng(31)
+    x = np.column_stack([rng.uniform(0, 2 * np.pi, (40, 3)), rng.uniform(0.2, 2.5, 40)])
+    m = S.equivalent_genes(x)                                   # (40, 48, 4)
+    assert m.shape == (40, 48, 4)
+    assert np.allclose(m[:, 0], np.c_[np.mod(x[:, :3], 2 * np.pi), x[:, 3]])
+    ok = np.all(np.isfinite(m), axis=-1)
+    assert ok.sum(axis=1).min() >= 40                 # a few relabellings may be degenerate
+    for k in (2, 7, 20, 41):
+        h = np.where(ok, S.objective_H(np.nan_to_num(m), k), np.nan)
+        assert np.nanmax(np.abs(h / S.objective_H(x, k)[:, None] - 1)) < 1e-9
+    hw = np.where(ok, S.objective_worst(np.nan_to_num(m), np.arange(2, 21)), np.nan)
+    assert np.nanmax(np.abs(hw / S.objective_worst(x, np.arange(2, 21))[:, None] - 1)) < 1e-9
+    # every member has the same canonical member (the class, not the description, decides)
+    c = S.canonical_genes(x)
+    for j in (5, 17, 30, 47):
+        sel = ok[:, j]
+        assert np.allclose(S.canonical_genes(m[sel, j]), c[sel], atol=1e-9)
+    # within a box only members inside count, and x itself is always a candidate
+    box = list(S.PAPER_BOX)
+    lo, hi = np.array(box).T
+    xb = lo + rng.random((40, 4)) * (hi - lo)
+    cb = S.canonical_genes(xb, box)
+    assert np.all((cb >= lo - 1e-12) & (cb <= hi + 1e-12))
+    assert all(tuple(np.round(a, 9)) <= tuple(np.round(b, 9)) for a, b in zip(cb, xb, strict=True))
+    assert np.allclose(S.objective_H(cb, 20), S.objective_H(xb, 20), rtol=1e-9)
+
+
+def test_select_best_breaks_ties_by_the_canonical_member_whatever_the_order():
+    x = np.array([0.3, 2.0, 5.0, 1.3])
+    m = S.equivalent_genes(x)
+    copies = m[np.all(np.isfinite(m), axis=-1)][[0, 7, 19, 33]]        # one layout, four copies
+    h = S.objective_H(copies, 20)
+    worse = np.array([[0.5, 2.2, 5.1, 1.0]])
+    cands = np.concatenate([copies, worse])
+    hc = np.r_[h * (1 + np.array([3e-10, 0, -2e-10, 1e-10])), 2 * h.max()]
+    picks = set()
+    for perm in ([0, 1, 2, 3, 4], [4, 3, 2, 1, 0], [2, 0, 4, 1, 3]):
+        i, g = S.select_best(hc[perm], cands[perm])
+        assert perm[i] != 4
+        picks.add(tuple(np.round(g, 9)))
+    assert len(picks) == 1                                      # the same layout every time
+    assert np.allclose(next(iter(picks)), S.canonical_genes(x), atol=1e-9)
+    # outside the tie tolerance the smaller H wins even if it is not canonical
+    hc2 = hc.copy()
+    hc2[3] *= 1 - 1e-6
+    assert S.select_best(hc2, cands, rel_tol=1e-9)[0] == 3
+    # batched over leading axes
+    i2, g2 = S.select_best(np.stack([hc, hc[::-1]]), np.stack([cands, cands[::-1]]))
+    assert np.allclose(g2[0], g2[1]) and i2[0] != 4 and i2[1] != 0
+
+
+def test_batched_reference_optima_and_differential_evolution():
+    box = list(S.PAPER_BOX)
+    ks = np.array([5, 10, 20])
+    h, g = S.reference_optima(ks, box, n_starts=2, seed=3)
+    assert h.shape == (3,) and g.shape == (3, 4)
+    assert np.all(h >= S.lower_bound_H(4)) and np.all(h < 0.27)
+    assert np.allclose(S.objective_H(g, ks), h, rtol=1e-9)       # Eq. 20 at the genes reported
+    assert np.allclose(S.canonical_genes(g, box), g)             # canonical members
+    h1, g1 = S.reference_optimum(10, box, n_starts=2, seed=3)
+    assert h1 <= h[1] * (1 + 1e-9) or np.isclose(h1, h[1], rtol=1e-6)
+    # over the whole circle the bound 1/4 is never passed (the near-degenerate labellings, where
+    # the closed form breaks down, are excluded), and at k = 4 it is reached (a pair layout)
+    hf, _ = S.reference_optima([4, 9, 20], S.FULL_BOX, n_starts=2, seed=1)
+    assert np.all(hf >= 0.25 - 1e-12) and hf[0] < 0.2501
+    # the baseline: all runs in one batch, reproducible, best-so-far history
+    d = S.run_de(20, bounds=box, n_runs=24, generations=60, seed=np.random.default_rng(4))
+    e = S.run_de(20, bounds=box, n_runs=24, generations=60, seed=np.random.default_rng(4))
+    assert np.array_equal(d.history, e.history) and d.history.shape == (61, 24)
+    assert np.all(np.diff(d.history, axis=0) <= 0)
+    assert np.allclose(d.history[-1], d.best_h)
+    assert np.allclose(S.objective_H(d.best_x, 20), d.best_h)
+    assert np.median(d.best_h) < 1.02 * S.reference_optimum(20, box, n_starts=2, seed=0)[0]
+
+
 def test_convergence_generation():
     hist = np.array([[1.0, 1.0], [0.5, 0.9], [0.26, 0.8], [0.25, 0.8]])
     assert list(S.convergence_generation(hist, 0.25, 0.05)) == [2, -1]
@@ -240,6 +368,11 @@ def test_simulated_measurements_average_the_noise():
     (lambda: S.adaptive_probabilities(1.0, 1.0, 1, 4, eq23="minus"), "eq23"),
     (lambda: S.motion_from_scalar(np.zeros(8), "polar"), "unknown mapping"),
     (lambda: S.lowpass(np.zeros(16), 9), "max_harmonic"),
+    (lambda: S.separate(np.zeros((4, 128)), S.probe_angles(POS, 128),
+                        S.full_weights(S.probe_angles(POS, 128), 1.0), max_harmonic=65),
+     "max_harmonic"),
+    (lambda: S.select_best(np.ones(3), np.ones((2, 4))), "must be"),
+    (lambda: S.reference_optima([1, 5]), "k = 1 is cancelled"),
 ])
 def test_bad_inputs_are_refused_clearly(call, match):
     with pytest.raises(ValueError, match=match):

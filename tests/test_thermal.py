@@ -103,6 +103,33 @@ def test_fuzzy_clusters_recover_three_obvious_groups():
     assert 0 < cl.lam <= 1 and cl.squarings >= 1
 
 
+def test_levels_closer_than_the_tolerance_are_one_level_and_ties_stay_ties():
+    """Two pairs merging at 0.9 and at 0.9 (1 - 1e-14), equal but for rounding: a cut between
+    the two would split the pairs' symmetry by noise; they merge at one level, whichever of
+    the two is the larger, and no partition into exactly 3 classes exists."""
+    def closure(a, b):
+        return np.array([[1.0, a, 0.5, 0.5], [a, 1.0, 0.5, 0.5],
+                         [0.5, 0.5, 1.0, b], [0.5, 0.5, b, 1.0]])
+    lo = 0.9 * (1 - 1e-14)
+    for a, b in ((0.9, lo), (lo, 0.9)):
+        t = closure(a, b)
+        assert thermal.cut_levels(t).tolist() == [1.0, lo, 0.5]
+        lam, labels = thermal.cut_for(t, 3)
+        assert lam == 1.0 and labels.tolist() == [0, 1, 2, 3]       # 4 classes, symmetric
+        lam, labels = thermal.cut_for(t, 2)
+        assert lam == lo and labels.tolist() == [0, 0, 1, 1]
+    same = closure(1.0, 0.9)                             # variables 0 and 1 are one
+    lam, labels = thermal.cut_for(same, 4)
+    assert lam == 1.0 and labels.tolist() == [0, 0, 1, 2]
+    assert thermal.cut_levels(closure(0.9, 0.8)).tolist() == [1.0, 0.9, 0.8, 0.5]
+    # exact ties stay exact: Eq. 1 is exactly symmetric, equal columns give equal rows
+    x = RNG.normal(size=(30, 7))
+    x[:, 5] = x[:, 2]
+    r = thermal.similarity_matrix(x)
+    assert np.array_equal(r, r.T)
+    assert np.array_equal(np.delete(r[2], [2, 5]), np.delete(r[5], [2, 5])) and r[2, 5] == 1.0
+
+
 def test_fuzzy_clusters_refuses_impossible_counts():
     with pytest.raises(ValueError, match="n_clusters must be in 1..2"):
         thermal.fuzzy_clusters(RNG.normal(size=(5, 2)), ["a", "b"], 3)
@@ -138,6 +165,16 @@ def test_selection_keeps_the_best_graded_sensor_per_cluster_and_mirrors_falling_
     assert "B1" in sel.mirrored and "A1" not in sel.mirrored
     assert sel.grades["A1"] == pytest.approx(1.0, abs=1e-3)
     assert sel.grades["B1"] == pytest.approx(1.0, abs=1e-3)  # mirrored, same shape
+    # how far each decision is from flipping
+    leads = [np.subtract(*sel.grades[g].sort_values(ascending=False).iloc[:2])
+             for g in sel.clusters if len(g) > 1]
+    assert sel.margins["grade"] == pytest.approx(min(leads))
+    corr = [abs(np.corrcoef(temps[c], target)[0, 1]) for c in temps]
+    assert sel.margins["correlation"] == pytest.approx(min(corr))
+    t_levels = thermal.cut_levels(thermal.transitive_closure(
+        thermal.similarity_matrix(temps.to_numpy()))[0])
+    others = t_levels[t_levels != sel.lam]
+    assert sel.margins["level"] == pytest.approx(np.abs(others - sel.lam).min() / sel.lam)
 
 
 def test_most_frequent_breaks_ties_by_sensor_order():
@@ -228,6 +265,112 @@ def test_missing_file_and_folder_are_refused(good_dir, tmp_path):
         thermal.read_measurements(tmp_path / "nowhere")
 
 
+def test_times_are_checked_in_measurement_order_not_file_order(good_dir):
+    """Measurement numbers give the order; a file whose numbers contradict its times is
+    refused (times 0, 23, 69, 46 in measurement order), one with rows shuffled is read."""
+    def swap(df):   # experiment 1: measurement 3 at 69 min, measurement 4 at 46 min
+        df = df.copy()
+        df.loc[2, "measurement"], df.loc[3, "measurement"] = "4", "3"
+        return df
+    _edit(good_dir / "temperatures.csv", swap)
+    with pytest.raises(thermal.DataFormatError,
+                       match=r"temperatures.csv: experiment 1: time_min must increase with the "
+                             r"measurement number, but measurement 4 \(line 4, 46 min\) does not "
+                             r"come after measurement 3 \(line 5, 69 min\); times in "
+                             r"measurement order: 0 -> 23 -> 69 -> 46 -> 92"):
+        thermal.read_measurements(good_dir)
+
+
+def test_rows_in_any_order_read_the_same(good_dir):
+    ref = thermal.read_measurements(good_dir)
+    for name in ("temperatures.csv", "errors.csv"):
+        _edit(good_dir / name, lambda df: df.iloc[np.random.default_rng(3).permutation(len(df))])
+    d = thermal.read_measurements(good_dir)
+    assert d.index.equals(ref.index) and d.temperatures.equals(ref.temperatures)
+    assert np.array_equal(d.errors, ref.errors)
+
+
+def _at(df, experiment=None, measurement=None, position=None):
+    m = np.ones(len(df), dtype=bool)
+    for col, v in (("experiment", experiment), ("measurement", measurement),
+                   ("position_mm", position)):
+        if v is not None:
+            m &= df[col].astype(float).to_numpy() == v
+    return m
+
+
+def test_re_zeroed_measurements_are_refused(good_dir):
+    """Every measurement of an experiment reading exactly 0 at one target is the signature of
+    re-zeroing before each measurement; a single later zero reading is not (it may be drift)."""
+    _edit(good_dir / "errors.csv", lambda df: df.assign(
+        error_um=df.error_um.mask(_at(df, experiment=2, measurement=5, position=185), "0")))
+    assert thermal.read_measurements(good_dir).errors.shape == (32, 14)
+    _edit(good_dir / "errors.csv", lambda df: df.assign(
+        error_um=df.error_um.mask(_at(df, experiment=3, position=305), "0.0")))
+    with pytest.raises(thermal.DataFormatError,
+                       match=r"errors.csv: experiment 3: all 8 measurements read exactly 0 at "
+                             r"305 mm, the signature of an interferometer re-zeroed before every "
+                             r"measurement"):
+        thermal.read_measurements(good_dir)
+
+
+def _scaled(column, factor, fmt):
+    return lambda df: df.assign(**{column: (df[column].astype(float) * factor).map(fmt.format)})
+
+
+@pytest.mark.parametrize("file, change, message", [
+    ("temperatures.csv", lambda df: df.assign(T3_degC=(df.T3_degC.astype(float) + 273.15)
+                                              .map("{:.2f}".format)),
+     r"temperatures.csv: column 'T3_degC' has value\(s\) 304.07, .* degC on line\(s\) "
+     r"\[2, 3, .*outside the plausible range -30 .. 200 degC.*kelvin\?"),
+    ("temperatures.csv", lambda df: df.assign(T7_degC=df.T7_degC.mask(df.index == 5, "-45")),
+     r"column 'T7_degC' has value\(s\) -45 degC on line\(s\) \[7\], outside the plausible "
+     r"range -30 .. 200 degC"),
+    ("errors.csv", _scaled("error_um", 1e-3, "{:.6f}"),
+     r"errors.csv: column 'error_um' spans only 0.013935 um \(-0.013884 .. 5.1e-05\), less than "
+     r"the plausible 1 um .*mm\?"),
+    ("errors.csv", _scaled("error_um", 1e3, "{:.0f}"),
+     r"errors.csv: column 'error_um' has value\(s\) -1251, .* um on line\(s\) .* outside the "
+     r"plausible range -1000 .. 1000 um.*nm\?"),
+    ("errors.csv", _scaled("position_mm", 1e-3, "{:.3f}"),
+     r"errors.csv: column 'position_mm' spans only 0.26 mm \(0.185 .. 0.445\), less than the "
+     r"plausible 1 mm.*m\?"),
+])
+def test_values_in_the_wrong_unit_are_refused_with_the_limits(good_dir, file, change, message):
+    _edit(good_dir / file, change)
+    with pytest.raises(thermal.DataFormatError, match=message):
+        thermal.read_measurements(good_dir)
+
+
+def test_duplicated_experiment_in_experiments_csv_is_refused(good_dir):
+    _edit(good_dir / "experiments.csv",
+          lambda df: pd.concat([df, df.iloc[[1]].assign(feed_mm_per_min="5000")]))
+    with pytest.raises(thermal.DataFormatError,
+                       match=r"experiments.csv: experiment\(s\) \[2\] listed more than once "
+                             r"\(lines \[3, 6\]\)"):
+        thermal.read_measurements(good_dir)
+
+
+def test_data_beyond_the_size_limits_are_refused(good_dir):
+    _edit(good_dir / "temperatures.csv", lambda df: df.assign(
+        **{f"X{i}_degC": df.T1_degC for i in range(thermal.MAX_SENSORS - 11)}))
+    with pytest.raises(thermal.DataFormatError,
+                       match=r"temperatures.csv: 101 temperature columns; at most 100 are "
+                             r"supported"):
+        thermal.read_measurements(good_dir)
+    _edit(good_dir / "temperatures.csv",
+          lambda df: df.filter(regex="^(?!X)").iloc[np.arange(1001) % len(df)])
+    with pytest.raises(thermal.DataFormatError, match=r"1001 measurements \(rows\); at most 1000"):
+        thermal.read_measurements(good_dir)
+
+
+def test_an_oversized_file_is_refused_before_it_is_read(good_dir, monkeypatch):
+    monkeypatch.setattr(thermal, "MAX_FILE_BYTES", 5000)
+    with pytest.raises(thermal.DataFormatError,
+                       match=r"errors.csv: 6776 bytes; files up to 5000 bytes are read"):
+        thermal.read_measurements(good_dir)
+
+
 # ------------------------------------------------------------------ models
 
 def _synthetic(n_exp=4, n_meas=6, seed=0):
@@ -279,11 +422,81 @@ def test_svr_search_is_grouped_and_deterministic():
     x = tr.temperatures[["T1", "T2"]].to_numpy()
     a = thermal.svr_search(x, k, tr.groups)
     b = thermal.svr_search(x, k, tr.groups)
-    assert a.best_params_ == b.best_params_ and a.best_score_ == b.best_score_
+    assert a.best_params_ == b.best_params_ and a.best_index_ == b.best_index_
     assert a.n_splits_ == 3                                       # one fold per experiment
-    assert a.best_params_["regressor__svr__kernel"] == "linear"   # the truth is linear
+    assert a.best_params_["kernel"] == "linear"                   # the truth is linear
     with pytest.raises(ValueError, match="at least 2 training experiments"):
         thermal.svr_search(x, k, np.ones(len(k)))
+
+
+def test_svr_ties_go_to_the_simplest_candidate_whatever_the_grid_order():
+    """Exactly linear data inside the tube: C = 1000 and C = 10 give the same model and equal
+    scores; scikit-learn's first best would take C = 1000 (listed first), the canonical rule
+    the smaller C."""
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(24, 2))
+    y = x @ [1.0, -2.0] + 0.5
+    grid = [{"kernel": ["linear"], "C": [1000.0, 10.0], "epsilon": [0.1]}]
+    s = thermal.svr_search(x, y, np.repeat([1, 2, 3], 8), grid)
+    rmse = -s.cv_results_["mean_test_score"]
+    assert rmse[0] <= rmse[1] * (1 + thermal.SVR_TIE_RTOL)        # a tie
+    assert s.best_params_["C"] == 10.0
+
+
+def test_standardised_svr_is_the_scaled_pipeline():
+    """Cross-check with scikit-learn's own composition of the same model."""
+    from sklearn.compose import TransformedTargetRegressor
+    from sklearn.pipeline import Pipeline
+    from sklearn.preprocessing import StandardScaler
+    from sklearn.svm import SVR
+    rng = np.random.default_rng(4)
+    x = rng.normal(30, 2, size=(20, 3))
+    x[:, 2] = 25.0                                              # a constant column
+    y = np.sin(x[:, 0]) + 0.1 * x[:, 1] + rng.normal(0, 0.05, 20)
+    for kw in ({"kernel": "rbf", "C": 10.0, "gamma": 0.1, "epsilon": 0.05},
+               {"kernel": "linear", "C": 1.0, "epsilon": 0.1}):
+        ours = thermal.StandardisedSVR(**kw).fit(x[:15], y[:15]).predict(x[15:])
+        ref = TransformedTargetRegressor(
+            Pipeline([("s", StandardScaler()), ("svr", SVR(tol=1e-6, **kw))]),
+            transformer=StandardScaler()).fit(x[:15], y[:15]).predict(x[15:])
+        assert np.allclose(ours, ref, rtol=0, atol=1e-5 * np.ptp(y))
+
+
+def test_canonical_best_treats_scores_within_the_tolerance_as_ties():
+    params = [{"kernel": "rbf", "C": 1.0, "gamma": 0.1, "epsilon": 0.1},
+              {"kernel": "linear", "C": 100.0, "epsilon": 0.01},
+              {"kernel": "linear", "C": 10.0, "epsilon": 0.01},
+              {"kernel": "linear", "C": 10.0, "epsilon": 0.1},
+              {"kernel": "linear", "C": 0.1, "epsilon": 0.1}]
+    rmse = np.array([1.0, 1.0004, 1.0009, 1.0009, 1.0011])
+    res = {"mean_test_score": -rmse, "params": params}
+    assert thermal.canonical_best(res) == 3          # linear, smallest C, then larger epsilon
+    assert thermal.canonical_best(res, rtol=1e-4) == 0
+    assert thermal.canonical_best(res, rtol=0.0) == 0
+    assert thermal.canonical_best(res, rtol=2e-3) == 4
+    tied, margin = thermal.tie_margin(res)
+    assert tied == 4 and margin == pytest.approx(1e-4)
+    far = {"mean_test_score": [-1.0, -1.5], "params": params[:2]}
+    assert thermal.tie_margin(far) == (1, pytest.approx(0.5 - 1e-3))   # the best is no edge
+    with pytest.raises(ValueError, match="every SVR candidate failed"):
+        thermal.canonical_best({"mean_test_score": [np.nan], "params": params[:1]})
+
+
+def test_leave_one_out_reuses_a_split_already_evaluated(monkeypatch):
+    d = _synthetic()
+    fixed = {"point": ["T1", "T3"], "k": ["T1", "T2"], "b": ["T3"]}
+    full = thermal.leave_one_experiment_out(d, 2, kinds=("mlr",), sensors=fixed)
+    done = thermal.evaluate_split(d, [1, 2, 3], [4], 2, kinds=("mlr",), sensors=fixed)
+    other = thermal.evaluate_split(d, [1, 2, 3], [4], 2, kinds=("mlr",))   # other settings
+    calls = []
+    real = thermal.evaluate_split
+    monkeypatch.setattr(thermal, "evaluate_split",
+                        lambda data, train, test, *a, **k: calls.append(test) or
+                        real(data, train, test, *a, **k))
+    again = thermal.leave_one_experiment_out(d, 2, kinds=("mlr",), sensors=fixed,
+                                             reuse=[other, done])
+    assert calls == [[1], [2], [3]]
+    pd.testing.assert_frame_equal(again, full)
 
 
 def test_evaluate_split_refuses_unknown_sensors_and_experiments():
@@ -379,16 +592,17 @@ def test_notebook_refuses_a_malformed_data_dir_and_leaves_it_alone(good_dir, tmp
     with pytest.raises(pm.PapermillExecutionError, match="error_mm"):
         pm.execute_notebook(str(paths.NOTEBOOKS / "04_xu2022_thermal_mlr_svr.ipynb"),
                             str(tmp_path / "nb.ipynb"), cwd=str(paths.NOTEBOOKS),
-                            parameters={"data_dir": str(good_dir), "output_dir": str(tmp_path)},
+                            parameters={"data_dir": str(good_dir),
+                                        "output_dir": str(tmp_path / "out")},
                             kernel_name="python3", progress_bar=False)
     assert {f.name: f.read_bytes() for f in good_dir.iterdir()} == before
 
 
-@pytest.mark.after_notebooks
-def test_notebook_regenerated_the_committed_dataset(test_output):
-    """After the nbval run of notebook 04 (regenerating into .test-output/data/thermal)."""
-    fresh = test_output / thermal_data.DEFAULT_DIR
-    if not fresh.exists():
-        pytest.skip("notebook 04 did not run in this session")
+def test_notebook_regenerated_the_committed_dataset(notebook_runs):
+    """Notebook 04's run in this session regenerated the reconstruction byte-identically
+    (into its own output base, never over data/thermal)."""
+    code, log, _ = notebook_runs.result("04_xu2022_thermal_mlr_svr")
+    assert code == 0, log[-2000:]
+    fresh = notebook_runs.folder("04_xu2022_thermal_mlr_svr") / thermal_data.DEFAULT_DIR
     for f in COMMITTED.glob("*.csv"):
         assert (fresh / f.name).read_bytes() == f.read_bytes(), f.name

@@ -1,7 +1,24 @@
-"""Where things live in the compendium, independent of the current working directory."""
+"""Where things live in the compendium, independent of the current working directory, and
+which output folders a notebook may write.
+
+A notebook's ``output_dir`` may be (:func:`check_output_dir`):
+
+* ``figures/<its own stem>`` (relative paths are taken from the repository root, or from
+  ``$MTACCURACY_OUTPUT_BASE`` when that is set, as the tests do), or
+* a folder outside the repository that does not exist yet, is empty, or was written by an
+  earlier run of the same notebook (its ``provenance.json`` names the notebook).
+
+Never the repository root, never another notebook's folder, never a folder inside the
+repository other than its own, never a non-empty folder the compendium did not write.
+
+When the runner executes a notebook it sets ``$MTACCURACY_STAGING``: :func:`output_dir` then
+returns that staging folder, and the runner moves its content into the real output folder only
+when the whole run succeeded (see :mod:`mtaccuracy.runner`).
+"""
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -15,17 +32,79 @@ FIGURES = ROOT / "figures"
 #: Environment variable that redirects relative output folders (used by the tests, so that
 #: executing a notebook under test never rewrites the committed figures).
 OUTPUT_BASE_ENV = "MTACCURACY_OUTPUT_BASE"
+#: Set by the runner for the kernel: the folder a run writes into before it is moved in place.
+STAGING_ENV = "MTACCURACY_STAGING"
+
+
+class OutputDirError(ValueError):
+    """An ``output_dir`` that a notebook must not write into."""
+
+
+def _base() -> Path:
+    base = os.environ.get(OUTPUT_BASE_ENV)
+    return Path(base).resolve() if base else ROOT
+
+
+def resolve_output(path: str | os.PathLike) -> Path:
+    """The absolute, normalised folder an ``output_dir`` value names (``..`` and symbolic
+    links resolved)."""
+    p = Path(os.path.expanduser(os.fspath(path)))
+    if not p.is_absolute():
+        p = _base() / p
+    return p.resolve()
+
+
+def _written_by(folder: Path) -> str | None:
+    """The notebook named by ``folder/provenance.json``, or None."""
+    side = folder / "provenance.json"
+    try:
+        return json.loads(side.read_text(encoding="utf-8"))["run"]["notebook"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def check_output_dir(path: str | os.PathLike, notebook: str) -> Path:
+    """Check that notebook ``notebook`` (its stem) may write into ``path``; return the
+    resolved folder.  Raises :class:`OutputDirError` saying what is allowed."""
+    allowed = (f"use figures/{notebook} (the default) or a new or empty folder outside the "
+               f"repository ({ROOT})")
+    if not str(path).strip():
+        raise OutputDirError(f"{notebook}: output_dir is empty, which would be the repository "
+                             f"root; {allowed}")
+    p = resolve_output(path)
+    base = _base()
+    own = base / "figures" / notebook
+    if p == own:
+        return p
+    inside = [r for r in {ROOT, base} if p == r or p.is_relative_to(r) or r.is_relative_to(p)]
+    if inside:
+        what = ("the repository root" if p in (ROOT, base) else
+                "a folder that contains the repository" if ROOT.is_relative_to(p) else
+                f"another notebook's folder ({p.name})" if p.parent == base / "figures" else
+                "a folder inside the repository that is not this notebook's")
+        raise OutputDirError(f"{notebook}: output_dir {str(path)!r} is {p}, {what}; {allowed}")
+    if p.exists() and not p.is_dir():
+        raise OutputDirError(f"{notebook}: output_dir {str(path)!r} is a file ({p}); {allowed}")
+    if p.is_dir() and any(p.iterdir()):
+        owner = _written_by(p)
+        if owner != notebook:
+            why = (f"it holds the outputs of {owner}" if owner else
+                   "it is not empty and was not written by the compendium")
+            raise OutputDirError(f"{notebook}: output_dir {str(path)!r} ({p}): {why}; nothing "
+                                 f"there is overwritten; {allowed}")
+    return p
 
 
 def output_dir(path: str | os.PathLike) -> Path:
     """Resolve a notebook's ``output_dir`` parameter and create the folder.
 
-    A relative path is taken from the repository root, or from ``$MTACCURACY_OUTPUT_BASE``
-    when that is set; an absolute path is used as given.
+    Under the runner (``$MTACCURACY_STAGING`` set) the run writes into the staging folder,
+    which the runner moves into place only when the run succeeds.  A relative path is taken
+    from the repository root, or from ``$MTACCURACY_OUTPUT_BASE`` when that is set; an
+    absolute path is used as given (the rules are checked by :func:`check_output_dir`, which
+    ``check_parameters`` calls first).
     """
-    p = Path(path)
-    if not p.is_absolute():
-        base = os.environ.get(OUTPUT_BASE_ENV)
-        p = (Path(base) if base else ROOT) / p
+    staging = os.environ.get(STAGING_ENV)
+    p = Path(staging) if staging else resolve_output(path)
     p.mkdir(parents=True, exist_ok=True)
     return p

@@ -7,16 +7,25 @@ through ``plotting.save`` and ``reproduction.save_table`` carries it: PNG text c
 ``mtaccuracy:provenance``, SVG ``Description``, and for CSVs the sidecar ``provenance.json`` of
 their folder, which lists every output file with its SHA-256.
 
-The record holds the git commit, a hash of the library sources (so uncommitted code changes
-show), the notebook, its parameters (except ``output_dir``, which only says where files go),
-the SHA-256 of each input file and the versions of the main packages.  It has no timestamp:
-two runs of the same commit with the same parameters give identical records.
+The record holds content hashes only: of the library sources, of the notebook's source
+cells (code and markdown, not outputs), of each input file, plus the notebook's parameters
+(except ``output_dir``, which only says where files go) and the versions of the main packages.
+It has no timestamp and no git commit: unchanged code, notebook, inputs and parameters give
+identical records and so identical figure bytes, whatever was committed in between.  The runner
+keeps the commit of each run in ``figures/.runs.json`` (not committed; see
+:mod:`mtaccuracy.runner`).
+
+Each file entry of the sidecar also says how the regenerated-table test compares it on another
+machine: ``tolerance`` (per float column, see :class:`mtaccuracy.reproduction.Tolerance`) or
+``measured`` (a measurement of the machine, such as wall-clock time: never compared, no hash).
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
+import os
 import platform
 import subprocess
 from importlib import metadata
@@ -28,7 +37,7 @@ PACKAGES = ("numpy", "scipy", "pandas", "matplotlib", "SALib", "chaospy", "sciki
             "sympy", "papermill")
 SIDECAR = "provenance.json"
 _IGNORED_PARAMETERS = {"output_dir"}
-_state: dict = {"notebook": None, "parameters": {}, "inputs": {}}
+_state: dict = {"notebook": None, "parameters": {}, "inputs": {}, "notebook_sha256": None}
 
 
 def sha256(path) -> str:
@@ -44,6 +53,7 @@ def _rel(path) -> str:
 
 
 def git_commit() -> str:
+    """The checkout's commit, for the runner's ``figures/.runs.json`` (never in a figure)."""
     try:
         out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=paths.ROOT, capture_output=True,
                              text=True, timeout=10)
@@ -52,8 +62,24 @@ def git_commit() -> str:
         return "unknown"
 
 
+def notebook_source_hash(path) -> str:
+    """SHA-256 over a notebook's cell types and sources, without outputs, execution counts,
+    metadata or the cell papermill injects: what the reader wrote, not what a run produced."""
+    nb = json.loads(Path(path).read_text(encoding="utf-8"))
+    h = hashlib.sha256()
+    for c in nb.get("cells", []):
+        if "injected-parameters" in c.get("metadata", {}).get("tags", []):
+            continue
+        src = c.get("source", "")
+        h.update(c.get("cell_type", "").encode() + b"\0")
+        h.update(("".join(src) if isinstance(src, list) else src).encode("utf-8") + b"\0")
+    return h.hexdigest()
+
+
+@functools.cache
 def library_hash() -> str:
-    """SHA-256 over the library's Python sources, in path order."""
+    """SHA-256 over the library's Python sources, in path order.  Computed once per process:
+    the code a process runs is the code it imported, whatever changes on disk later."""
     h = hashlib.sha256()
     lib = Path(__file__).resolve().parent
     for p in sorted(lib.rglob("*.py")):
@@ -62,9 +88,11 @@ def library_hash() -> str:
     return h.hexdigest()
 
 
-def start(notebook: str, parameters: dict) -> None:
-    """Begin the record of a notebook run (called by ``check_parameters``)."""
+def start(notebook: str, parameters: dict, source=None) -> None:
+    """Begin the record of a notebook run (called by ``check_parameters``); ``source`` is the
+    notebook file, whose source cells are hashed."""
     _state["notebook"] = notebook
+    _state["notebook_sha256"] = notebook_source_hash(source) if source else None
     _state["parameters"] = {k: v for k, v in sorted(parameters.items())
                             if k not in _IGNORED_PARAMETERS}
     _state["inputs"] = {}
@@ -82,8 +110,8 @@ def track(path) -> None:
         _state["inputs"][_rel(p)] = sha256(p)
 
 
-def record() -> dict:
-    """The current provenance record (JSON-serialisable, deterministic)."""
+@functools.cache
+def _versions() -> dict:
     versions = {}
     for pkg in PACKAGES:
         try:
@@ -91,8 +119,15 @@ def record() -> dict:
         except metadata.PackageNotFoundError:
             versions[pkg] = "not installed"
     versions["python"] = platform.python_version()
-    return {"commit": git_commit(), "library_sha256": library_hash(),
-            "notebook": _state["notebook"], "parameters": dict(_state["parameters"]),
+    return versions
+
+
+def record() -> dict:
+    """The current provenance record (JSON-serialisable, deterministic)."""
+    versions = dict(_versions())
+    return {"library_sha256": library_hash(), "notebook": _state["notebook"],
+            "notebook_sha256": _state["notebook_sha256"],
+            "parameters": dict(_state["parameters"]),
             "inputs": dict(sorted(_state["inputs"].items())), "packages": versions}
 
 
@@ -100,19 +135,26 @@ def as_text(rec: dict | None = None) -> str:
     return json.dumps(rec or record(), sort_keys=True, separators=(",", ":"), default=str)
 
 
-def register_output(path) -> None:
-    """Record an output file (with its hash) in its folder's ``provenance.json``."""
+def register_output(path, measured: bool = False, tolerance: dict | None = None) -> None:
+    """Record an output file in its folder's ``provenance.json``: its hash and, for tables,
+    the tolerance of each float column; a ``measured`` file (wall-clock times) without a hash.
+    """
     p = Path(path)
     side = p.parent / SIDECAR
     data = json.loads(side.read_text(encoding="utf-8")) if side.exists() else {}
     rec = record()
     files = data.get("files", {}) if data.get("run", {}).get("notebook") == rec["notebook"] \
         else {}
-    files[p.name] = {"sha256": sha256(p)}
+    entry: dict = {"measured": True} if measured else {"sha256": sha256(p)}
+    if tolerance:
+        entry["tolerance"] = tolerance
+    files[p.name] = entry
     data = {"run": rec, "files": dict(sorted(files.items()))}
     text = json.dumps(data, sort_keys=True, indent=1, default=str) + "\n"
     if not side.exists() or side.read_text(encoding="utf-8") != text:
-        side.write_text(text, encoding="utf-8")
+        tmp = side.with_name(f".{SIDECAR}.{os.getpid()}.tmp")
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, side)
 
 
 def read(folder) -> dict:

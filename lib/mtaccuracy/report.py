@@ -4,8 +4,13 @@ Per paper: its citation, the scorecard (published vs reproduced, the verdict by 
 word, the note), every regenerated figure captioned with the paper's figure number and what
 the scorecard says differs, its provenance (from the PNG itself), links to every CSV table and
 to an HTML export of the executed notebook (``figures/html/<stem>.html``).  A top section sums
-the verdicts over all papers and gives the last run time of each notebook (recorded by the
-runner in ``figures/.runtimes.json``; the only run-dependent content, and only when present).
+the verdicts over all papers and gives the last run time and commit of each notebook (recorded
+by the runner in ``figures/.runs.json``; the only run-dependent content, and only when present).
+
+Every figure is checked before it is shown: a PNG or SVG that cannot be read (a truncated file
+from an interrupted run, say) or whose bytes do not match the hash in its folder's
+``provenance.json`` is marked as broken in the report instead of being shown, and the command
+exits with status 1 naming it.
 
 The report uses no script and no external resource; the notebook exports have their CDN script
 tags removed, so they open offline too (LaTeX then shows as source).  ``python -m
@@ -16,16 +21,17 @@ from __future__ import annotations
 
 import argparse
 import html
-import json
+import os
 import re
+import sys
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pandas as pd
 from PIL import Image
 
-from . import paths, provenance, reproduction
+from . import paths, provenance, reproduction, runner
 
-RUNTIMES = ".runtimes.json"
 COLOURS = {"reproduced": "#1a9850", "close": "#d9a400", "differs": "#d73027",
            "not reproducible": "#7f7f7f"}
 CSS = """
@@ -42,6 +48,7 @@ figure { margin: 1.5rem 0; border: 1px solid #eee; padding: 0.5rem; }
 figure img { max-width: 100%; height: auto; }
 figcaption { font-size: 0.9rem; } details { font-size: 0.8rem; } code { font-size: 0.8rem; }
 .citation { color: #555; } .links a { margin-right: 0.8rem; }
+.broken { background: #fde0dd; border-left: 4px solid #d73027; padding: 0.3rem 0.6rem; }
 """
 
 
@@ -93,34 +100,77 @@ def _provenance_html(rec: dict) -> str:
                      for k, v in rec.get("inputs", {}).items())
     pkgs = ", ".join(f"{k} {v}" for k, v in rec.get("packages", {}).items())
     return (f"<details><summary>provenance</summary><ul>"
-            f"<li>commit <code>{_e(rec.get('commit', ''))}</code>, library sha256 "
+            f"<li>library sha256 "
             f"<code>{_e(str(rec.get('library_sha256', ''))[:16])}…</code></li>"
-            f"<li>notebook <code>{_e(rec.get('notebook', ''))}</code></li>"
+            f"<li>notebook <code>{_e(rec.get('notebook', ''))}</code>, source sha256 "
+            f"<code>{_e(str(rec.get('notebook_sha256', ''))[:16])}…</code></li>"
             f"<li>parameters: {_e(params)}</li><li>inputs:<ul>{inputs}</ul></li>"
             f"<li>packages: {_e(pkgs)}</li></ul></details>")
 
 
+def figure_problem(path: Path, side: dict) -> str | None:
+    """Why a figure file cannot be shown (unreadable, truncated, not the file its folder's
+    provenance lists), or None when it is sound."""
+    entry = side.get("files", {}).get(path.name)
+    try:
+        if path.suffix == ".png":
+            with Image.open(path) as im:
+                im.load()  # decodes every byte: a truncated file fails here
+        else:
+            ET.parse(path)
+    except Exception as exc:  # PIL and expat raise many kinds
+        return f"cannot be read ({type(exc).__name__}: {str(exc)[:80]})"
+    if entry is None:
+        return f"is not listed in {provenance.SIDECAR} (not written by this folder's run)"
+    if "sha256" in entry and entry["sha256"] != provenance.sha256(path):
+        return f"does not match the hash in {provenance.SIDECAR} (changed after its run)"
+    return None
+
+
+_EXPORTER = None
+_STAMP = "<!-- mtaccuracy: export of notebook sha256 {} -->\n"
+
+
 def export_notebook(nb: Path, out: Path) -> Path:
-    """HTML export of an executed notebook (no execution), with external scripts removed."""
+    """HTML export of an executed notebook (no execution), with external scripts removed;
+    skipped when ``out`` is already the export of these notebook bytes (the runner exports
+    each notebook as soon as its run succeeds, so the report seldom has to).
+
+    The notebooks are the compendium's own, so nbconvert's HTML sanitiser (bleach, most of the
+    export time) is not applied to them."""
+    global _EXPORTER
+    stamp = _STAMP.format(provenance.sha256(nb))
+    if out.exists():
+        with open(out, encoding="utf-8") as fh:
+            if fh.readline() == stamp:
+                return out
     from nbconvert import HTMLExporter
 
-    body, _ = HTMLExporter(template_name="lab").from_filename(str(nb))
+    if _EXPORTER is None:
+        _EXPORTER = HTMLExporter(template_name="lab", filters={"clean_html": lambda s: s})
+    body, _ = _EXPORTER.from_filename(str(nb))
     body = re.sub(r'<script[^>]*src="https?://[^"]*"[^>]*>\s*</script>', "", body)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(body, encoding="utf-8")
+    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
+    tmp.write_text(stamp + body, encoding="utf-8")
+    os.replace(tmp, out)
     return out
 
 
-def build(figures=None, notebooks=None) -> Path:
-    """Write ``<figures>/index.html`` and ``<figures>/html/<stem>.html``; returns the index."""
+def build(figures=None, notebooks=None, broken: list | None = None, export: bool = True) -> Path:
+    """Write ``<figures>/index.html`` and (with ``export``) ``<figures>/html/<stem>.html``;
+    returns the index.  Figures that cannot be shown (:func:`figure_problem`) are marked in the
+    page and appended to ``broken`` as ``(path, why)``."""
     figures = Path(figures or paths.FIGURES)
     notebooks = Path(notebooks or paths.NOTEBOOKS)
+    broken = [] if broken is None else broken
     index = reproduction.papers_index()
     cards = reproduction.collect(figures)
+    measured = reproduction.collect(figures, measured=True)
     summary = reproduction.summary(cards)
-    rt_path = figures / RUNTIMES
-    runtimes = json.loads(rt_path.read_text(encoding="utf-8")) if rt_path.exists() else {}
-    stems = sorted(p.parent.name for p in figures.glob("*/reproduction.csv"))
+    runs = runner.last_runs() if figures == paths.FIGURES else {}
+    runtimes = {k: v.get("seconds") for k, v in runs.items() if isinstance(v, dict)}
+    stems = sorted(set(cards["notebook"]))
 
     out = ['<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">',
            "<title>mtaccuracy: reproduction report</title>",
@@ -132,18 +182,19 @@ def build(figures=None, notebooks=None) -> Path:
            + ' (<a href="REPRODUCTION.md">scorecard as Markdown</a>).</p>',
            '<table class="summary"><tr><th>paper</th><th>notebook</th>'
            + "".join(f"<th>{_badge(v)}</th>" for v in reproduction.VERDICTS)
-           + "<th>total</th><th>last run time</th></tr>"]
+           + "<th>total</th><th>last run here</th></tr>"]
     for _, r in summary.iterrows():
         rt = runtimes.get(r["notebook"])
+        commit = str(runs.get(r["notebook"], {}).get("commit", ""))[:10]
         out.append(f'<tr><td><a href="#{_e(r["notebook"])}">{_e(r["paper"])}</a></td>'
                    f"<td><code>{_e(r['notebook'])}</code></td>"
                    + "".join(f'<td class="num">{r[v]}</td>' for v in reproduction.VERDICTS)
                    + f'<td class="num">{r["total"]}</td>'
                    + f'<td class="num">{f"{rt:.0f} s" if rt is not None else "not run here"}'
-                   + "</td></tr>")
+                   + (f" (commit <code>{_e(commit)}</code>)" if commit else "") + "</td></tr>")
     tot = summary[list(reproduction.VERDICTS) + ["total"]].sum() if not summary.empty else None
     if tot is not None:
-        total_rt = f"{sum(runtimes.values()):.0f} s" if runtimes else ""
+        total_rt = f"{sum(v for v in runtimes.values() if v):.0f} s" if runtimes else ""
         out.append("<tr><th>all papers</th><th></th>"
                    + "".join(f'<th class="num">{tot[v]}</th>' for v in reproduction.VERDICTS)
                    + f'<th class="num">{tot["total"]}</th><th class="num">{total_rt}</th></tr>')
@@ -156,7 +207,7 @@ def build(figures=None, notebooks=None) -> Path:
         nb = notebooks / f"{stem}.ipynb"
         links = ['<a href="' + _e(f"html/{stem}.html") + '">executed notebook (HTML)</a>'] \
             if nb.exists() else []
-        if nb.exists():
+        if nb.exists() and export:
             export_notebook(nb, figures / "html" / f"{stem}.html")
         links += [f'<a href="{_e(stem)}/{_e(p.name)}">{_e(p.name)}</a>'
                   for p in sorted(folder.glob("*.csv"))]
@@ -167,19 +218,37 @@ def build(figures=None, notebooks=None) -> Path:
                 "<h3>Scorecard</h3><table><tr><th>item</th><th>quantity</th><th>published</th>"
                 "<th>reproduced</th><th>unit</th><th>tolerance</th><th>verdict</th>"
                 "<th>note</th></tr>"]
-        for _, r in card.iterrows():
-            out.append(f'<tr class="score-row" data-notebook="{_e(stem)}" '
+        rows = [("score-row", r) for _, r in card.iterrows()]
+        rows += [("measured-row", r) for _, r in measured[measured["notebook"] == stem].iterrows()]
+        for cls, r in rows:
+            out.append(f'<tr class="{cls}" data-notebook="{_e(stem)}" '
                        f'data-verdict="{_e(r["verdict"])}"><td>{_e(r["item"])}</td>'
                        f"<td>{_e(r['quantity'])}</td><td>{_e(r['published'])}</td>"
                        f"<td>{_e(r['reproduced'])}</td><td>{_e(r['unit'])}</td>"
                        f"<td>{_e(r['tolerance'])}</td><td>{_badge(r['verdict'])}</td>"
-                       f"<td>{_e(r['note'])}</td></tr>")
+                       f"<td>{_e(r['note'])}"
+                       + (" <em>(measured on the machine that ran it: changes from run to "
+                          "run; not counted in the summary)</em>" if cls == "measured-row" else "")
+                       + "</td></tr>")
         out.append("</table><h3>Figures</h3>")
+        side = provenance.read(folder)
+        for fig in sorted([*folder.glob("*.png"), *folder.glob("*.svg")]):
+            why = figure_problem(fig, side)
+            if why:
+                broken.append((fig, why))
+                out.append(f'<p class="broken"><strong>Broken figure</strong> '
+                           f"<code>{_e(stem)}/{_e(fig.name)}</code> {_e(why)}: not shown; run "
+                           f"<code>make reproduce NB={_e(stem[:2])}</code> again.</p>")
+        bad = {p.name for p, _ in broken}
         for png in sorted(folder.glob("*.png")):
+            if png.name in bad:
+                continue
             label = _figure_label(png.stem)
             with Image.open(png) as im:
                 title = im.info.get("Title", "")
             svg = png.with_suffix(".svg")
+            if svg.name in bad:
+                svg = Path("/nonexistent")
             out.append(
                 f'<figure id="{_e(stem)}-{_e(png.stem)}"><img class="figure" '
                 f'src="{_e(stem)}/{_e(png.name)}" alt="{_e(label)}: {_e(title or png.stem)}">'
@@ -200,10 +269,13 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m mtaccuracy.report")
     ap.add_argument("--figures", default=None, help="figures folder (default: figures/)")
     args = ap.parse_args(argv)
-    path = build(args.figures)
+    broken: list = []
+    path = build(args.figures, broken=broken)
     shown = path.relative_to(paths.ROOT) if path.is_relative_to(paths.ROOT) else path
     print(f"report: {shown}")
-    return 0
+    for fig, why in broken:
+        print(f"error: figure {fig} {why}; marked as broken in the report", file=sys.stderr)
+    return 1 if broken else 0
 
 
 if __name__ == "__main__":

@@ -12,8 +12,11 @@ import argparse
 import csv
 import io
 import math
+import os
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from . import paths, provenance
@@ -46,19 +49,73 @@ def published(name: str, required: list[str] | None = None, folder=None) -> pd.D
     return df
 
 
+class NonFiniteResult(ValueError):
+    """A computed result is NaN or infinite: an error in the computation, never a verdict."""
+
+
+def _finite(value, what: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise NonFiniteResult(f"{what} is not a number: {value!r}") from None
+    if not math.isfinite(v):
+        raise NonFiniteResult(f"{what} is {v}: a NaN or infinite result is an error in the "
+                              f"computation (check the parameters and inputs), never a verdict")
+    return v
+
+
 def verdict(published_value: float, reproduced_value: float, tolerance: float,
             same_conclusion: bool) -> str:
     """``reproduced`` within ``tolerance``; else ``close`` if the conclusion is the same;
-    else ``differs``."""
-    if any(map(math.isnan, (published_value, reproduced_value))):
-        return "not reproducible"
+    else ``differs``.
+
+    Raises :class:`NonFiniteResult` when either value is NaN or infinite: a row without a
+    number to compare is ``not reproducible`` by the notebook's own decision, never by a NaN.
+    """
+    published_value = _finite(published_value, "the published value")
+    reproduced_value = _finite(reproduced_value, "the reproduced value")
     if abs(published_value - reproduced_value) <= tolerance:
         return "reproduced"
     return "close" if same_conclusion else "differs"
 
 
-def write_card(rows: list[dict], path) -> pd.DataFrame:
-    """Validate and write a ``reproduction.csv``; returns it as a DataFrame."""
+MEASURED_MARK = "(measured)"
+MEASURED_CARD = "reproduction_measured.csv"
+
+
+def _is_missing(value) -> bool:
+    return value is None or (isinstance(value, str) and value.strip() == "")
+
+
+def _check_row_numbers(rows: list[dict]) -> None:
+    """A row's ``reproduced`` is a finite number or text; empty only when the row is ``not
+    reproducible``; NaN and infinity (as floats or as text) are errors, never verdicts."""
+    for i, r in enumerate(rows):
+        where = f"scorecard row {i + 1} ({r.get('item', '')}: {r.get('quantity', '')})"
+        v = r.get("reproduced")
+        if _is_missing(v):
+            if r.get("verdict") != "not reproducible":
+                raise NonFiniteResult(f"{where}: no reproduced value, but verdict "
+                                      f"{r.get('verdict')!r}")
+            continue
+        if isinstance(v, str):
+            if v.strip().lower().lstrip("+-") in ("nan", "inf", "infinity"):
+                _finite(float(v), f"{where}: reproduced")
+            continue
+        if isinstance(v, int | float | np.integer | np.floating):
+            _finite(v, f"{where}: reproduced")
+
+
+def write_card(rows: list[dict], path, tolerance=None) -> pd.DataFrame:
+    """Validate and write a ``reproduction.csv``; returns it as a DataFrame.
+
+    Rows whose quantity says ``(measured)`` (wall-clock times: measurements of the machine,
+    not results of the parameters) go to ``reproduction_measured.csv`` beside it, declared as
+    measured, so that the card itself is the same on every run.  ``tolerance`` as in
+    :func:`save_table` (for the numbers in the ``reproduced`` column).
+    Raises :class:`NonFiniteResult` on a NaN or infinite reproduced value.
+    """
+    _check_row_numbers(rows)
     df = pd.DataFrame(rows)
     missing = [c for c in COLUMNS if c not in df.columns]
     if missing:
@@ -67,22 +124,152 @@ def write_card(rows: list[dict], path) -> pd.DataFrame:
     if bad:
         raise ValueError(f"unknown verdict(s) {bad}; allowed: {', '.join(VERDICTS)}")
     df = df[COLUMNS]
-    save_table(df, path)
+    path = Path(path)
+    measured = df["quantity"].astype(str).str.contains(MEASURED_MARK, regex=False)
+    if measured.any():
+        save_table(df[measured], path.with_name(MEASURED_CARD), measured=True)
+    if tolerance is None or isinstance(tolerance, Tolerance):
+        tolerance = {"reproduced": tolerance or PRINTED}
+    save_table(df[~measured].reset_index(drop=True), path, tolerance=tolerance)
     return df
 
 
-def save_table(df: pd.DataFrame, path, float_format: str = "%.6g") -> None:
+@dataclass(frozen=True)
+class Tolerance:
+    """How closely a float column regenerated on another machine must match the committed
+    one.  The printed precision (one unit in the last digit written) is always allowed on
+    top, so a last-digit rounding flip never fails; ``abs`` and ``rel`` add what the
+    quantity's own numerical uncertainty justifies, and ``why`` says what that is (an
+    optimiser's stopping tolerance, a solver's conditioning, ...).  Text and integer columns
+    are always compared exactly."""
+
+    rel: float = 0.0
+    abs: float = 0.0
+    why: str = "deterministic arithmetic: equal to the printed precision"
+
+    def __post_init__(self):
+        for name in ("rel", "abs"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"Tolerance.{name} must be finite and >= 0, got {v!r}")
+        if not self.why.strip():
+            raise ValueError("a Tolerance needs its reason (why=...)")
+
+    def allows(self, a: np.ndarray, b: np.ndarray, unit: np.ndarray) -> np.ndarray:
+        """Elementwise: ``|a - b| <= max(abs, rel * max(|a|, |b|)) + unit`` (``unit``: the
+        last printed digit's place of the two strings)."""
+        scale = np.maximum(np.abs(a), np.abs(b))
+        return np.abs(a - b) <= np.maximum(self.abs, self.rel * scale) + unit * (1 + 1e-9)
+
+
+#: The default for float columns: deterministic arithmetic, equal to the printed precision.
+PRINTED = Tolerance()
+
+
+def _tolerance_map(df: pd.DataFrame, tolerance) -> dict[str, dict]:
+    """``{column: Tolerance as dict}`` for every float column of ``df``."""
+    if tolerance is None:
+        tolerance = {}
+    if isinstance(tolerance, Tolerance):
+        tolerance = {"*": tolerance}
+    unknown = [c for c in tolerance if c != "*" and c not in df.columns]
+    if unknown:
+        raise ValueError(f"tolerance for unknown column(s) {unknown}; columns: "
+                         f"{list(df.columns)}")
+    for c, t in tolerance.items():
+        if not isinstance(t, Tolerance):
+            raise TypeError(f"tolerance[{c!r}] must be a reproduction.Tolerance, got {t!r}")
+    out = {}
+    for c in df.columns:
+        t = tolerance.get(c, tolerance.get("*", PRINTED))
+        if c in tolerance or pd.api.types.is_float_dtype(df[c]):
+            out[str(c)] = asdict(t)
+    return out
+
+
+def save_table(df: pd.DataFrame, path, float_format: str = "%.6g", tolerance=None,
+               measured: bool = False) -> None:
     """Write a CSV deterministically (fixed float format, '\\n' line ends, no index) and record
-    it, with its hash, in the folder's ``provenance.json``.  Returns nothing, so that a notebook
-    cell ending with it shows no machine-specific path."""
+    it in the folder's ``provenance.json`` with its hash and the tolerance of each float column
+    (what the regenerated-table test allows on another machine).
+
+    ``tolerance``: a :class:`Tolerance` for every float column, or ``{column: Tolerance}``
+    (key ``"*"`` for the others); default :data:`PRINTED`.  ``measured=True`` declares the
+    whole table a measurement of the machine (wall-clock times): recorded without a hash and
+    never compared.  Infinite values are refused (NaN is written as an empty cell).  Returns
+    nothing, so that a notebook cell ending with it shows no machine-specific path."""
     path = Path(path)
+    num = df.select_dtypes(include="number")
+    if not num.empty and np.isinf(num.to_numpy(dtype=float)).any():
+        cols = [c for c in num.columns if np.isinf(num[c].to_numpy(dtype=float)).any()]
+        raise NonFiniteResult(f"{path.name}: infinite value(s) in column(s) {cols}")
+    tol = _tolerance_map(df, tolerance)
     path.parent.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
     df.to_csv(buf, index=False, float_format=float_format, lineterminator="\n")
     data = buf.getvalue().encode("utf-8")
     if not path.exists() or path.read_bytes() != data:
-        path.write_bytes(data)
-    provenance.register_output(path)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        tmp.write_bytes(data)
+        os.replace(tmp, path)
+    provenance.register_output(path, measured=measured, tolerance=None if measured else tol)
+
+
+def _last_digit_place(text: pd.Series) -> np.ndarray:
+    """The place value of the last digit written in each numeric string (``0.0776`` ->
+    1e-4, ``1.2e-05`` -> 1e-6, ``120`` -> 1)."""
+    out = np.zeros(len(text))
+    for i, s in enumerate(text.astype(str)):
+        s = s.strip().lower()
+        mant, _, exp = s.partition("e")
+        decimals = len(mant.split(".", 1)[1]) if "." in mant else 0
+        out[i] = 10.0 ** (-decimals + (int(exp) if exp else 0))
+    return out
+
+
+def compare_tables(new_path, committed_path, tolerances: dict | None = None) -> list[str]:
+    """Differences between a regenerated CSV and the committed one, as messages (empty when
+    they agree).  Text and integer cells must be equal; float cells within the column's
+    declared :class:`Tolerance` (``tolerances``: as recorded in ``provenance.json``) plus the
+    printed precision."""
+    a = pd.read_csv(new_path, dtype=str, keep_default_na=False)
+    b = pd.read_csv(committed_path, dtype=str, keep_default_na=False)
+    name = Path(committed_path).name
+    if list(a.columns) != list(b.columns):
+        return [f"{name}: columns {list(a.columns)} != committed {list(b.columns)}"]
+    if a.shape != b.shape:
+        return [f"{name}: shape {a.shape} != committed {b.shape}"]
+    problems = []
+    tolerances = tolerances or {}
+    for c in a.columns:
+        if c not in tolerances:  # text, integers: exact
+            diff = np.flatnonzero(a[c].to_numpy() != b[c].to_numpy())
+            if diff.size:
+                i = int(diff[0])
+                problems.append(f"{name}: column {c!r} row {i + 2}: {a[c][i]!r} != committed "
+                                f"{b[c][i]!r} (compared exactly)")
+            continue
+        tol = Tolerance(**tolerances[c])
+        na, nb_ = pd.to_numeric(a[c], errors="coerce"), pd.to_numeric(b[c], errors="coerce")
+        numeric = (na.notna() & nb_.notna()).to_numpy()
+        text_diff = np.flatnonzero(~numeric & (a[c].to_numpy() != b[c].to_numpy()))
+        if text_diff.size:
+            i = int(text_diff[0])
+            problems.append(f"{name}: column {c!r} row {i + 2}: {a[c][i]!r} != committed "
+                            f"{b[c][i]!r}")
+            continue
+        if not numeric.any():
+            continue
+        sa, sb = a[c][numeric], b[c][numeric]
+        unit = np.maximum(_last_digit_place(sa), _last_digit_place(sb))
+        ok = tol.allows(na[numeric].to_numpy(), nb_[numeric].to_numpy(), unit)
+        if not ok.all():
+            j = int(np.flatnonzero(~ok)[0])
+            i = int(np.flatnonzero(numeric)[j])
+            problems.append(f"{name}: column {c!r} row {i + 2}: {sa.iloc[j]} vs committed "
+                            f"{sb.iloc[j]} (allowed: rel {tol.rel:g}, abs {tol.abs:g} and the "
+                            f"printed digit; {tol.why})")
+    return problems
 
 
 def papers_index() -> dict[str, dict]:
@@ -95,13 +282,19 @@ def _md_cell(text) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
-def collect(figures=None) -> pd.DataFrame:
-    """Every ``figures/<stem>/reproduction.csv``, with a ``paper`` and ``notebook`` column."""
+def collect(figures=None, measured: bool = False) -> pd.DataFrame:
+    """Every ``figures/<stem>/reproduction.csv`` of the papers' notebooks (the stems of
+    ``data/papers/index.csv``), with a ``paper`` and ``notebook`` column; with ``measured``,
+    the ``reproduction_measured.csv`` cards instead (wall-clock rows, which change from run to
+    run and so are kept out of the committed summaries)."""
     figures = Path(figures or paths.FIGURES)
     index = papers_index()
     frames = []
-    for card in sorted(figures.glob("*/reproduction.csv")):
+    name = MEASURED_CARD if measured else "reproduction.csv"
+    for card in sorted(figures.glob(f"*/{name}")):
         stem = card.parent.name
+        if stem not in index:
+            continue
         df = pd.read_csv(card, dtype=str, keep_default_na=False)
         missing = [c for c in COLUMNS if c not in df.columns]
         if missing:
@@ -142,6 +335,24 @@ def scorecard_markdown(cards: pd.DataFrame, full: bool = True) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _measured_sentence(figures: Path) -> str:
+    m = collect(figures, measured=True)
+    if m.empty:
+        return ""
+    where = ", ".join(f"`figures/{s}/{MEASURED_CARD}` ({n})"
+                      for s, n in m.groupby("notebook", sort=True).size().items())
+    return (f"\nNot counted above: {len(m)} rows scoring wall-clock times, which are "
+            f"measurements of the machine and change from run to run: {where}, shown with "
+            f"their verdicts in the HTML report (`make report`).\n")
+
+
+def _write_if_changed(path: Path, text: str) -> None:
+    if not path.exists() or path.read_text(encoding="utf-8") != text:
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+
+
 def gather(figures=None, readme=None, report=None) -> tuple[Path, Path]:
     """Write ``figures/REPRODUCTION.md`` and refresh the scorecard section of ``README.md``."""
     figures = Path(figures or paths.FIGURES)
@@ -149,25 +360,25 @@ def gather(figures=None, readme=None, report=None) -> tuple[Path, Path]:
     report = Path(report or figures / "REPRODUCTION.md")
     cards = collect(figures)
     body = scorecard_markdown(cards)
+    measured = _measured_sentence(figures)
     md = ("# Reproduction scorecard\n\nGenerated by `make reproduce` from every "
           "`figures/<notebook>/reproduction.csv`. Verdicts: `reproduced` (within tolerance), "
           "`close` (same conclusion, numbers outside tolerance), `differs`, `not reproducible` "
-          "(the paper lacks what is needed). Each notebook explains its rows.\n\n" + body)
-    report.write_text(md, encoding="utf-8")
+          "(the paper lacks what is needed). Each notebook explains its rows.\n" + measured
+          + "\n" + body)
+    _write_if_changed(report, md)
     text = readme.read_text(encoding="utf-8")
     if README_START not in text or README_END not in text:
         raise ValueError(f"{readme} lacks the scorecard markers {README_START!r} ... "
                          f"{README_END!r}; add them where the scorecard belongs")
     head, rest = text.split(README_START, 1)
     _, tail = rest.split(README_END, 1)
-    section = (README_START + "\n\n" + scorecard_markdown(cards, full=False)
+    section = (README_START + "\n\n" + scorecard_markdown(cards, full=False) + measured
                + "\n<details><summary>Every row (notes in "
                + "<a href=\"figures/REPRODUCTION.md\">figures/REPRODUCTION.md</a>)</summary>\n\n"
                + scorecard_markdown(cards).split("\n\n", 1)[1]
                + "\n</details>\n\n" + README_END)
-    new = head + section + tail
-    if new != text:
-        readme.write_text(new, encoding="utf-8")
+    _write_if_changed(readme, head + section + tail)
     return report, readme
 
 

@@ -7,21 +7,39 @@ parameter and the allowed ones, before any kernel starts.
 A notebook declares its parameters in the one code cell tagged ``parameters``, one
 assignment per line with a comment; the comment may start with constraints in braces::
 
-    n_samples = 500  # {>= 2} Latin hypercube sample size
+    n_samples = 500  # {>= 2, <= 200000} Latin hypercube sample size
     method = "lhs"  # {in: lhs|mc} sampling method
     focus = ["dx(z)"]  # {errors: vertical_xyfz} errors to highlight
+    # {memory: 3e8 + 8 * n_samples * 21 * 4} peak bytes of a run
 
-The type is the default's type (an int parameter refuses 2.5; a float one accepts 2).  The
-same checks run inside the notebook (:func:`check_parameters`), so an interactive run in
-JupyterLab refuses a bad value too.
+The type is the default's type (an int parameter refuses 2.5; a float one accepts 2); a float
+must be finite.  The ``memory`` line is an arithmetic expression of the parameters giving the
+run's peak memory in bytes: a run that cannot fit in the memory available is refused before it
+starts, naming the limit.  ``output_dir`` must be the notebook's own folder under ``figures/``
+or a folder outside the repository (:func:`mtaccuracy.paths.check_output_dir`).  The same
+checks run inside the notebook (:func:`check_parameters`), so an interactive run in JupyterLab
+refuses a bad value too.
 
-Execution goes to ``notebooks/.running/``; only a successful run replaces the notebook in
-place (the previous version is kept in ``notebooks/.backup/``).  A failed run is kept in
-``notebooks/.failed/`` and the committed notebook is left untouched.
+All or nothing: a run executes the notebook into ``notebooks/.running/`` and writes its
+figures and tables into a staging folder; only when every cell succeeded is the notebook
+replaced in place and the staging folder moved into the output folder, so that a notebook and
+its ``figures/<stem>/`` (``reproduction.csv``, figures, ``provenance.json``) always come from
+one run.  A failed or interrupted run (Ctrl-C, SIGTERM) leaves the committed notebook and
+figures byte-identical and is kept in ``notebooks/.failed/`` (the executed notebook and a
+``<stem>.figures/`` folder with what it had written); it ends with one line saying so.
 
-Command line (``make reproduce NB=03 PARAMS="n_samples=1000 seed=2"`` calls this)::
+Cells tagged ``measured`` print measurements of the machine (wall-clock times): their outputs
+are not stored (a one-line note replaces them), so re-running an unchanged notebook leaves it
+byte-identical.
 
-    python -m mtaccuracy.runner all|03|notebooks/03_....ipynb [name=value ...] [--check] [--list]
+Command line (``make reproduce NB=03 PARAMS="n_samples=1000 seed=2"`` calls this, passing
+``NB`` and ``PARAMS`` through the environment, never through a shell)::
+
+    python -m mtaccuracy.runner all|03|notebooks/03_....ipynb [name=value ...] [--check]
+                                [--list] [--jobs N]
+
+``all`` runs the notebooks two at a time on a machine with two cores or more (each kernel with
+one BLAS thread, so that they do not compete), the longest first.
 """
 
 from __future__ import annotations
@@ -30,8 +48,14 @@ import argparse
 import ast
 import copy
 import json
+import math
+import operator
+import os
 import re
+import shlex
 import shutil
+import signal
+import subprocess
 import sys
 import time
 from dataclasses import dataclass
@@ -42,6 +66,10 @@ from . import paths
 
 class ParameterError(ValueError):
     """A notebook parameter is unknown, of the wrong type or outside its constraints."""
+
+
+class Interrupted(Exception):
+    """The run was stopped by SIGINT (Ctrl-C) or SIGTERM."""
 
 
 @dataclass
@@ -56,11 +84,14 @@ class Parameter:
                          (f"one of {'|'.join(v)}" if op == "in" else f"error names of {v}")
                          for op, v in self.constraints)
         kind = type(self.default).__name__ if self.default is not None else "any"
+        if self.name == "output_dir":
+            cons = "its own folder under figures/ or a folder outside the repository"
         return (f"{self.name} = {self.default!r} ({kind}{'; ' + cons if cons else ''})"
                 f"{'  ' + self.help if self.help else ''}")
 
 
 _CONSTRAINT = re.compile(r"^\s*\{([^}]*)\}\s*(.*)$")
+_MEMORY = re.compile(r"^\s*#\s*\{\s*memory\s*:([^}]*)\}")
 _OPS = (">=", "<=", ">", "<")
 
 
@@ -70,9 +101,12 @@ def _parse_constraints(text: str, where: str) -> list[tuple[str, object]]:
         for op in _OPS:
             if clause.startswith(op):
                 try:
-                    out.append((op, float(clause[len(op):])))
+                    bound = float(clause[len(op):])
                 except ValueError:
                     raise ParameterError(f"{where}: bad bound {clause!r}") from None
+                if not math.isfinite(bound):
+                    raise ParameterError(f"{where}: bound {clause!r} is not finite")
+                out.append((op, bound))
                 break
         else:
             if clause.startswith("in:"):
@@ -90,7 +124,7 @@ def notebook_path(name: str | Path) -> Path:
     p = Path(name)
     if p.suffix == ".ipynb" and p.exists():
         return p.resolve()
-    hits = sorted(paths.NOTEBOOKS.glob(f"{name}*.ipynb"))
+    hits = sorted(paths.NOTEBOOKS.glob(f"{name}*.ipynb")) if str(name).strip() else []
     if len(hits) == 1:
         return hits[0]
     known = ", ".join(h.stem for h in sorted(paths.NOTEBOOKS.glob("[0-9]*.ipynb")))
@@ -114,11 +148,15 @@ def _parameters_cell(nb: dict, where: str) -> dict:
     return cells[0]
 
 
-def read_parameters(notebook: str | Path) -> dict[str, Parameter]:
-    """The declared parameters of a notebook, in order."""
+def _parameters_source(notebook) -> tuple[Path, str]:
     path = notebook_path(notebook)
     nb = json.loads(path.read_text(encoding="utf-8"))
-    src = "".join(_parameters_cell(nb, path.name)["source"])
+    return path, "".join(_parameters_cell(nb, path.name)["source"])
+
+
+def read_parameters(notebook: str | Path) -> dict[str, Parameter]:
+    """The declared parameters of a notebook, in order."""
+    path, src = _parameters_source(notebook)
     lines = src.splitlines()
     tree = ast.parse(src)
     out: dict[str, Parameter] = {}
@@ -139,11 +177,96 @@ def read_parameters(notebook: str | Path) -> dict[str, Parameter]:
     return out
 
 
+# --- memory estimate ----------------------------------------------------------------------
+
+_BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+           ast.Div: operator.truediv, ast.Pow: operator.pow, ast.FloorDiv: operator.floordiv}
+
+
+def _eval_arithmetic(node, names: dict, where: str) -> float:
+    if isinstance(node, ast.Expression):
+        return _eval_arithmetic(node.body, names, where)
+    if isinstance(node, ast.Constant) and isinstance(node.value, int | float) \
+            and not isinstance(node.value, bool):
+        return float(node.value)
+    if isinstance(node, ast.Name):
+        v = names.get(node.id)
+        if isinstance(v, bool) or not isinstance(v, int | float | list | tuple):
+            raise ParameterError(f"{where}: {node.id!r} is not a numeric parameter")
+        return float(len(v)) if isinstance(v, list | tuple) else float(v)
+    if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
+        return _BINOPS[type(node.op)](_eval_arithmetic(node.left, names, where),
+                                      _eval_arithmetic(node.right, names, where))
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+        return -_eval_arithmetic(node.operand, names, where)
+    if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) \
+            and node.func.id in ("max", "min", "len") and node.args and not node.keywords:
+        args = [_eval_arithmetic(a, names, where) for a in node.args]
+        return {"max": max, "min": min, "len": lambda x: x}[node.func.id](*args) \
+            if node.func.id != "len" else args[0]
+    raise ParameterError(f"{where}: the memory expression may use numbers, parameter names, "
+                         f"+ - * / ** and max/min/len only")
+
+
+def memory_estimate(notebook: str | Path, values: dict) -> float | None:
+    """Peak bytes of a run with ``values`` (all parameters), from the ``# {memory: ...}`` line
+    of the parameters cell; None when the notebook declares none."""
+    path, src = _parameters_source(notebook)
+    for line in src.splitlines():
+        m = _MEMORY.match(line)
+        if m:
+            where = f"{path.name}, memory line"
+            try:
+                tree = ast.parse(m.group(1).strip(), mode="eval")
+            except SyntaxError:
+                raise ParameterError(f"{where}: cannot parse {m.group(1).strip()!r}") from None
+            try:
+                return _eval_arithmetic(tree, values, where)
+            except (OverflowError, ZeroDivisionError):
+                return math.inf
+    return None
+
+
+def memory_available() -> tuple[float, str]:
+    """Bytes this process may still use, and where that limit comes from."""
+    limits = []
+    try:
+        import psutil
+
+        limits.append((float(psutil.virtual_memory().available), "available memory"))
+    except ImportError:  # pragma: no cover - psutil is in the lock
+        pass
+    for f, used in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),):
+        try:
+            cap = Path(f).read_text().strip()
+            if cap != "max":
+                limits.append((float(cap) - float(Path(used).read_text()), "the cgroup limit"))
+        except (OSError, ValueError):
+            pass
+    return min(limits) if limits else (math.inf, "no known limit")
+
+
+def _check_memory(notebook: str, values: dict, share: int = 1) -> None:
+    need = memory_estimate(notebook, values)
+    if need is None:
+        return
+    have, what = memory_available()
+    have /= share
+    if need > have:
+        raise ParameterError(
+            f"{notebook}: these parameters need about {need / 1e9:.3g} GB of memory, more "
+            f"than the {have / 1e9:.3g} GB {what}"
+            f"{f' (shared by {share} runs at once)' if share > 1 else ''} on this machine; "
+            f"lower the sample sizes")
+
+
+# --- checking values -------------------------------------------------------------------------
+
 def parse_value(text: str):
     """A command-line value: a Python literal if it parses as one, else the string."""
     try:
         return ast.literal_eval(text)
-    except (ValueError, SyntaxError):
+    except (ValueError, SyntaxError, MemoryError, RecursionError):
         return text
 
 
@@ -166,13 +289,29 @@ def _type_ok(default, value) -> bool:
     return isinstance(value, type(default))
 
 
+def _finite(value) -> bool:
+    if isinstance(value, float):
+        return math.isfinite(value)
+    if isinstance(value, list | tuple):
+        return all(_finite(v) for v in value)
+    return True
+
+
 def _check_one(p: Parameter, value, notebook: str) -> object:
     if not _type_ok(p.default, value):
         raise ParameterError(
             f"{notebook}: parameter {p.name!r} must be {type(p.default).__name__} like its "
             f"default {p.default!r}, got {type(value).__name__} {value!r}")
+    if not _finite(value):
+        raise ParameterError(f"{notebook}: parameter {p.name!r} = {value!r} is not a finite "
+                             f"number (1e400 overflows to inf)")
     if isinstance(p.default, float) and isinstance(value, int):
         value = float(value)
+    if p.name == "output_dir":
+        try:
+            paths.check_output_dir(value, notebook)
+        except paths.OutputDirError as exc:
+            raise ParameterError(str(exc)) from None
     items = value if isinstance(value, list | tuple) else [value]
     for op, bound in p.constraints:
         for v in items:
@@ -194,11 +333,10 @@ def _check_one(p: Parameter, value, notebook: str) -> object:
     return value
 
 
-def validate(notebook: str | Path, overrides: dict) -> dict:
-    """Check ``overrides`` against the notebook's declared parameters; return them cleaned.
-
-    Raises :class:`ParameterError` naming the parameter and the allowed ones.
-    """
+def validate(notebook: str | Path, overrides: dict, share: int = 1) -> dict:
+    """Check ``overrides`` against the notebook's declared parameters and the run's memory
+    estimate; return them cleaned.  Raises :class:`ParameterError` naming the parameter and
+    the allowed ones."""
     path = notebook_path(notebook)
     declared = read_parameters(path)
     unknown = [k for k in overrides if k not in declared]
@@ -206,7 +344,11 @@ def validate(notebook: str | Path, overrides: dict) -> dict:
         raise ParameterError(
             f"{path.stem}: unknown parameter(s) {', '.join(unknown)}; allowed:\n  "
             + "\n  ".join(p.describe() for p in declared.values()))
-    return {k: _check_one(declared[k], v, path.stem) for k, v in overrides.items()}
+    clean = {k: _check_one(declared[k], v, path.stem) for k, v in overrides.items()}
+    if "output_dir" in declared and "output_dir" not in clean:
+        _check_one(declared["output_dir"], declared["output_dir"].default, path.stem)
+    _check_memory(path.stem, {**{k: p.default for k, p in declared.items()}, **clean}, share)
+    return clean
 
 
 def check_parameters(namespace: dict, notebook: str) -> None:
@@ -219,7 +361,17 @@ def check_parameters(namespace: dict, notebook: str) -> None:
         if name not in namespace:
             raise ParameterError(f"{notebook}: parameter {name!r} is not defined")
         _check_one(p, namespace[name], notebook)
-    provenance.start(notebook_path(notebook).stem, {k: namespace[k] for k in declared})
+    if not os.environ.get(paths.STAGING_ENV):  # the runner checked the memory for its share
+        _check_memory(notebook, {k: namespace[k] for k in declared})
+    provenance.start(notebook_path(notebook).stem, {k: namespace[k] for k in declared},
+                     source=notebook_path(notebook))
+
+
+# --- running -----------------------------------------------------------------------------
+
+MEASURED_NOTE = ("[output of a cell tagged 'measured' (wall-clock times of the machine that ran "
+                 "it): not stored, so that re-running an unchanged notebook leaves it unchanged; "
+                 "the values are in the output files declared measured]\n")
 
 
 def _strip_injected(nb: dict) -> dict:
@@ -229,8 +381,9 @@ def _strip_injected(nb: dict) -> dict:
     return nb
 
 
-def _strip_timing(nb: dict, rel: str) -> dict:
-    """Remove what makes two identical runs differ (timestamps, durations, temp paths)."""
+def _normalise(nb: dict, rel: str) -> dict:
+    """Remove what makes two identical runs differ (timestamps, durations, temp paths, the
+    outputs of cells tagged ``measured``)."""
     meta = nb.get("metadata", {}).get("papermill", {})
     for k in ("start_time", "end_time", "duration", "environment_variables", "exception"):
         meta.pop(k, None)
@@ -240,57 +393,299 @@ def _strip_timing(nb: dict, rel: str) -> dict:
         md = c.get("metadata", {})
         md.pop("papermill", None)
         md.pop("execution", None)
+        if c.get("cell_type") != "code":
+            continue
+        if "measured" in md.get("tags", []):
+            c["outputs"] = [{"name": "stdout", "output_type": "stream", "text": [MEASURED_NOTE]}]
+        c["outputs"] = _merge_streams(c.get("outputs", []))
     return nb
 
 
-def run(notebook: str | Path, overrides: dict | None = None, progress: bool = True) -> float:
-    """Validate, execute with papermill and replace the notebook in place; returns seconds."""
-    import papermill as pm
+def _merge_streams(outputs: list) -> list:
+    """Consecutive stream outputs of one stream as one: the kernel splits a cell's printing
+    into pieces depending on timing, which is not part of the result."""
+    merged: list = []
+    for o in outputs:
+        prev = merged[-1] if merged else None
+        if (o.get("output_type") == "stream" and prev is not None
+                and prev.get("output_type") == "stream" and prev.get("name") == o.get("name")):
+            text = "".join(prev["text"]) + "".join(o["text"])
+            prev["text"] = text.splitlines(keepends=True)
+        else:
+            if o.get("output_type") == "stream":
+                o = dict(o, text="".join(o["text"]).splitlines(keepends=True))
+            merged.append(o)
+    return merged
 
-    path = notebook_path(notebook)
-    params = validate(path, overrides or {})
-    running = paths.NOTEBOOKS / ".running"
-    failed = paths.NOTEBOOKS / ".failed"
-    backup = paths.NOTEBOOKS / ".backup"
-    for d in (running, failed, backup):
-        d.mkdir(exist_ok=True)
-    src = running / f"{path.stem}.input.ipynb"
-    out = running / path.name
-    src.write_text(json.dumps(_strip_injected(json.loads(path.read_text(encoding="utf-8"))),
-                              indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
-    t0 = time.perf_counter()
+
+def _parameterised(path: Path, params: dict) -> dict:
+    """The notebook with papermill's injected-parameters cell (built here, so that papermill
+    does not guess at the parameters cell and warn about what this runner already checked)."""
+    import nbformat
+    from papermill.parameterize import parameterize_notebook
+
+    nb = nbformat.reads(json.dumps(_strip_injected(json.loads(path.read_text("utf-8")))),
+                        as_version=4)
+    nb.metadata.setdefault("papermill", {})
+    for c in nb.cells:  # papermill's own loader does this too
+        c.metadata.setdefault("tags", [])
+    if params:
+        nb = parameterize_notebook(nb, params, kernel_name="python3", language="python")
+    return nb
+
+
+def _rel(p: Path) -> str:
     try:
-        pm.execute_notebook(str(src), str(out), parameters=params, cwd=str(paths.NOTEBOOKS),
-                            kernel_name="python3", progress_bar=progress, log_output=False)
-    except Exception as exc:  # papermill raises PapermillExecutionError with the cell's error
-        shutil.move(str(out), failed / path.name) if out.exists() else None
-        msg = getattr(exc, "evalue", None) or str(exc).strip().splitlines()[-1]
-        cell = getattr(exc, "exec_count", None)
-        raise RuntimeError(
-            f"{path.stem} failed{f' in cell [{cell}]' if cell else ''}: "
-            f"{getattr(exc, 'ename', type(exc).__name__)}: {msg}\n"
-            f"  executed copy: {(failed / path.name).relative_to(paths.ROOT)}; "
-            f"{path.relative_to(paths.ROOT)} is unchanged") from None
+        return str(p.resolve().relative_to(paths.ROOT))
+    except ValueError:
+        return str(p)
+
+
+def _on_signal(signum, frame):
+    raise Interrupted(signal.Signals(signum).name)
+
+
+def _install(handler) -> dict:
+    old = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        try:
+            old[sig] = signal.signal(sig, handler)
+        except ValueError:  # not the main thread: leave signals alone
+            pass
+    return old
+
+
+def _replace_folder(staging: Path, target: Path) -> None:
+    """Move ``staging`` to ``target``, replacing it (rename when on one file system)."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    old = target.with_name(f".{target.name}.old-{os.getpid()}")
+    if target.exists():
+        os.replace(target, old)
+    try:
+        shutil.move(str(staging), str(target))
+    except BaseException:
+        if old.exists() and not target.exists():
+            os.replace(old, target)
+        raise
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def run(notebook: str | Path, overrides: dict | None = None, progress: bool = True,
+        share: int = 1, export: bool = True) -> float:
+    """Validate, execute with papermill and, only if every cell succeeds, replace the notebook
+    in place and move its outputs into the output folder; returns seconds.
+
+    Raises :class:`RuntimeError` (failed) or :class:`Interrupted` (SIGINT/SIGTERM), both with a
+    one-line message; the committed notebook and output folder are then unchanged and the
+    partial run is kept in ``notebooks/.failed/``.  With ``export``, a run into the default
+    folder also writes the report's HTML export of the notebook (``figures/html/``)."""
+    path = notebook_path(notebook)
+    params = validate(path, overrides or {}, share)
+    declared = read_parameters(path)
+    target = paths.resolve_output(params.get("output_dir", declared["output_dir"].default)) \
+        if "output_dir" in declared else None
+    running, failed = paths.NOTEBOOKS / ".running", paths.NOTEBOOKS / ".failed"
+    for d in (running, failed):
+        d.mkdir(exist_ok=True)
+    out = running / path.name
+    staging = (target.parent / f".{target.name}.staging-{os.getpid()}") if target else None
+    if staging is not None:
+        shutil.rmtree(staging, ignore_errors=True)
+    old_env = os.environ.get(paths.STAGING_ENV)
+    old_handlers = _install(_on_signal)
+    try:
+        seconds = _execute_and_replace(path, params, out, staging, target, failed, progress)
     finally:
-        src.unlink(missing_ok=True)
-    seconds = time.perf_counter() - t0
-    nb = _strip_timing(json.loads(out.read_text(encoding="utf-8")),
-                       str(path.relative_to(paths.ROOT)))
-    shutil.copy2(path, backup / path.name)
-    path.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
-    out.unlink()
-    _record_runtime(path.stem, seconds)
+        if old_env is None:
+            os.environ.pop(paths.STAGING_ENV, None)
+        else:
+            os.environ[paths.STAGING_ENV] = old_env
+        for sig, h in old_handlers.items():
+            signal.signal(sig, h)
+    _record_run(path.stem, seconds)
+    if export:
+        _export(path, target)
     return seconds
 
 
-def _record_runtime(stem: str, seconds: float) -> None:
-    """Keep the last run time of each notebook for the report (``figures/.runtimes.json``,
-    not committed: it is a measurement of this machine)."""
-    rt = paths.FIGURES / ".runtimes.json"
-    data = json.loads(rt.read_text(encoding="utf-8")) if rt.exists() else {}
-    data[stem] = round(seconds, 1)
+def _export(path: Path, target: Path | None) -> None:
+    """The report's HTML export of a notebook just run into its default folder."""
+    if target == paths.FIGURES / path.stem:
+        from .report import export_notebook
+
+        export_notebook(path, paths.FIGURES / "html" / f"{path.stem}.html")
+
+
+def execute_copy(notebook: str | Path, dest: str | Path, overrides: dict | None = None) -> Path:
+    """Execute a notebook into ``dest/<stem>.ipynb`` (normalised as a run in place would store
+    it) with relative output folders taken from ``dest`` (``$MTACCURACY_OUTPUT_BASE``): nothing
+    in the repository is touched.  Used by the tests and by ``--copy-to``; raises papermill's
+    error when a cell fails."""
+    import papermill as pm
+
+    path = notebook_path(notebook)
+    dest = Path(dest).resolve()
+    dest.mkdir(parents=True, exist_ok=True)
+    old = os.environ.get(paths.OUTPUT_BASE_ENV)
+    os.environ[paths.OUTPUT_BASE_ENV] = str(dest)
+    staging = os.environ.pop(paths.STAGING_ENV, None)  # a copy is never staged
+    try:
+        params = validate(path, overrides or {})
+        out = dest / path.name
+        pm.execute_notebook(_parameterised(path, params), str(out), cwd=str(paths.NOTEBOOKS),
+                            kernel_name="python3", progress_bar=False, log_output=False)
+        nb = _normalise(json.loads(out.read_text(encoding="utf-8")), _rel(path))
+        out.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    finally:
+        if old is None:
+            os.environ.pop(paths.OUTPUT_BASE_ENV, None)
+        else:
+            os.environ[paths.OUTPUT_BASE_ENV] = old
+        if staging is not None:
+            os.environ[paths.STAGING_ENV] = staging
+    return out
+
+
+def _execute_and_replace(path, params, out, staging, target, failed, progress) -> float:
+    import papermill as pm
+
+    t0 = time.perf_counter()
+    try:
+        if staging is not None:
+            os.environ[paths.STAGING_ENV] = str(staging)
+        pm.execute_notebook(_parameterised(path, params), str(out), cwd=str(paths.NOTEBOOKS),
+                            kernel_name="python3", progress_bar=progress, log_output=False)
+    except BaseException as exc:
+        _install(signal.SIG_IGN)  # a second Ctrl-C must not interrupt the clean-up
+        kept = failed / path.name
+        if out.exists():
+            shutil.move(str(out), kept)
+        if staging is not None and staging.exists():
+            dest = failed / f"{path.stem}.figures"
+            shutil.rmtree(dest, ignore_errors=True)
+            shutil.move(str(staging), dest)
+        unchanged = f"{_rel(path)}{f' and {_rel(target)}' if target else ''} unchanged"
+        where = f"partial run kept in {_rel(failed)}/"
+        if isinstance(exc, Interrupted | KeyboardInterrupt):
+            raise Interrupted(f"{path.stem} interrupted ({exc or 'SIGINT'}): {unchanged}; "
+                              f"{where}") from None
+        msg = getattr(exc, "evalue", None) or (str(exc).strip().splitlines() or [""])[-1]
+        cell = getattr(exc, "exec_count", None)
+        raise RuntimeError(
+            f"{path.stem} failed{f' in cell [{cell}]' if cell else ''}: "
+            f"{getattr(exc, 'ename', type(exc).__name__)}: {msg}\n  {unchanged}; {where}"
+        ) from None
+    seconds = time.perf_counter() - t0
+    nb = _normalise(json.loads(out.read_text(encoding="utf-8")), _rel(path))
+    text = json.dumps(nb, indent=1, ensure_ascii=False) + "\n"
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    if staging is not None and staging.exists():  # a notebook that wrote nothing leaves it
+        _replace_folder(staging, target)
+    os.replace(tmp, path)
+    out.unlink()
+    return seconds
+
+
+RUNS = ".runs.json"
+
+
+def _record_run(stem: str, seconds: float) -> None:
+    """Keep, for the report, each notebook's last run time and the commit it ran on, in
+    ``figures/.runs.json``: not committed (a measurement of this machine), and the only place
+    the commit is kept: figures carry content hashes (:mod:`mtaccuracy.provenance`)."""
+    rt = paths.FIGURES / RUNS
+    try:
+        data = json.loads(rt.read_text(encoding="utf-8")) if rt.exists() else {}
+    except ValueError:
+        data = {}
+    from .provenance import git_commit
+
+    data[stem] = {"seconds": round(seconds, 1), "commit": git_commit()}
     rt.parent.mkdir(parents=True, exist_ok=True)
-    rt.write_text(json.dumps(dict(sorted(data.items())), indent=1) + "\n", encoding="utf-8")
+    tmp = rt.with_name(f"{RUNS}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(dict(sorted(data.items())), indent=1) + "\n", encoding="utf-8")
+    os.replace(tmp, rt)
+
+
+def last_runs() -> dict:
+    """``{stem: {"seconds": s, "commit": c}}`` of the runs recorded on this machine."""
+    rt = paths.FIGURES / RUNS
+    try:
+        return json.loads(rt.read_text(encoding="utf-8")) if rt.exists() else {}
+    except ValueError:
+        return {}
+
+
+# --- command line ---------------------------------------------------------------------------
+
+def _child_env() -> dict:
+    env = dict(os.environ)
+    for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        env[k] = "1"
+    return env
+
+
+def _run_parallel(targets: list[Path], items: list[str], jobs: int) -> int:
+    """Run each notebook in its own ``python -m mtaccuracy.runner`` process, ``jobs`` at a
+    time, the longest (by the last recorded run) first; returns the number that failed."""
+    known = last_runs()
+    order = sorted(targets, key=lambda t: -float(known.get(t.stem, {}).get("seconds", 0)))
+    pending, active, failures = list(order), {}, 0
+    n, t0 = len(order), time.perf_counter()
+    overrides = dict(i.split("=", 1) for i in items)
+    try:
+        import nbconvert  # noqa: F401 - this process exports each notebook as its run ends
+    except ImportError:  # pragma: no cover - nbconvert is in the lock
+        pass
+    try:
+        while pending or active:
+            while pending and len(active) < jobs:
+                t = pending.pop(0)
+                cmd = [sys.executable, "-m", "mtaccuracy.runner", str(t), *items, "--quiet",
+                       f"--share={jobs}"]
+                active[t] = subprocess.Popen(cmd, env=_child_env())
+                print(f"[{n - len(pending)}/{n}] started "
+                      f"{t.stem}", flush=True)
+            time.sleep(0.2)
+            for t, proc in list(active.items()):
+                if proc.poll() is not None:
+                    del active[t]
+                    failures += proc.returncode != 0
+                    if proc.returncode == 0:  # while the other run goes on
+                        value = overrides.get("output_dir")
+                        declared = read_parameters(t).get("output_dir")
+                        default = declared.default if declared else None
+                        target = paths.resolve_output(parse_value(value) if value else default) \
+                            if (value or default) else None
+                        _export(t, target)
+    except (KeyboardInterrupt, Interrupted):
+        _install(signal.SIG_IGN)
+        for proc in active.values():  # each child ends its own run and says so
+            try:
+                proc.send_signal(signal.SIGINT)
+            except OSError:
+                pass
+        for proc in active.values():
+            proc.wait()
+        raise Interrupted("") from None
+    print(f"{n} notebook(s) in {time.perf_counter() - t0:.1f} s of wall-clock time"
+          f"{f', {failures} failed' if failures else ''}", flush=True)
+    return failures
+
+
+def _arguments(argv) -> list[str]:
+    """The command line, or ``NB`` and ``PARAMS`` from the environment (``--from-env``, as the
+    Makefile passes them: split like a shell would, never evaluated by one)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if "--from-env" in argv:
+        argv.remove("--from-env")
+        try:
+            extra = shlex.split(os.environ.get("PARAMS", ""))
+        except ValueError as exc:
+            raise ParameterError(f"PARAMS={os.environ.get('PARAMS', '')!r}: {exc}") from None
+        argv = [os.environ.get("NB", "all") or "all", *extra, *argv]
+    return argv
 
 
 def main(argv=None) -> int:
@@ -300,8 +695,15 @@ def main(argv=None) -> int:
     ap.add_argument("params", nargs="*", help="name=value overrides (Python literals)")
     ap.add_argument("--check", action="store_true", help="validate only, do not run")
     ap.add_argument("--list", action="store_true", help="list the notebook's parameters")
-    args = ap.parse_args(argv)
+    ap.add_argument("--jobs", type=int, default=None,
+                    help="notebooks run at once for 'all' (default: 2 on 2+ cores)")
+    ap.add_argument("--copy-to", metavar="DIR", default=None,
+                    help="execute into DIR (notebook and figures/<stem>/ there), touching "
+                         "nothing in the repository")
+    ap.add_argument("--quiet", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--share", type=int, default=1, help=argparse.SUPPRESS)
     try:
+        args = ap.parse_args(_arguments(argv))
         targets = all_notebooks() if args.notebook == "all" else [notebook_path(args.notebook)]
         overrides = {}
         for item in args.params:
@@ -315,19 +717,40 @@ def main(argv=None) -> int:
                 for p in read_parameters(t).values():
                     print("  " + p.describe())
             return 0
+        jobs = max(1, min(args.jobs or min(2, os.cpu_count() or 1), len(targets)))
         for t in targets:  # validate everything before running anything
-            validate(t, overrides)
+            validate(t, overrides, share=max(jobs, args.share))
         if args.check:
             print("parameters ok")
             return 0
-        total = 0.0
-        for i, t in enumerate(targets, 1):
-            shown = " ".join(f"{k}={v!r}" for k, v in overrides.items()) or "defaults"
-            print(f"[{i}/{len(targets)}] {t.relative_to(paths.ROOT)} ({shown})", flush=True)
-            s = run(t, overrides, progress=True)
-            total += s
-            print(f"[{i}/{len(targets)}] {t.stem} done in {s:.1f} s", flush=True)
-        print(f"{len(targets)} notebook(s) in {total:.1f} s")
+        if args.copy_to:
+            for t in targets:
+                try:
+                    execute_copy(t, args.copy_to, overrides)
+                except ParameterError:
+                    raise
+                except Exception as exc:  # papermill's execution error names the cell
+                    print(f"error: {t.stem} failed: {getattr(exc, 'ename', type(exc).__name__)}"
+                          f": {getattr(exc, 'evalue', exc)}", file=sys.stderr)
+                    return 1
+                print(f"{t.stem} executed into {args.copy_to}", flush=True)
+            return 0
+        if jobs > 1:
+            return 1 if _run_parallel(targets, args.params, jobs) else 0
+        shown = " ".join(f"{k}={v!r}" for k, v in overrides.items()) or "defaults"
+        for t in targets:
+            if not args.quiet:
+                print(f"{_rel(t)} ({shown})", flush=True)
+            s = run(t, overrides, progress=not args.quiet, share=args.share,
+                    export=not args.quiet)
+            print(f"{t.stem} done in {s:.1f} s -> {_rel(notebook_path(t))}", flush=True)
+    except Interrupted as exc:
+        if str(exc):
+            print(f"interrupted: {exc}", file=sys.stderr, flush=True)
+        return 130
+    except KeyboardInterrupt:
+        print("interrupted before any run started; nothing changed", file=sys.stderr)
+        return 130
     except (ParameterError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

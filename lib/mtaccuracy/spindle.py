@@ -32,11 +32,16 @@ algorithm can split them; a convention must.  :func:`separate` offers two:
     fixes the first harmonic ``C, D`` exactly.
 
 Optimisation (Section 2): the objective ``H = q_k^2`` (Eqs. 19-20) for the genes
-``x = (phi_1, phi_2, phi_3, a_3)``, fitness ``1/H`` (Eq. 21), a real-coded genetic algorithm with
-fixed rates and the same algorithm with the adaptive rates of Eqs. 22-23, both batched over
-independent runs and population (arrays of shape ``(runs, population, 4)``; the only Python loop
-is over generations).  ``H >= 1/4`` for four probes at every harmonic (Cauchy-Schwarz), reached for
-even ``k``; :func:`optimal_a3` gives the best ``a_3`` for given angles in closed form.
+``x = (phi_1, phi_2, phi_3, a_3)``, fitness ``1/H`` (Eq. 21), a genetic algorithm (binary or real
+coded) with fixed rates and the same algorithm with the adaptive rates of Eqs. 22-23, and
+differential evolution as the baseline, all batched over independent runs and population (arrays
+of shape ``(runs, population, 4)``; the only Python loop is over generations).  ``H >= 1/4`` for
+four probes at every harmonic (Cauchy-Schwarz), reached for even ``k``; :func:`optimal_a3` gives
+the best ``a_3`` for given angles in closed form.  ``H`` belongs to the physical layout: the 48
+gene vectors that describe one layout (:func:`equivalent_genes`: reference probe, labels, mirror)
+share it, so a best layout is picked with ties (``H`` equal within a relative tolerance) broken by
+the canonical member of the class (:func:`select_best`, :func:`canonical_genes`), and the
+optimisers' own ties (equal ``H`` in a population) go to the lowest index.
 
 Roundness (Section 3): least-squares circle (limacon model, ``scipy.linalg.lstsq``) and minimum zone
 (a linear programme, ``scipy.optimize.linprog``).
@@ -47,17 +52,20 @@ micrometres where it mirrors a paper's printed functions.  Angles are radians.
 Why hand-written: the four-point separation, its weights and transfer function, and the adaptive
 genetic algorithm are what the paper contributes, so they are written out here to be checked line
 by line against its equations; the numerical building blocks come from numpy (FFT) and scipy
-(``linalg.lstsq``/``pinv``, ``linalg.circulant``, ``optimize.linprog``,
-``optimize.differential_evolution`` as the baseline optimiser).
+(``linalg.lstsq``/``pinv``, ``linalg.circulant``, ``optimize.linprog``, ``optimize.minimize``).
+The baseline differential evolution follows the scheme of ``scipy.optimize.differential_evolution``
+but is written out batched over runs (:func:`_differential_evolution`): scipy runs one
+optimisation at a time, looping over the population in Python, and hundreds of runs are needed.
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
-from scipy.optimize import differential_evolution, linprog
+from scipy.optimize import linprog, minimize
 
 TWO_PI = 2.0 * np.pi
 
@@ -72,15 +80,19 @@ PAPER_BOX = ((0.0, np.pi / 4), (np.pi / 4, 1.5 * np.pi), (1.5 * np.pi, TWO_PI), 
 FULL_BOX = ((0.0, TWO_PI), (0.0, TWO_PI), (0.0, TWO_PI), (0.1, 3.0))
 
 _DEGENERATE = 1e-12
+#: The reference optimum (:func:`reference_optima`) excludes layouts with |sin(phi_2 - phi_1)|
+#: below this (weights above 1e4, closed-form H inaccurate).
+_NEAR_DEGENERATE = 1e-4
 
 __all__ = [
     "PAPER_BOX", "FULL_BOX", "PC_MAX", "PC_MIN", "PM_MAX", "PM_MIN",
-    "Separation", "GAResult",
+    "Separation", "GAResult", "CancelledHarmonicsWarning",
     "probe_angles", "weights", "full_weights", "eigenvalues", "transfer", "circulant_matrix",
     "probe_signals", "separate", "separate_details", "rotation_error", "motion_from_scalar",
     "MAPPINGS", "objective_H", "objective_worst", "fitness", "optimal_a3", "genes_to_layout",
     "lower_bound_H", "bound_layout", "worst_case_bound", "adaptive_probabilities", "run_ga",
-    "run_de", "convergence_generation", "reference_optimum", "harmonic_coefficients",
+    "run_de", "convergence_generation", "reference_optimum", "reference_optima",
+    "equivalent_genes", "canonical_genes", "select_best", "harmonic_coefficients",
     "lowpass", "lsc_roundness", "mz_roundness", "random_profile", "simulate_measurements",
 ]
 
@@ -276,8 +288,23 @@ def _check_signals(signals, phi, w, check):
     return y, n, phi4, w, np.round(p).astype(int) % n
 
 
+class CancelledHarmonicsWarning(UserWarning):
+    """:func:`separate` was told (``allow_cancelled=True``) to proceed on a layout whose weights
+    cancel harmonics besides the first; the separated profile lacks them."""
+
+
+def _harmonic_list(ks, limit: int = 12) -> str:
+    ks = [int(k) for k in ks]
+    if len(ks) <= limit:
+        return ", ".join(map(str, ks))
+    return (", ".join(map(str, ks[:limit - 2])) + f", ..., {ks[-1]} ({len(ks)} harmonics"
+            + ("; every odd one" if ks == list(range(ks[0], ks[-1] + 1, 2)) and ks[0] % 2 else "")
+            + ")")
+
+
 def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
-                     rcond: float = 1e-9, check: bool = True) -> Separation:
+                     rcond: float = 1e-9, check: bool = True,
+                     allow_cancelled: bool = False, max_harmonic: int | None = None) -> Separation:
     """Four-point separation with the matrix method (Eqs. 3-10); see :func:`separate`.
 
     Steps: combined signal ``Y = sum a_l y_l``; ``R_k = Y_k / Lambda_k`` for every DFT bin with
@@ -285,6 +312,14 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
     by FFT; equal to ``scipy.linalg.lstsq(A, Y)``), the others set aside; ``dx, dy`` at each sample
     by least squares over the four probes after removing the profile; the first harmonic by the
     chosen ``first_harmonic`` convention (module docstring).
+
+    A layout whose weights cancel a harmonic other than the first (``|Lambda_k|`` below the
+    threshold, e.g. a probe at 180 degrees with ``a3 = 1``, which cancels every odd one) cannot
+    recover it: the profile would silently lose it.  Such a layout is refused with a
+    ``ValueError`` naming the harmonics; ``allow_cancelled=True`` proceeds without them and
+    warns (:class:`CancelledHarmonicsWarning`), naming them.  ``max_harmonic``: the highest
+    harmonic the signals can contain (e.g. after :func:`lowpass`); a cancelled harmonic above it
+    loses nothing and is set aside without complaint.
     """
     if first_harmonic not in ("eccentricity", "radial"):
         raise ValueError(f"first_harmonic must be 'eccentricity' or 'radial', "
@@ -292,6 +327,12 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
     if not (0 < rcond < 1):
         raise ValueError(f"rcond must be in (0, 1), got {rcond!r}")
     y, n, phi4, w, p = _check_signals(signals, phi, w, check)
+    if max_harmonic is None:
+        max_harmonic = n // 2
+    if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
+            or not 1 <= max_harmonic <= n // 2:
+        raise ValueError(f"max_harmonic must be an integer in 1..N/2 = {n // 2}, "
+                         f"got {max_harmonic!r}")
     theta = TWO_PI * np.arange(n) / n
 
     # Profile without the cancelled harmonics: pseudo-inverse of the circulant matrix by FFT.
@@ -304,6 +345,17 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
     r0 = np.fft.ifft(np.fft.fft(big_y, axis=-1) * inv, axis=-1).real
     harm = np.arange(n // 2 + 1)
     cancelled = harm[~keep[: n // 2 + 1]]
+    extra = cancelled[(cancelled != 1) & (cancelled <= max_harmonic)]
+    if extra.size:
+        msg = (f"the layout (probe positions {p.tolist()} of N = {n}, weights "
+               f"{np.round(w, 4).tolist()}) cancels harmonic(s) {_harmonic_list(extra)} besides "
+               f"the first (|Lambda_k| <= rcond * max|Lambda| = {rcond:g} * "
+               f"{np.abs(lam).max():.4g}): the separated profile would lack them")
+        if not allow_cancelled:
+            raise ValueError(msg + "; move a probe or change a3, or pass allow_cancelled=True "
+                             "to separate without them")
+        warnings.warn(msg + " (allow_cancelled=True: proceeding without them)",
+                      CancelledHarmonicsWarning, stacklevel=3)
 
     # Error motion (plus what the profile's first harmonic looks like) by least squares per sample.
     idx = (np.arange(n)[None, :] + p[:, None]) % n
@@ -332,7 +384,7 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
 
 
 def separate(signals, phi, w, *, first_harmonic: str = "eccentricity", rcond: float = 1e-9,
-             check: bool = True):
+             check: bool = True, allow_cancelled: bool = False, max_harmonic: int | None = None):
     """Separate the profile and the radial error motion from four probe signals.
 
     Parameters
@@ -345,6 +397,11 @@ def separate(signals, phi, w, *, first_harmonic: str = "eccentricity", rcond: fl
     first_harmonic : ``"eccentricity"`` or ``"radial"``, the convention that splits the profile's
         first harmonic from the motion (module docstring).
     rcond : harmonics with ``|Lambda_k| <= rcond * max|Lambda|`` are set aside (not recoverable).
+    allow_cancelled : a layout that cancels a harmonic other than the first is refused
+        (``ValueError`` naming them) unless this is True; then it proceeds without them and
+        warns with :class:`CancelledHarmonicsWarning`, naming them.
+    max_harmonic : the highest harmonic the signals can contain (default N/2); cancelled
+        harmonics above it are set aside silently, as they carry nothing.
 
     Returns
     -------
@@ -352,7 +409,8 @@ def separate(signals, phi, w, *, first_harmonic: str = "eccentricity", rcond: fl
     (the pseudo-inverse profile, ``C, D``, the cancelled harmonics, the matrix rank).
     """
     s = separate_details(signals, phi, w, first_harmonic=first_harmonic, rcond=rcond,
-                         check=check)
+                         check=check, allow_cancelled=allow_cancelled,
+                         max_harmonic=max_harmonic)
     return s.profile, s.dx, s.dy
 
 
@@ -469,20 +527,20 @@ def optimal_a3(phi, k, a3_bounds=(-np.inf, np.inf)):
     if not lo < hi:
         raise ValueError(f"a3_bounds must be (low, high) with low < high, got {a3_bounds!r}")
     k = np.asarray(k, dtype=float)
-    # a = u + a3 v (a0..a3); H = (a.a) / |c.a|^2 with c_l = exp(i k phi_l)
-    u1, u2 = _raw_weights(phi3, 0.0)
-    v1, v2 = _raw_weights(phi3, 1.0)
-    with np.errstate(invalid="ignore"):
-        v1, v2 = v1 - u1, v2 - u2
-    one, zero = np.ones_like(u1), np.zeros_like(u1)
-    u = np.stack([one, u1, u2, zero], axis=-1)
-    v = np.stack([zero, v1, v2, one], axis=-1)
-    phi4 = np.concatenate([np.zeros(phi3.shape[:-1] + (1,)), phi3], axis=-1)
-    c = np.exp(1j * k[..., None] * phi4)
+    # a = u + a3 v (a0..a3) with u = (1, u1, u2, 0), v = (0, v1, v2, 1) from Eq. 15;
+    # H = (a.a) / |c.a|^2 with c_l = exp(i k phi_l), written out in real arithmetic
+    f1, f2, f3 = phi3[..., 0], phi3[..., 1], phi3[..., 2]
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        cu, cv = (c * u).sum(-1), (c * v).sum(-1)
-        p0, p1, p2 = (u * u).sum(-1), 2 * (u * v).sum(-1), (v * v).sum(-1)
-        q0, q1, q2 = np.abs(cu) ** 2, 2 * (cu * cv.conj()).real, np.abs(cv) ** 2
+        sd = np.sin(f2 - f1)
+        sd = np.where(np.abs(sd) < _DEGENERATE, np.nan, sd)
+        u1, u2 = -np.sin(f2) / sd, np.sin(f1) / sd
+        v1, v2 = np.sin(f3 - f2) / sd, -np.sin(f3 - f1) / sd
+        c1, c2, c3 = np.cos(k * f1), np.cos(k * f2), np.cos(k * f3)
+        s1, s2, s3 = np.sin(k * f1), np.sin(k * f2), np.sin(k * f3)
+        cur, cui = 1 + u1 * c1 + u2 * c2, u1 * s1 + u2 * s2
+        cvr, cvi = v1 * c1 + v2 * c2 + c3, v1 * s1 + v2 * s2 + s3
+        p0, p1, p2 = 1 + u1 ** 2 + u2 ** 2, 2 * (u1 * v1 + u2 * v2), v1 ** 2 + v2 ** 2 + 1
+        q0, q1, q2 = cur ** 2 + cui ** 2, 2 * (cur * cvr + cui * cvi), cvr ** 2 + cvi ** 2
         qa, qb, qc = p2 * q1 - p1 * q2, 2 * (p2 * q0 - p0 * q2), p1 * q0 - p0 * q1
         disc = np.sqrt(np.maximum(qb ** 2 - 4 * qa * qc, 0))
         roots = np.stack([(-qb + disc) / (2 * qa), (-qb - disc) / (2 * qa), -qc / qb], axis=-1)
@@ -598,15 +656,19 @@ def _reflect(x, lo, hi):
 
 
 def _make_objective(k, harmonics, n_runs):
+    """``objective(x, runs=all)``: H of genes ``x`` (len(runs), pop, 4) for those runs."""
     if (k is None) == (harmonics is None):
         raise ValueError("give either k (one harmonic, Eq. 20) or harmonics (worst case)")
     if harmonics is not None:
         hs = np.asarray(harmonics)
         objective_worst(np.zeros(4) + 1.0, hs)  # validates
-        return lambda x: objective_worst(x, hs)
+        return lambda x, runs=None: objective_worst(x, hs)
     ks = np.broadcast_to(np.asarray(k), (n_runs,)).astype(float)
     objective_H(np.array([0.3, 2.0, 5.0, 1.0]), ks)  # validates k
-    return lambda x: objective_H(x, ks[:, None])
+
+    def objective(x, runs=None):
+        return objective_H(x, (ks if runs is None else ks[runs])[:, None])
+    return objective
 
 
 def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_size: int = 50,
@@ -660,13 +722,19 @@ def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_si
                                pm_min=pm_min, eq23=eq23)
     binary = encoding == "binary"
     if binary:
+        # Genes are stored as integers (runs, pop, 4), bit j of gene i being bit j of the
+        # string of 4 * bits (most significant first); random bits are drawn as that string
+        # and packed exactly (sums of powers of two below 2**53).
         pow2 = 2.0 ** np.arange(bits - 1, -1, -1)
+        gene_no = np.arange(d)
+
+        def pack(bitstring):
+            return (bitstring.reshape(bitstring.shape[:-1] + (d, bits)) @ pow2).astype(np.int64)
 
         def decode(gen):
-            ints = gen.reshape(gen.shape[:-1] + (d, bits)) @ pow2
-            return lo + (hi - lo) * ints / (2.0 ** bits - 1)
+            return lo + (hi - lo) * gen / (2.0 ** bits - 1)
 
-        geno = rng.random((s, p, d * bits)) < 0.5
+        geno = pack(rng.random((s, p, d * bits)) < 0.5)
     else:
         def decode(gen):
             return gen
@@ -680,13 +748,24 @@ def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_si
     hist = [best_h.copy()]
     pcs, pms = [pc if not adaptive else pc_max], [pm if not adaptive else pm_min]
     rows = ar[:, None]
+    n_search = int(np.ceil(np.log2(p))) + 1
     for g in range(1, generations + 1):
         f = fitness(h)
         total = f.sum(axis=1, keepdims=True)
         prob = np.where(total > 0, f / np.where(total > 0, total, 1), 1.0 / p)
         cum = np.cumsum(prob, axis=1)
         u = rng.random((s, p))
-        idx = np.minimum((u[:, :, None] > cum[:, None, :]).sum(-1), p - 1)
+        # roulette wheel: index = number of cumulative probabilities below u (cum is sorted),
+        # found by a batched binary search over the population axis
+        low_i = np.zeros((s, p), dtype=np.int64)
+        high_i = np.full((s, p), p, dtype=np.int64)
+        for _ in range(n_search):
+            mid = (low_i + high_i) // 2
+            below = cum[rows, np.minimum(mid, p - 1)] < u
+            active = low_i < high_i
+            low_i = np.where(active & below, mid + 1, low_i)
+            high_i = np.where(active & ~below, mid, high_i)
+        idx = np.minimum(low_i, p - 1)
         par = geno[rows, idx]
         fpar = f[rows, idx]
         a, b = par[:, 0::2], par[:, 1::2]                    # (s, p/2, genes)
@@ -706,22 +785,28 @@ def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_si
         cross = (rng.random((s, p // 2)) < pc_pair)[..., None]
         if binary:
             cut = rng.integers(1, d * bits, size=(s, p // 2, 1))
-            tail = np.arange(d * bits) >= cut
-            c1 = np.where(cross & tail, b, a)
-            c2 = np.where(cross & tail, a, b)
+            # single-point crossover at bit `cut` of the string: the tail of gene i is its
+            # last bits - clip(cut - i * bits, 0, bits) bits
+            tail_bits = bits - np.clip(cut - gene_no * bits, 0, bits)
+            swap = np.where(cross, (np.int64(1) << tail_bits) - 1, 0)
+            c1 = (a & ~swap) | (b & swap)
+            c2 = (b & ~swap) | (a & swap)
         else:
             beta = rng.random((s, p // 2, d))
             c1 = np.where(cross, beta * a + (1 - beta) * b, a)
             c2 = np.where(cross, (1 - beta) * a + beta * b, b)
         child = np.concatenate([c1, c2], axis=1)             # pm_ind is ordered alike
-        mut = rng.random(child.shape) < pm_ind[..., None]
         if binary:
-            geno = child ^ mut
+            geno = child ^ pack(rng.random((s, p, d * bits)) < pm_ind[..., None])
         else:
+            mut = rng.random(child.shape) < pm_ind[..., None]
             step = rng.normal(size=child.shape) * mutation_scale * (hi - lo)
             geno = _reflect(np.where(mut, child + step, child), lo, hi)
         h = objective(decode(geno))
-        iw = np.argmax(h, axis=1)                            # elitism
+        # elitism: the best so far replaces the worst child; ties (equal H, e.g. several
+        # degenerate layouts with H = inf) go to the lowest population index (argmax/argmin
+        # return the first), so a run is a function of its random numbers only
+        iw = np.argmax(h, axis=1)
         geno[ar, iw] = best_g
         h[ar, iw] = best_h
         ib = np.argmin(h, axis=1)
@@ -738,49 +823,125 @@ def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_si
                     label=f"{label}, {encoding}")
 
 
-def _recorder():
-    trace = []
+def _differential_evolution(objective, lo, hi, n_runs: int, n_pop: int, generations: int, rng,
+                            *, tol: float = 0.0, mutation=(0.5, 1.0),
+                            recombination: float = 0.7):
+    """Differential evolution, scipy's default scheme, ``n_runs`` independent runs at once.
 
-    def cb(intermediate_result):
-        trace.append(intermediate_result.fun)
+    The scheme of ``scipy.optimize.differential_evolution`` with ``strategy="best1bin"``,
+    ``mutation=(0.5, 1)`` (dithered: a new factor per run and generation),
+    ``recombination=0.7``, ``init="latinhypercube"``, ``updating="deferred"`` and ``tol``
+    (a run stops when the standard deviation of its population's energies is at most ``tol``
+    times their mean): the trial of member ``i`` is ``best + F (x_r0 - x_r1)`` with ``r0, r1, i``
+    distinct, crossed binomially with member ``i`` (one gene always from the trial); genes that
+    leave the box are redrawn uniformly in it; a trial replaces its member when not worse.
+    Hand-written because scipy runs one optimisation at a time with a Python loop over the
+    population every generation, and the compendium needs hundreds of runs: here every step is
+    an array over (runs, population, genes) and the only loop is over generations.
 
-    return trace, cb
+    ``objective(x, runs)``: energies ``(len(runs), n_pop)`` of genes ``x`` ``(len(runs), n_pop,
+    d)`` for the runs with indices ``runs``.  Returns ``(population, energies, history,
+    generations_run)``: the final population ``(n_runs, n_pop, d)`` and its energies, the best
+    energy after each generation ``(generations + 1, n_runs)`` (row 0: the initial population;
+    a stopped run keeps its value), and the number of generations each run made.
+    """
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    s, p, d = n_runs, n_pop, lo.size
+    if p < 4:
+        raise ValueError(f"differential evolution needs at least 4 members, got {p}")
+    every = np.arange(s)
+
+    def energy(unit, runs):
+        with np.errstate(over="ignore", invalid="ignore"):
+            e = np.asarray(objective(lo + unit * (hi - lo), runs), dtype=float)
+        return np.where(np.isfinite(e), np.minimum(e, 1e300), 1e300)
+
+    # Latin hypercube: one point in each of n_pop slices of every gene, slices shuffled per gene
+    unit = (rng.random((s, p, d)) + np.arange(p)[:, None]) / p
+    unit = np.take_along_axis(unit, np.argsort(rng.random((s, p, d)), axis=1), axis=1)
+    e = energy(unit, every)
+    hist = np.empty((generations + 1, s))
+    hist[0] = e.min(axis=1)
+    done = np.zeros(s, dtype=bool)
+    made = np.zeros(s, dtype=np.int64)
+    member = np.arange(p)
+    for g in range(1, generations + 1):
+        runs = np.flatnonzero(~done)
+        if runs.size:
+            m = runs.size
+            pop, en = unit[runs], e[runs]
+            rows = np.arange(m)[:, None]
+            best = pop[np.arange(m), np.argmin(en, axis=1)]          # first index on ties
+            f = rng.uniform(mutation[0], mutation[1], size=(m, 1, 1))
+            r0 = rng.integers(0, p - 1, size=(m, p))
+            r0 = r0 + (r0 >= member)                                  # r0 != i
+            r1 = rng.integers(0, p - 2, size=(m, p))
+            first, second = np.minimum(member, r0), np.maximum(member, r0)
+            r1 = r1 + (r1 >= first)
+            r1 = r1 + (r1 >= second)                                  # r1 != i, r0
+            mutant = best[:, None, :] + f * (pop[rows, r0] - pop[rows, r1])
+            cross = rng.random((m, p, d)) < recombination
+            cross[rows, member, rng.integers(0, d, size=(m, p))] = True
+            trial = np.where(cross, mutant, pop)
+            outside = (trial < 0) | (trial > 1)
+            trial = np.where(outside, rng.random((m, p, d)), trial)
+            et = energy(trial, runs)
+            take = et <= en
+            unit[runs] = np.where(take[..., None], trial, pop)
+            e[runs] = np.where(take, et, en)
+            made[runs] += 1
+            if tol > 0:
+                with np.errstate(over="ignore", invalid="ignore"):
+                    spread = e[runs].std(axis=1) <= tol * np.abs(e[runs].mean(axis=1))
+                done[runs] = spread
+        hist[g] = e.min(axis=1)
+    return lo + unit * (hi - lo), e, hist, made
+
+
+def _polish(fun, x0, lo, hi):
+    """L-BFGS-B from ``x0`` within the box (what scipy's ``polish=True`` does); returns
+    ``(x, f)`` of the better of the start and the end point."""
+    f0 = float(fun(x0))
+    res = minimize(fun, x0, method="L-BFGS-B", bounds=list(zip(lo, hi, strict=True)))
+    if res.fun < f0:
+        return np.clip(res.x, lo, hi), float(res.fun)
+    return np.asarray(x0, dtype=float), f0
 
 
 def run_de(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, popsize: int = 13,
            generations: int = 200, seed: int = 0, polish: bool = False) -> GAResult:
-    """Baseline: ``scipy.optimize.differential_evolution`` on the same genes and objective.
+    """Baseline: differential evolution (scipy's default scheme, :func:`_differential_evolution`)
+    on the same genes and objective, ``n_runs`` runs at once.
 
-    One run per seed ``seed, seed + 1, ...`` (scipy runs one optimisation at a time; each evaluates
-    its population as one array, ``vectorized=True``).  ``popsize * 4`` individuals, ``tol=0`` so
-    every run lasts ``generations``; the best-so-far per generation comes from the callback.
+    ``popsize * 4`` members, no early stop, so every run lasts ``generations``; ``polish``
+    refines each run's best with L-BFGS-B as scipy's ``polish=True`` does.  ``seed`` seeds one
+    ``numpy.random.Generator`` for all runs (or pass a Generator).
     """
-    if isinstance(n_runs, bool) or not isinstance(n_runs, int) or n_runs < 1:
-        raise ValueError(f"n_runs must be an integer >= 1, got {n_runs!r}")
+    for name, v, low in (("n_runs", n_runs, 1), ("popsize", popsize, 1),
+                         ("generations", generations, 1)):
+        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
+            raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
     if k is not None and np.ndim(k) != 0:
         raise ValueError("run_de takes one harmonic order k")
     lo, hi = _box(bounds)
-    objective = _make_objective(k, harmonics, 1)
-
-    def f(xt):  # scipy passes (4, S) when vectorized
-        return np.minimum(objective(xt.T[None])[0], 1e300)
-
-    hist = np.empty((generations + 1, n_runs))
-    best_x = np.empty((n_runs, 4))
-    for r in range(n_runs):
-        trace, cb = _recorder()
-        res = differential_evolution(f, list(zip(lo, hi, strict=True)), popsize=popsize,
-                                     maxiter=generations, tol=0, atol=0, seed=seed + r,
-                                     polish=polish, vectorized=True, updating="deferred",
-                                     callback=cb, init="latinhypercube")
-        tr = np.minimum.accumulate(np.array(trace, dtype=float))
-        # row 0: best of the initial population is not reported separately; use the first
-        hist[:, r] = np.concatenate([[tr[0]], tr, np.full(generations - len(tr), tr[-1])])[
-            : generations + 1]
-        best_x[r] = res.x
-    return GAResult(best_x=best_x, best_h=hist[-1].copy(), history=hist,
+    objective = _make_objective(k, harmonics, n_runs)
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    pop, e, hist, _ = _differential_evolution(lambda x, runs: objective(x, runs), lo, hi,
+                                              n_runs, popsize * 4, generations, rng)
+    ib = np.argmin(e, axis=1)
+    best_x = pop[np.arange(n_runs), ib]
+    best_h = e[np.arange(n_runs), ib]
+    if polish:
+        for r in range(n_runs):
+            def fun(x, r=r):
+                return float(np.minimum(objective(np.asarray(x)[None, None], np.array([r]))
+                                        [0, 0], 1e300))
+            best_x[r], best_h[r] = _polish(fun, best_x[r], lo, hi)
+    best_h = np.asarray(objective(best_x[:, None], np.arange(n_runs))[:, 0], dtype=float)
+    return GAResult(best_x=best_x, best_h=best_h, history=hist,
                     pc=np.full(generations + 1, np.nan), pm=np.full(generations + 1, np.nan),
-                    evaluations_per_generation=popsize * 4, label="differential evolution (scipy)")
+                    evaluations_per_generation=popsize * 4,
+                    label="differential evolution (best1bin" + (", polished)" if polish else ")"))
 
 
 def convergence_generation(history, target, rel_tol: float = 0.01) -> np.ndarray:
@@ -795,26 +956,155 @@ def convergence_generation(history, target, rel_tol: float = 0.01) -> np.ndarray
     return np.where(ok.any(axis=0), ok.argmax(axis=0), -1)
 
 
+def reference_optima(ks, bounds=PAPER_BOX, n_starts: int = 2, seed: int = 0,
+                     maxiter: int = 400, popsize: int = 30, rel_tol: float = 1e-9):
+    """Best known ``H`` at every harmonic of ``ks`` within ``bounds``: differential evolution
+    over the three angles with the optimal ``a_3`` in closed form (:func:`optimal_a3`),
+    ``n_starts`` runs per harmonic (all harmonics and starts in one batch, each run stopping
+    when its population's energies agree to ``1e-12``), each polished with L-BFGS-B; the
+    result's ``H`` is Eq. 20 evaluated at the genes found.  Layouts with
+    ``|sin(phi_2 - phi_1)| < 1e-4`` are excluded: Eq. 15 would need weights above ``1e4``
+    there, and the closed form of :func:`optimal_a3` loses its accuracy (it can even return
+    values below the bound 1/4).
+
+    Returns ``(H, genes)`` of shapes ``(K,)`` and ``(K, 4)``.  The best start is chosen by
+    :func:`select_best` (starts whose ``H`` agree within ``rel_tol`` are ties, broken by the
+    canonical layout), and the genes are the canonical member of the layout's symmetry class
+    (:func:`canonical_genes`).  A numerical reference, not a proof.
+    """
+    ks = np.atleast_1d(np.asarray(ks))
+    if ks.ndim != 1 or ks.size == 0:
+        raise ValueError("ks must be a non-empty list of harmonic orders")
+    objective_H(np.array([0.3, 2.0, 5.0, 1.0]), ks)  # validates the orders
+    if isinstance(n_starts, bool) or not isinstance(n_starts, int | np.integer) or n_starts < 1:
+        raise ValueError(f"n_starts must be an integer >= 1, got {n_starts!r}")
+    lo, hi = _box(bounds)
+    a3b = (lo[3], hi[3])
+    k_run = np.repeat(ks.astype(float), n_starts)
+
+    def objective(x3, runs):
+        h = optimal_a3(x3, k_run[runs, None], a3b)[1]
+        return np.where(np.abs(np.sin(x3[..., 1] - x3[..., 0])) < _NEAR_DEGENERATE, np.inf, h)
+
+    rng = np.random.default_rng(seed)
+    pop, e, _, _ = _differential_evolution(objective, lo[:3], hi[:3], k_run.size, popsize * 3,
+                                           maxiter, rng, tol=1e-12)
+    n = k_run.size
+    x3 = pop[np.arange(n), np.argmin(e, axis=1)]
+    h = np.empty(n)
+    for r in range(n):
+        def fun(v, r=r):
+            return float(np.minimum(objective(np.asarray(v)[None, None], np.array([r]))[0, 0],
+                                    1e300))
+        x3[r], _ = _polish(fun, x3[r], lo[:3], hi[:3])
+    a3 = optimal_a3(x3, k_run, a3b)[0]
+    genes = np.concatenate([x3, a3[:, None]], axis=1)
+    h = np.where(np.abs(np.sin(x3[:, 1] - x3[:, 0])) < _NEAR_DEGENERATE, np.inf,
+                 objective_H(genes, k_run))                     # Eq. 20 itself, as the GAs
+    genes = genes.reshape(ks.size, n_starts, 4)
+    h = h.reshape(ks.size, n_starts)
+    best, genes_best = select_best(h, genes, bounds, rel_tol=rel_tol)
+    return h[np.arange(ks.size), best], genes_best
+
+
 def reference_optimum(k: int, bounds=PAPER_BOX, n_starts: int = 4, seed: int = 0,
                       maxiter: int = 400):
-    """Best known ``H`` at harmonic ``k`` in ``bounds``: differential evolution over the three
-    angles with the optimal ``a_3`` in closed form (:func:`optimal_a3`), best of ``n_starts``
-    seeds, polished.  Returns ``(H, genes)``; a numerical reference, not a proof."""
-    lo, hi = _box(bounds)
-    objective_H(np.array([0.3, 2.0, 5.0, 1.0]), k)
+    """Best known ``H`` at harmonic ``k`` in ``bounds`` (:func:`reference_optima` for one
+    harmonic).  Returns ``(H, genes)``, the genes canonical (:func:`canonical_genes`)."""
+    h, g = reference_optima([k], bounds, n_starts=n_starts, seed=seed, maxiter=maxiter)
+    return float(h[0]), g[0]
 
-    def f(xt):
-        return np.minimum(optimal_a3(xt.T, k, (lo[3], hi[3]))[1], 1e300)
 
-    best = (np.inf, None)
-    for r in range(n_starts):
-        res = differential_evolution(f, list(zip(lo[:3], hi[:3], strict=True)), popsize=30,
-                                     maxiter=maxiter, tol=1e-12, seed=seed + r, polish=True,
-                                     vectorized=True, updating="deferred")
-        if res.fun < best[0]:
-            a3 = optimal_a3(res.x, k, (lo[3], hi[3]))[0]
-            best = (float(res.fun), np.r_[res.x, a3])
-    return best
+# ----------------------------------------------------------------------------- symmetry
+
+def equivalent_genes(x) -> np.ndarray:
+    """Every gene vector describing the same physical layout as ``x``: ``(..., 48, 4)``.
+
+    ``H`` (Eq. 20), at every harmonic, and the worst case over harmonics are unchanged when
+    (a) another probe is taken as the reference (all angles turned by ``-phi_j``; the weights
+    divided by ``a_j``, so ``a_0`` stays 1: ``|Lambda_k|`` is turned, and ``H`` is a ratio
+    invariant under scaling the weights), (b) the three other probes are relabelled (six
+    orders; ``a_3`` is the weight of whichever comes last), and (c) the layout is mirrored
+    (``phi -> -phi``: ``Lambda_k -> conj(Lambda_k)``, Eq. 15's weights unchanged).  That is
+    4 x 6 x 2 = 48 gene vectors per layout, computed here (angles in ``[0, 2 pi)``; NaN rows
+    where a relabelling is degenerate, ``a_j = 0`` or ``sin(phi_2 - phi_1) = 0``).  Member 0 is
+    ``x`` itself (angles taken modulo ``2 pi``).
+    """
+    x = _genes(x)
+    phi, w = genes_to_layout(x)                                 # (..., 4) each
+    out = []
+    perms = ((0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0))
+    for mirror in (1.0, -1.0):
+        for j in range(4):
+            others = [i for i in range(4) if i != j]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                scale = 1.0 / w[..., j]
+            for perm in perms:
+                idx = [others[i] for i in perm]
+                ang = np.mod(mirror * (phi[..., idx] - phi[..., j:j + 1]), TWO_PI)
+                ang = np.where(ang >= TWO_PI, ang - TWO_PI, ang)
+                a3 = w[..., idx[2]] * scale
+                g = np.concatenate([ang, a3[..., None]], axis=-1)
+                bad = (~np.isfinite(a3)) | (np.abs(np.sin(ang[..., 1] - ang[..., 0]))
+                                            < _DEGENERATE) | (np.abs(w[..., j]) < _DEGENERATE)
+                out.append(np.where(bad[..., None], np.nan, g))
+    return np.stack(out, axis=-2)
+
+
+def _lexicographic_first(keys, valid):
+    """Index (over axis -2) of the lexicographically smallest row of ``keys`` (..., M, 4)
+    among ``valid``; keys are compared rounded to 1e-9 so that two rows equal up to round-off
+    are a tie decided by the next key (and finally by the lower index)."""
+    q = np.where(valid[..., None], np.round(keys, 9), np.inf)
+    order = np.broadcast_to(np.arange(q.shape[-2]), q.shape[:-1]).copy()
+    for c in range(q.shape[-1] - 1, -1, -1):
+        v = np.take_along_axis(q[..., c], order, axis=-1)
+        order = np.take_along_axis(order, np.argsort(v, axis=-1, kind="stable"), axis=-1)
+    return order[..., 0]
+
+
+def canonical_genes(x, bounds=None) -> np.ndarray:
+    """The canonical member of the symmetry class of ``x`` (:func:`equivalent_genes`): the
+    lexicographically smallest ``(phi_1, phi_2, phi_3, a_3)`` among the members inside
+    ``bounds`` (``x`` itself counts as inside; angles within 1e-12 of a bound are put on it, and
+    an angle 0 counts as 2 pi where only that is inside).  ``bounds=None``: all members."""
+    x = _genes(x)
+    members = equivalent_genes(x)
+    members = np.concatenate([x[..., None, :], members], axis=-2)
+    valid = np.all(np.isfinite(members), axis=-1)
+    if bounds is not None:
+        lo, hi = _box(bounds)
+        wrap = np.r_[TWO_PI, TWO_PI, TWO_PI, 0.0]
+        alt = members + wrap
+        members = np.where((members < lo - 1e-12) & (alt <= hi + 1e-12), alt, members)
+        inside = np.all((members >= lo - 1e-12) & (members <= hi + 1e-12), axis=-1)
+        members = np.clip(members, lo, hi)
+        valid &= inside
+        valid[..., 0] = True
+    first = _lexicographic_first(members, valid)
+    return np.take_along_axis(members, first[..., None, None], axis=-2)[..., 0, :]
+
+
+def select_best(h, x, bounds=None, rel_tol: float = 1e-9):
+    """The best of several candidate layouts, with canonical tie-breaking.
+
+    ``h`` (..., M) objective values (smaller is better), ``x`` (..., M, 4) their genes.  The
+    candidates whose ``H`` is within ``rel_tol`` of the smallest are ties (two optimisers, or
+    two round-off orders, that found the same optimum or symmetric copies of it); among them
+    the one whose canonical genes (:func:`canonical_genes` in ``bounds``) are lexicographically
+    smallest wins.  Returns ``(index, canonical genes)`` of shapes (...) and (..., 4).
+    """
+    h = np.asarray(h, dtype=float)
+    x = _genes(x)
+    if h.shape != x.shape[:-1] or h.shape[-1] < 1:
+        raise ValueError(f"h {h.shape} and x {x.shape} must be (..., M) and (..., M, 4)")
+    if not rel_tol >= 0:
+        raise ValueError(f"rel_tol must be >= 0, got {rel_tol!r}")
+    hmin = np.min(h, axis=-1, keepdims=True)
+    tied = h <= hmin + rel_tol * np.abs(hmin)
+    canon = canonical_genes(x, bounds)
+    first = _lexicographic_first(canon, tied)
+    return first, np.take_along_axis(canon, first[..., None, None], axis=-2)[..., 0, :]
 
 
 # ----------------------------------------------------------------------------- roundness, filter

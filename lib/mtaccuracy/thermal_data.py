@@ -216,12 +216,14 @@ def is_default_dir(data_dir) -> bool:
 
 
 def prepare(data_dir: str = DEFAULT_DIR, regenerate: bool = True,
-            seed: int = DEFAULT_SEED) -> tuple[Path, list[Path], str]:
+            seed: int = DEFAULT_SEED, out=None) -> tuple[Path, list[Path], str]:
     """Decide where to read from and, for the reconstruction only, regenerate it first.
 
-    * ``data_dir`` is the default ``data/thermal`` and ``regenerate`` is true: the generator
-      writes into it (through :func:`mtaccuracy.paths.output_dir`, so under the tests it goes to
-      ``.test-output/data/thermal``), a file only when its bytes change.
+    * ``data_dir`` is the default ``data/thermal``, ``regenerate`` is true and ``seed`` is the
+      committed one: the generator writes into it (resolved like an output folder, so under the
+      tests it goes to ``.test-output/data/thermal``), a file only when its bytes change.
+    * the same with another ``seed``: the reconstruction goes to ``<out>/reconstruction`` (the
+      run's own output folder), never over the committed data.
     * any other ``data_dir`` is the reader's own measurements: read, **never written**.
 
     Returns (folder to read, files that changed, a sentence saying what happened).
@@ -234,9 +236,18 @@ def prepare(data_dir: str = DEFAULT_DIR, regenerate: bool = True,
         return p, [], what
     if not regenerate:
         return paths.ROOT / DEFAULT_DIR, [], f"{DEFAULT_DIR}: committed reconstruction, as stored"
-    folder = paths.output_dir(DEFAULT_DIR)
+    if seed == DEFAULT_SEED:
+        folder = paths.resolve_output(DEFAULT_DIR)
+    elif out is None:
+        raise ValueError(f"a reconstruction with seed {seed} (not the committed {DEFAULT_SEED}) "
+                         f"is written into the run's output folder: pass out=")
+    else:
+        folder = Path(out) / "reconstruction"
+    folder.mkdir(parents=True, exist_ok=True)
     changed = write_measurements(reconstruct(seed), folder)
-    where = folder.relative_to(paths.ROOT) if folder.is_relative_to(paths.ROOT) else folder
+    where = (folder.relative_to(paths.ROOT) if folder.is_relative_to(paths.ROOT)
+             else f"<output_dir>/{folder.name}" if out is not None and folder.parent == Path(out)
+             else folder)
     what = (f"{where}: reconstruction regenerated with seed {seed}: "
             + (f"{len(changed)} file(s) rewritten ({', '.join(p.name for p in changed)})"
                if changed else "every file byte-identical, nothing rewritten"))

@@ -31,6 +31,12 @@ tool-tip position error in the workpiece frame (mm); ``Vx, Vy, Vz`` is the error
 tool-axis direction (unit vector, so rad to first order) in the workpiece frame.  With the tool
 along z, an angular error about x reaches Vz through sin A, which is how the paper's Vz key
 errors (e_xx, e_xy, e_xz, e_xa, a_AM) arise.
+
+Also here: the exact first-order Jacobian in closed form (:meth:`ACDoubleTurntable.
+linear_jacobian`), the 32-element symmetry group of the normalised linear indices
+(:func:`pose_orbit`, :func:`canonical_pose`), and the search for the pose behind a table of
+published indices with its canonical ranking (:func:`fit_pose_to_indices`,
+:func:`rank_poses`), written by hand because the pose is what the paper omits.
 """
 
 from __future__ import annotations
@@ -99,6 +105,7 @@ class ACDoubleTurntable(Machine):
         self.convention = convention
         self.catalogue = _errors.five_axis_ac_catalogue()
         self._idx = {s: j for j, s in enumerate(self.error_names)}
+        self._jacobian_table = _jacobian_table(self._idx)
 
     # -- building blocks -------------------------------------------------------------------
     def _cols(self, e, names):
@@ -176,6 +183,95 @@ class ACDoubleTurntable(Machine):
         ri, ti = self.relative(errors, pose, with_errors=False)
         return np.concatenate([ta - ti, ra[..., :, 2] - ri[..., :, 2]], axis=-1)
 
+    def linear_jacobian(self, pose: Mapping) -> np.ndarray:
+        """The exact first-order Jacobian d(pose error)/d(errors) at zero errors, in closed
+        form: (P, 6, 41) for pose arrays of length P ((1, 6, 41) for a scalar pose).
+
+        Convention "moving" only (``convention="fixed"`` falls back to the central
+        differences of :meth:`Machine.jacobian`).  Each error block is a small twist
+        ``(d, w)`` in the frame after its axis' ideal motion.  A tool-chain block (ideal
+        rotation identity, origin ``o``) moves the tool tip by ``d + w x (p_t - o)`` and the
+        tool axis by ``w x e_z`` in the base frame, seen in the workpiece frame through
+        ``R_bw^T``; a workpiece-chain block, with ``W`` the rest of that chain after it
+        (``Rz(C)`` for the A blocks, identity for the C blocks), changes ``g_wt`` by
+        ``-W^-1 (d, w)^ W g_wt``.  Unlike differences of the full model (which subtract
+        poses of some 100 mm to get effects of some 1e-6 mm, so lose about eight digits on
+        the translational entries) every entry is exact to rounding; a test checks it
+        against :meth:`Machine.jacobian`.
+        """
+        if self.convention != "moving":
+            return self.jacobian(pose)
+        vals = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
+        n = max(v.shape[0] for v in vals.values())
+        p = self.check_pose(vals, n)
+        zero, one = np.zeros(n), np.ones(n)
+        ca, sa, cc, sc = np.cos(p["A"]), np.sin(p["A"]), np.cos(p["C"]), np.sin(p["C"])
+        r_a_t = np.stack([one, zero, zero, zero, ca, sa, zero, -sa, ca], -1).reshape(n, 3, 3)
+        r_c_t = np.stack([cc, sc, zero, -sc, cc, zero, zero, zero, one], -1).reshape(n, 3, 3)
+        r_bw_t = np.einsum("nij,njk->nik", r_c_t, r_a_t)              # base -> workpiece
+        # the five frames of _JACOBIAN_TABLE (Y, X, Z carriages, A cradle, C table): rotation
+        # into the workpiece frame, tool tip from the frame's origin and tool axis, both in
+        # the frame, and the sign (workpiece-chain errors act inversely)
+        to_w = np.empty((n, 5, 3, 3))
+        to_w[:, :3] = r_bw_t[:, None]
+        to_w[:, 3] = r_c_t
+        to_w[:, 4] = np.eye(3)
+        to_w[:, 3:] *= -1.0
+        vec = np.zeros((n, 5, 2, 3))                                   # arm and axis per frame
+        tip = np.stack([p["x"], p["y"], p["z"] + p["L"]], -1)          # tool tip, base frame
+        vec[:, 0, 0] = tip * [1.0, 0.0, 1.0]
+        vec[:, 1, 0, 2] = tip[:, 2]
+        vec[:, 2, 0, 2] = p["L"]
+        vec[:, :3, 1, 2] = 1.0
+        vec[:, 3, 0] = np.einsum("nij,nj->ni", r_a_t, tip)
+        vec[:, 3, 1] = r_a_t[:, :, 2]
+        vec[:, 4, 0] = np.einsum("nij,nj->ni", r_c_t, vec[:, 3, 0])
+        vec[:, 4, 1] = r_bw_t[:, :, 2]
+        cols, frame, moves, shift = self._jacobian_table
+        # a translation along u moves the tip by u; a rotation about u moves it by u x arm and
+        # the axis by u x axis (in the frame)
+        local = np.einsum("epqrk,nerk->nepq", moves, vec[:, frame]) + shift  # (n, 41, 2, 3)
+        jac = np.empty((n, 6, self.n_errors))
+        jac[:, :, cols] = np.einsum("neij,nepj->npie", to_w[:, frame], local).reshape(n, 6, -1)
+        return jac
+
+
+def _six(a, frame):
+    return [(f"d_{d}{a}", frame, "t", k) for k, d in enumerate("xyz")] + \
+        [(f"e_{d}{a}", frame, "r", k) for k, d in enumerate("xyz")]
+
+
+def _jacobian_table(idx):
+    """For :meth:`ACDoubleTurntable.linear_jacobian`: per error of :data:`_JACOBIAN_TABLE`
+    its column, its frame, the linear map ``moves`` (41, 2, 3, 2, 3) from (arm, axis) in the
+    frame to the first-order motion of (tip, axis) (a rotation about u: u x arm, u x axis),
+    and the constant motion ``shift`` (41, 2, 3) (a translation along u: u, 0)."""
+    eps = np.zeros((3, 3, 3))                                          # Levi-Civita
+    eps[0, 1, 2] = eps[1, 2, 0] = eps[2, 0, 1] = 1.0
+    eps[0, 2, 1] = eps[2, 1, 0] = eps[1, 0, 2] = -1.0
+    m = len(_JACOBIAN_TABLE)
+    moves, shift = np.zeros((m, 2, 3, 2, 3)), np.zeros((m, 2, 3))
+    for e, (_, _, kind, d) in enumerate(_JACOBIAN_TABLE):
+        if kind == "r":
+            cross = eps[:, d, :]                                       # (u x a)_q = eps_qdk a_k
+            moves[e, 0, :, 0, :] = moves[e, 1, :, 1, :] = cross
+        else:
+            shift[e, 0, d] = 1.0
+    return (np.array([idx[t[0]] for t in _JACOBIAN_TABLE]),
+            np.array([t[1] for t in _JACOBIAN_TABLE]), moves, shift)
+
+
+#: Every error as (symbol, frame, translation "t" or rotation "r", direction 0-2): the frames
+#: are those after each axis' ideal motion, convention "moving" (0 Y, 1 X, 2 Z carriage of the
+#: tool chain, 3 A cradle with the A location errors, 4 C table with the C location errors).
+_JACOBIAN_TABLE = (_six("y", 0) + [("S_xy", 0, "r", 2)]
+                   + _six("x", 1) + [("S_yz", 1, "r", 0), ("S_xz", 1, "r", 1)]
+                   + _six("z", 2)
+                   + _six("a", 3) + [("d_xAM", 3, "t", 0), ("d_yAM", 3, "t", 1),
+                                     ("d_zAM", 3, "t", 2), ("a_AM", 3, "r", 0),
+                                     ("b_AM", 3, "r", 1), ("g_AM", 3, "r", 2)]
+                   + _six("c", 4) + [("d_yCA", 4, "t", 1), ("b_CA", 4, "r", 1)])
+
 
 def diagonal_test_points(n_per_diagonal: int = 5, rotary: str = "sweep") -> dict[str, np.ndarray]:
     """Test points equally spaced on the four body diagonals of the X-Y-Z workspace (Fig. 4).
@@ -208,37 +304,256 @@ def diagonal_test_points(n_per_diagonal: int = 5, rotary: str = "sweep") -> dict
 
 
 # --------------------------------------------------------------------------------------
-# Fast evaluation of the "moving" convention: the same product, regrouped so that per-sample
-# work is a handful of 4x4 products into preallocated buffers (the leading sample axis is
-# processed in cache-sized chunks).  The general implementation above is the reference; the
-# tests require both to agree to rounding.
+# Symmetries of the linear indices, and the search for the pose behind a table of indices
 # --------------------------------------------------------------------------------------
 
-_ANGLES = ["e_xy", "e_yy", "e_zy", "S_xy", "e_xx", "e_yx", "e_zx", "S_yz", "S_xz",
-           "e_xz", "e_yz", "e_zz", "e_xa", "e_ya", "e_za", "a_AM", "b_AM", "g_AM",
+#: Elements of the symmetry group of the normalised linear indices, as (sx, sy, sz, half-turn
+#: of the cradle, half-turn of the table); see :func:`pose_orbit`.
+POSE_SYMMETRIES = tuple((sx, sy, sz, ka, hc) for sx in (1, -1) for sy in (1, -1)
+                        for sz in (1, -1) for ka in (0, 1) for hc in (0, 1))
+
+
+def pose_orbit(pose: Mapping, fixed_position: bool = False) -> dict[str, np.ndarray]:
+    """Every pose with the same normalised linear indices as ``pose`` (x, y, z in mm, A, C in
+    rad): arrays with a leading axis over the group elements (32, or 4 with
+    ``fixed_position``), in the order of :data:`POSE_SYMMETRIES`.
+
+    The indices ``J_ki^2 sd_i^2 / sum_j J_kj^2 sd_j^2`` depend on each error's effect only
+    through its square.  Every error is a translation along or a rotation about a coordinate
+    axis, so a reflection of the machine in a coordinate plane through the A/C intersection
+    maps each error's effect onto plus or minus itself: x -> -x with C -> -C, y -> -y with
+    A -> -A and C -> -C, z -> -z with A -> -A (and their products, e.g. the point inversion
+    of x, y, z with A and C unchanged).  Two half-turns do the same: of the table,
+    C -> C + 180 deg (x and y change sign in the workpiece frame), and of the cradle,
+    A -> A + 180 deg with C -> -C (the table's z axis upside down).  The group is (Z2)^5, 32
+    poses; ``fixed_position`` keeps the 4 that leave x, y, z alone.  A is wrapped to
+    (-180, 180] deg (members outside the A travel remain in the list), C to [0, 360) deg.
+    The reflections need the tool tip at the Z carriage's origin: a tool length ``L`` other
+    than 0 is refused.
+    """
+    if np.any(np.asarray(pose.get("L", 0.0)) != 0):
+        raise ValueError("pose_orbit: the symmetries hold for tool length L = 0 only (the "
+                         "reflections would also have to reverse the tool)")
+    p = {k: np.asarray(pose[k], dtype=float) for k in AXES}
+    out = {k: [] for k in AXES}
+    for sx, sy, sz, ka, hc in POSE_SYMMETRIES:
+        if fixed_position and (sx, sy, sz) != (1, 1, 1):
+            continue
+        a = sy * sz * p["A"] + ka * np.pi
+        c = sx * sy * p["C"] * (-1 if ka else 1) + hc * np.pi
+        out["x"].append(sx * p["x"])
+        out["y"].append(sy * p["y"])
+        out["z"].append(sz * p["z"])
+        out["A"].append(np.pi - np.mod(np.pi - a, 2 * np.pi))          # (-pi, pi]
+        out["C"].append(np.mod(c, 2 * np.pi))
+    return {k: np.asarray(v) for k, v in out.items()}
+
+
+def _canonical_key(x, y, z, a, c):
+    """Criteria of the canonical member, each to be maximised in turn: x, y, z >= 0, then
+    |A| <= 90 deg, C in [0, 180) deg (then the sign of A and C = 0 over 180 deg, which
+    matter only on the boundaries)."""
+    return np.stack([x, y, z, np.cos(a), np.sin(c), np.cos(c), np.sin(a)], axis=-1)
+
+
+def canonical_pose(pose: Mapping, fixed_position: bool = False, pos_tol: float = 1e-2,
+                   ang_tol: float = 1e-4) -> dict[str, float]:
+    """The canonical member of the orbit of ``pose`` (:func:`pose_orbit`): the one with the
+    largest x, then y, then z, then cos A, sin C, cos C, sin A, where values within
+    ``pos_tol`` (mm) or ``ang_tol`` (on the cosines and sines) count as equal, so that a
+    coordinate that is zero up to rounding does not decide.  For a generic pose this is the
+    member with x, y, z >= 0, -90 < A <= 90 deg and 0 <= C < 180 deg, which always lies inside
+    the travels (they are symmetric in x, y, z and contain that A range).
+    """
+    orbit = pose_orbit(pose, fixed_position)
+    if orbit["x"].ndim != 1:
+        raise ValueError("canonical_pose takes one pose (scalar values)")
+    keys = _canonical_key(*(orbit[k] for k in AXES))
+    tol = np.array([pos_tol] * 3 + [ang_tol] * 4)
+    from ..sensitivity.screening import rank_with_ties
+    best = rank_with_ties(np.zeros(len(keys)), -keys, key_tol=tol)[0]
+    return {k: float(orbit[k][best]) for k in AXES}
+
+
+def rank_poses(candidates, misfit: str = "misfit", rtol: float = 1e-6,
+               fixed_position: bool = False, pos_tol: float = 1e-2, ang_tol: float = 1e-4):
+    """The canonical ranking of the poses an optimiser returned (one row per start).
+
+    ``candidates``: a DataFrame with columns x, y, z (mm), A, C (rad) and ``misfit``.  Each
+    pose is mapped to its canonical member (:func:`canonical_pose`); candidates whose
+    canonical poses agree within ``pos_tol`` (mm) and ``ang_tol`` (rad) are one minimum
+    (the one with the smallest misfit stands for it; ``n_starts`` counts them); minima are
+    ranked by misfit, misfits within ``rtol`` (relative) of the best remaining one being
+    ties, broken by the canonical pose (largest x, y, z first, then smallest A, C; see
+    :func:`~mtaccuracy.sensitivity.rank_with_ties`).  Returns one row per minimum, best
+    first, with x, y, z, A, C, ``misfit`` and ``n_starts``: which pose comes first depends
+    neither on the order of the starts nor on rounding noise.
+    """
+    import pandas as pd
+
+    from ..sensitivity.screening import rank_with_ties
+
+    df = pd.DataFrame(candidates)
+    missing = [c for c in (*AXES, misfit) if c not in df.columns]
+    if missing:
+        raise ValueError(f"candidates lack column(s) {missing}")
+    if df.empty:
+        raise ValueError("no candidates to rank")
+    canon = pd.DataFrame([canonical_pose(r, fixed_position, pos_tol, ang_tol)
+                          for r in df[list(AXES)].to_dict("records")])
+    canon[misfit] = df[misfit].to_numpy(dtype=float)
+    order = rank_with_ties(canon[misfit].to_numpy(), rtol=0.0)
+    reps, counts = [], []
+    for i in order:  # smallest misfit first: it stands for its minimum
+        r = canon.iloc[i]
+        for j, q in enumerate(reps):
+            if (max(abs(r.x - q.x), abs(r.y - q.y), abs(r.z - q.z)) <= pos_tol
+                    and abs(np.angle(np.exp(1j * (r.A - q.A)))) <= ang_tol
+                    and abs(np.angle(np.exp(1j * (r.C - q.C)))) <= ang_tol):
+                counts[j] += 1
+                break
+        else:
+            reps.append(r)
+            counts.append(1)
+    minima = pd.DataFrame(reps).reset_index(drop=True)
+    minima["n_starts"] = counts
+    keys = np.c_[-minima[["x", "y", "z"]].to_numpy(), minima[["A", "C"]].to_numpy()]
+    tol = [pos_tol] * 3 + [ang_tol] * 2
+    ranked = rank_with_ties(minima[misfit].to_numpy(), keys, rtol=rtol, key_tol=tol)
+    return minima.iloc[ranked].reset_index(drop=True)
+
+
+def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, starts,
+                        free=AXES, fixed: Mapping | None = None, ftol: float = 1e-15,
+                        xtol: float = 1e-15, max_nfev: int = 500):
+    """Least-squares fits of the pose whose normalised linear indices
+    (:func:`~mtaccuracy.sensitivity.linear_indices` of :meth:`ACDoubleTurntable.linear_jacobian`)
+    best match ``target`` at the (component, error) pairs ``rows``, ``cols``.
+
+    ``starts`` (m, len(free)): start values of the ``free`` axes (mm, rad); ``fixed`` gives
+    the other axes.  x, y, z and A stay within their travels, C is free (periodic).  scipy's
+    ``least_squares`` (trust-region reflective) with a central-difference Jacobian evaluated
+    in one batched call, run until the relative change of the cost falls below ``ftol`` or
+    of the step below ``xtol``.  Returns a DataFrame, one row per start: x, y, z, A, C,
+    ``misfit`` (RMS of the residuals) and the optimiser's ``status``.  BLAS runs
+    single-threaded (small matrices: threads only cost time, and the result is then the same
+    for any thread count).
+    """
+    import pandas as pd
+    from scipy.optimize import least_squares
+    from threadpoolctl import threadpool_limits
+
+    from ..sensitivity.sobol import linear_indices
+
+    free = tuple(free)
+    fixed = dict(fixed or {})
+    if set(free) | set(fixed) != set(AXES) or set(free) & set(fixed):
+        raise ValueError(f"free {free} and fixed {tuple(fixed)} must split the axes {AXES}")
+    starts = np.atleast_2d(np.asarray(starts, dtype=float))
+    if starts.shape[1] != len(free):
+        raise ValueError(f"starts must have {len(free)} columns ({free}), got {starts.shape}")
+    target = np.asarray(target, dtype=float)
+    rows, cols = np.asarray(rows), np.asarray(cols)
+    scale = np.array([100.0 if a in "xyz" else 1.0 for a in free])
+    lo = np.array([TRAVELS[a][0] if a != "C" else -np.inf for a in free])
+    hi = np.array([TRAVELS[a][1] if a != "C" else np.inf for a in free])
+    step = 1e-6 * scale
+
+    def residuals(v):  # v: (P, len(free)) -> (P, len(target))
+        pose = {a: v[:, i] for i, a in enumerate(free)}
+        pose.update({a: np.full(v.shape[0], float(fixed[a])) for a in fixed})
+        return linear_indices(machine.linear_jacobian(pose), sd)[:, rows, cols] - target
+
+    def fun(v):
+        return residuals(v[None])[0]
+
+    def jac(v):
+        e = np.eye(len(free)) * step
+        r = residuals(np.concatenate([v + e, v - e]))
+        return ((r[:len(free)] - r[len(free):]) / (2 * step[:, None])).T
+
+    out = []
+    with threadpool_limits(limits=1, user_api="blas"):
+        for v0 in starts:
+            r = least_squares(fun, np.clip(v0, lo, hi), jac=jac, bounds=(lo, hi),
+                              x_scale=scale, ftol=ftol, xtol=xtol, gtol=None,
+                              max_nfev=max_nfev, method="trf")
+            row = {a: float(fixed[a]) for a in fixed}
+            row.update({a: float(r.x[i]) for i, a in enumerate(free)})
+            row["C"] = float(np.mod(row["C"], 2 * np.pi))
+            row["misfit"] = float(np.sqrt(np.mean(fun(r.x) ** 2)))
+            row["status"] = int(r.status)
+            out.append({k: row[k] for k in (*AXES, "misfit", "status")})
+    return pd.DataFrame(out)
+
+
+# --------------------------------------------------------------------------------------
+# Fast evaluation of the "moving" convention: the same product, applied to the two vectors
+# the pose error needs (the tool tip and the tool axis) instead of multiplying 4x4 matrices.
+# Every rotation is three elementary rotations of vectors held as structure of arrays (one
+# contiguous row per coordinate), so each step is a few elementwise numpy operations over a
+# chunk of samples: no stacked small matmul (which numpy hands to BLAS one 4x4 product at a
+# time: slow, and rounded differently by each BLAS kernel).  The general implementation above
+# is the reference; the tests require both to agree to rounding.
+# --------------------------------------------------------------------------------------
+
+
+def _rx(v, c, s, inverse=False):
+    """Rx(a) v (``inverse``: Rx(a)^T v) for v a list of three coordinate rows (each (2, k):
+    the tool tip and the tool axis), c, s the cosines and sines (k,)."""
+    if inverse:
+        v[1], v[2] = c * v[1] + s * v[2], c * v[2] - s * v[1]
+    else:
+        v[1], v[2] = c * v[1] - s * v[2], s * v[1] + c * v[2]
+
+
+def _ry(v, c, s, inverse=False):
+    if inverse:
+        v[0], v[2] = c * v[0] - s * v[2], c * v[2] + s * v[0]
+    else:
+        v[0], v[2] = c * v[0] + s * v[2], c * v[2] - s * v[0]
+
+
+def _rz(v, c, s, inverse=False):
+    if inverse:
+        v[0], v[1] = c * v[0] + s * v[1], c * v[1] - s * v[0]
+    else:
+        v[0], v[1] = c * v[0] - s * v[1], s * v[0] + c * v[1]
+
+
+def _rxyz(v, c, s, k):
+    """Rx Ry Rz v, angles k, k+1, k+2 of the (cos, sin) rows c, s."""
+    _rz(v, c[k + 2], s[k + 2])
+    _ry(v, c[k + 1], s[k + 1])
+    _rx(v, c[k], s[k])
+
+
+def _rxyz_t(v, c, s, k, last=True):
+    """(Rx Ry Rz)^T v = Rz^T Ry^T Rx^T v; ``last=False`` leaves out Rz^T."""
+    _rx(v, c[k], s[k], True)
+    _ry(v, c[k + 1], s[k + 1], True)
+    if last:
+        _rz(v, c[k + 2], s[k + 2], True)
+
+
+#: angles of the fast path, in the order it reads them (three per rotation block)
+_ANGLES = ["e_xz", "e_yz", "e_zz", "S_yz", "S_xz", "S_xy", "e_xx", "e_yx", "e_zx",
+           "e_xy", "e_yy", "e_zy", "e_xa", "e_ya", "e_za", "a_AM", "b_AM", "g_AM",
            "e_xc", "e_yc", "e_zc", "b_CA"]
-
-
-def _fill_rot_xyz(out, ca, sa, cb, sb, cc, sc):
-    """Write Rx Ry Rz into out[..., :3, :3] from cosines and sines."""
-    out[:, 0, 0] = cb * cc
-    out[:, 0, 1] = -cb * sc
-    out[:, 0, 2] = sb
-    out[:, 1, 0] = ca * sc + sa * sb * cc
-    out[:, 1, 1] = ca * cc - sa * sb * sc
-    out[:, 1, 2] = -sa * cb
-    out[:, 2, 0] = sa * sc - ca * sb * cc
-    out[:, 2, 1] = sa * cc + ca * sb * sc
-    out[:, 2, 2] = ca * cb
+_SHIFTS = {"z": ["d_xz", "d_yz", "d_zz"], "x": ["d_xx", "d_yx", "d_zx"],
+           "y": ["d_xy", "d_yy", "d_zy"], "a": ["d_xa", "d_ya", "d_za"],
+           "am": ["d_xAM", "d_yAM", "d_zAM"], "c": ["d_xc", "d_yc", "d_zc"]}
 
 
 def fast_pose_error(machine: ACDoubleTurntable, errors: np.ndarray, pose: Mapping,
-                    chunk: int = 2048, out: np.ndarray | None = None) -> np.ndarray:
+                    chunk: int = 4096, out: np.ndarray | None = None) -> np.ndarray:
     """``machine.pose_error`` for one pose (scalar pose values), convention "moving".
 
-    g_bt = I_Y E_Y I_X E_X Sq I_Z E_Z and g_bw = I_A E_A L_A I_C E_C L_C are built with 4x4
-    products into preallocated buffers, ``chunk`` samples at a time (small chunks keep every
-    temporary in cache); the pose error needs only R_bw^T (t_bt - t_bw) and R_bw^T R_bt e_z.
+    The tool tip (0, 0, L) and the tool axis e_z are carried together (rows of shape (2, k))
+    through the tool chain g_bt = I_Y E_Y Sq_Y I_X E_X Sq_X I_Z E_Z (innermost factor
+    first), then through the inverse of the workpiece chain g_bw = I_A E_A L_A I_C E_C L_C
+    (outermost first): each step a rotation of both, plus a shift of the tip; ``chunk``
+    samples at a time (small chunks keep every row in cache).
     """
     if machine.convention != "moving":
         return machine.pose_error(errors, pose)
@@ -249,71 +564,73 @@ def fast_pose_error(machine: ACDoubleTurntable, errors: np.ndarray, pose: Mappin
     ideal_t, ideal_v = t_i[0], r_i[0, :, 2]
     n = e.shape[0]
     idx = machine._idx
-    ang = [idx[s] for s in _ANGLES]
-    lin = {a: [idx[f"d_x{a}"], idx[f"d_y{a}"], idx[f"d_z{a}"]] for a in "xyzac"}
-    am = [idx["d_xAM"], idx["d_yAM"], idx["d_zAM"]]
-    i_a = homogeneous(_rot_xyz(p["A"], 0.0, 0.0), np.zeros(3))
-    i_c = homogeneous(_rot_xyz(0.0, 0.0, p["C"]), np.zeros(3))
+    shift = {k: [idx[s] for s in v] for k, v in _SHIFTS.items()}
+    rows = [idx[s] for s in _ANGLES] + [j for v in shift.values() for j in v] + [idx["d_yCA"]]
+    at = {k: 22 + 3 * i for i, k in enumerate(shift)}   # first row of each shift
+    ca, sa, cc, sc = np.cos(p["A"]), np.sin(p["A"]), np.cos(p["C"]), np.sin(p["C"])
     res = np.empty((n, 6)) if out is None else out
-    m = min(chunk, n)
-    buf = {k: np.zeros((m, 4, 4)) for k in ("ey", "ex", "sq", "ez", "ea", "la", "ec", "lc",
-                                            "w1", "w2", "bt")}
-    for k in buf:
-        buf[k][:, 3, 3] = 1.0
-    one, zero = np.ones(m), np.zeros(m)
-    for s in range(0, n, chunk):
-        k = min(chunk, n - s)
-        blk = e[s:s + k]
-        th = blk[:, ang]
-        th[:, 2] += th[:, 3]  # S_xy rotates the X frame about z on Y: adds to e_zy
-        c, sn = _cos_sin(th)
-        b = {name: v[:k] for name, v in buf.items()}
-        o, z0 = one[:k], zero[:k]
-        _fill_rot_xyz(b["ey"], c[:, 0], sn[:, 0], c[:, 1], sn[:, 1], c[:, 2], sn[:, 2])
-        b["ey"][:, :3, 3] = blk[:, lin["y"]]
-        b["ey"][:, 1, 3] += p["y"]  # I_Y . E_Y (a translation along y)
-        _fill_rot_xyz(b["ex"], c[:, 4], sn[:, 4], c[:, 5], sn[:, 5], c[:, 6], sn[:, 6])
-        b["ex"][:, :3, 3] = blk[:, lin["x"]]
-        _fill_rot_xyz(b["sq"], c[:, 7], sn[:, 7], c[:, 8], sn[:, 8], o, z0)
-        _fill_rot_xyz(b["ez"], c[:, 9], sn[:, 9], c[:, 10], sn[:, 10], c[:, 11], sn[:, 11])
-        b["ez"][:, :3, 3] = blk[:, lin["z"]]
-        _fill_rot_xyz(b["ea"], c[:, 12], sn[:, 12], c[:, 13], sn[:, 13], c[:, 14], sn[:, 14])
-        b["ea"][:, :3, 3] = blk[:, lin["a"]]
-        _fill_rot_xyz(b["la"], c[:, 15], sn[:, 15], c[:, 16], sn[:, 16], c[:, 17], sn[:, 17])
-        b["la"][:, :3, 3] = blk[:, am]
-        _fill_rot_xyz(b["ec"], c[:, 18], sn[:, 18], c[:, 19], sn[:, 19], c[:, 20], sn[:, 20])
-        b["ec"][:, :3, 3] = blk[:, lin["c"]]
-        _fill_rot_xyz(b["lc"], o, z0, c[:, 21], sn[:, 21], o, z0)
-        b["lc"][:, 1, 3] = blk[:, idx["d_yCA"]]
-        w1, w2, bt = b["w1"], b["w2"], b["bt"]
-        # tool side g_bt = (I_Y E_Y) (I_X E_X Sq I_Z E_Z), tool length along the tool axis
-        np.matmul(b["ex"], b["sq"], out=w1)
-        w1[:, :3, 3] += p["z"] * w1[:, :3, 2]  # . I_Z (a translation along z)
-        np.matmul(w1, b["ez"], out=w2)
-        w2[:, 0, 3] += p["x"]  # I_X . (a translation along x)
-        np.matmul(b["ey"], w2, out=bt)
-        # workpiece side g_bw = I_A (E_A L_A) I_C (E_C L_C)
-        np.matmul(b["ea"], b["la"], out=w1)
-        np.matmul(i_a, w1, out=w2)
-        np.matmul(w2, i_c, out=w1)
-        np.matmul(b["ec"], b["lc"], out=w2)
-        np.matmul(w1, w2, out=b["ea"])
-        r = b["ea"][:, :3, :3]
-        d = bt[:, :3, 3] + p["L"] * bt[:, :3, 2] - b["ea"][:, :3, 3]
-        v = bt[:, :3, 2]
-        for i in range(3):  # R_bw^T d and R_bw^T v
-            res[s:s + k, i] = (r[:, 0, i] * d[:, 0] + r[:, 1, i] * d[:, 1]
-                               + r[:, 2, i] * d[:, 2] - ideal_t[i])
-            res[s:s + k, 3 + i] = (r[:, 0, i] * v[:, 0] + r[:, 1, i] * v[:, 1]
-                                   + r[:, 2, i] * v[:, 2] - ideal_v[i])
+    for s0 in range(0, n, chunk):
+        k = min(chunk, n - s0)
+        blk = np.ascontiguousarray(e[s0:s0 + k, rows].T)  # (41, k): angles, then shifts
+        blk[11] += blk[5]  # Sq_Y = Rz(S_xy) is followed by Rz(e_zy) of E_Y: one rotation
+        c, sn = _cos_sin(blk[:22])
+        # L_A^-1 ends with Rz(g_AM)^T, followed by I_C^-1 = Rz(C)^T: one rotation by C + g_AM
+        c_cg, s_cg = cc * c[17] - sc * sn[17], sc * c[17] + cc * sn[17]
+
+        def shift_tip(v, key, sign=1, blk=blk):
+            for i in range(3):
+                if sign > 0:
+                    v[i][0] += blk[at[key] + i]
+                else:
+                    v[i][0] -= blk[at[key] + i]
+
+        # tool chain, innermost first: E_Z, I_Z, Sq_X, E_X, I_X, Sq_Y with E_Y, I_Y
+        v = [np.zeros((2, k)), np.zeros((2, k)), np.empty((2, k))]
+        v[2][0], v[2][1] = p["L"], 1.0
+        _ry(v, c[1], sn[1])  # Rz leaves (0, 0, a) alone
+        _rx(v, c[0], sn[0])
+        shift_tip(v, "z")
+        v[2][0] += p["z"]
+        _ry(v, c[4], sn[4])
+        _rx(v, c[3], sn[3])
+        _rxyz(v, c, sn, 6)
+        shift_tip(v, "x")
+        v[0][0] += p["x"]
+        _rxyz(v, c, sn, 9)
+        shift_tip(v, "y")
+        v[1][0] += p["y"]
+        # inverse of the workpiece chain: I_A^-1, E_A^-1, L_A^-1, I_C^-1, E_C^-1, L_C^-1
+        _rx(v, ca, sa, True)
+        shift_tip(v, "a", -1)
+        _rxyz_t(v, c, sn, 12)
+        shift_tip(v, "am", -1)
+        _rxyz_t(v, c, sn, 15, last=False)
+        _rz(v, c_cg, s_cg, True)
+        shift_tip(v, "c", -1)
+        _rxyz_t(v, c, sn, 18)
+        v[1][0] -= blk[40]
+        _ry(v, c[21], sn[21], True)
+        for i in range(3):
+            res[s0:s0 + k, i] = v[i][0] - ideal_t[i]
+            res[s0:s0 + k, 3 + i] = v[i][1] - ideal_v[i]
     return res
 
 
 def _cos_sin(x):
     """cos and sin; for |x| < 1e-3 rad (all geometric errors) a Taylor polynomial whose
-    truncation error (< x^6/720 and x^7/5040) is far below double precision, 5x faster than
-    numpy's cos and sin."""
-    if np.abs(x).max(initial=0.0) >= 1e-3:
+    truncation error is far below double precision, several times faster than numpy's cos
+    and sin: to x^4 and x^5 below 1e-3 rad (errors < x^6/720 and x^7/5040), to x^2 and x^3
+    below 1e-4 rad (errors < x^4/24 < 5e-18 and x^5/120 < 1e-22, under half an ulp of 1 and
+    of x)."""
+    m = max(x.max(initial=0.0), -x.min(initial=0.0))
+    if m >= 1e-3:
         return np.cos(x), np.sin(x)
     x2 = x * x
+    if m < 1e-4:
+        c = x2 * -0.5
+        c += 1.0
+        s = x2 * (-1.0 / 6.0)
+        s += 1.0
+        s *= x
+        return c, s
     return 1.0 - 0.5 * x2 * (1.0 - x2 / 12.0), x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0))

@@ -27,8 +27,9 @@ from collections.abc import Mapping
 import numpy as np
 
 from .. import errors as _errors
-from ..kinematics import chain, error_transform, translation
+from ..kinematics import hat, homogeneous, rotation_exp, translation, vee
 from ._base import Machine
+from .horizontal_3axis import matmul3, matvec3
 
 AXES = ("x", "y", "z")
 TOOL_OFFSETS = ("D1", "D2", "D3")
@@ -49,24 +50,52 @@ class VerticalXYFZ(Machine):
         self._eps = {a: [idx[f"e{d}({a})"] for d in AXES] for a in AXES}
         self._sq = {s: idx[s] for s in ("S_xy", "S_yz", "S_xz")}
 
-    def transforms(self, errors, pose: Mapping) -> tuple[np.ndarray, np.ndarray]:
-        e = self.check_errors(errors)
+    def _actual(self, e: np.ndarray, p: Mapping[str, np.ndarray]
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """Rotation (n, 3, 3) and translation (n, 3) of the actual chain, composed as
+        rotation-translation pairs (a product with a pure translation is a vector sum; the
+        3x3 products are written out in a fixed order, no BLAS call, so the rounding is the
+        same on every machine)."""
         n = e.shape[0]
-        p = self.check_pose(pose, n)
         zero = np.zeros(n)
         x, y, z = p["x"], p["y"], p["z"]
         d = {a: e[:, self._delta[a]].copy() for a in AXES}
         d["y"][:, 0] -= y * e[:, self._sq["S_xy"]]
         d["z"][:, 0] -= z * e[:, self._sq["S_xz"]]
         d["z"][:, 1] -= z * e[:, self._sq["S_yz"]]
-        err = {a: error_transform(d[a], e[:, self._eps[a]], exact=self.exact) for a in AXES}
-        t_x = translation(np.stack([x, zero, zero], axis=-1))
-        t_y = translation(np.stack([zero, y, zero], axis=-1))
-        t_z = translation(np.stack([zero, zero, z], axis=-1))
-        t_d = translation(np.stack([p["D1"], p["D2"], p["D3"]], axis=-1))
-        actual = chain(t_x, err["x"], t_y, err["y"], t_z, err["z"], t_d)
-        ideal = chain(t_x, t_y, t_z, t_d)
-        return actual, ideal
+        eps = {a: e[:, self._eps[a]] for a in AXES}
+        rot = {a: rotation_exp(eps[a]) if self.exact else np.eye(3) + hat(eps[a]) for a in AXES}
+        # T(x) E_X: (R_X, (x, 0, 0) + d_X)
+        r, t = rot["x"], np.stack([x, zero, zero], axis=-1) + d["x"]
+        # . T(y) E_Y
+        t = t + r[:, :, 1] * y[:, None] + matvec3(r, d["y"])
+        r = matmul3(r, rot["y"])
+        # . T(z) E_Z
+        t = t + r[:, :, 2] * z[:, None] + matvec3(r, d["z"])
+        r = matmul3(r, rot["z"])
+        # . T(D1, D2, D3)
+        t = t + matvec3(r, np.stack([p["D1"], p["D2"], p["D3"]], axis=-1))
+        return r, t
+
+    @staticmethod
+    def _ideal_position(p: Mapping[str, np.ndarray]) -> np.ndarray:
+        """The ideal chain T(x) T(y) T(z) T(D) is the translation (x + D1, y + D2, z + D3)."""
+        return np.stack([p["x"] + p["D1"], p["y"] + p["D2"], p["z"] + p["D3"]], axis=-1)
+
+    def transforms(self, errors, pose: Mapping) -> tuple[np.ndarray, np.ndarray]:
+        e = self.check_errors(errors)
+        p = self.check_pose(pose, e.shape[0])
+        r, t = self._actual(e, p)
+        return homogeneous(r, t), translation(self._ideal_position(p))
+
+    def pose_error(self, errors, pose: Mapping) -> np.ndarray:
+        """(n, 6) pose error ``Px, Py, Pz`` (mm), ``Vx, Vy, Vz`` (rad) of the tool in the
+        workpiece frame, actual minus ideal, from the full (untruncated) matrix product (the
+        ideal frame is a pure translation, so the rotation part is ``vee(R)``)."""
+        e = self.check_errors(errors)
+        p = self.check_pose(pose, e.shape[0])
+        r, t = self._actual(e, p)
+        return np.concatenate([t - self._ideal_position(p), vee(r)], axis=-1)
 
 
 # --------------------------------------------------------------------------------------

@@ -15,14 +15,20 @@ indices therefore leaves an RMS residual of ``sqrt(1 - s)`` of the full model's 
 
 Written by hand because the rule is the paper's own (a few lines); the indices come from
 :mod:`.sobol`.
+
+:func:`rank_with_ties` is the ranking every selection here and elsewhere in the compendium
+uses when candidates can be equal up to rounding (optimiser minima, competing models): values
+within a stated tolerance are ties, broken by a canonical key, never by noise.
 """
 
 from __future__ import annotations
 
 __all__ = ["KeySet", "key_errors", "key_errors_by_output", "union_key_set",
            "simplification_rate", "pooled_indices", "zero_non_key", "reduced_model",
-           "residual_summary", "expected_rms_ratio", "threshold_sweep", "key_set_bootstrap"]
+           "residual_summary", "expected_rms_ratio", "threshold_sweep", "key_set_bootstrap",
+           "rank_with_ties"]
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -34,6 +40,50 @@ from .sobol import sobol_estimate
 #: A share counts as exceeding the threshold only if it is larger by more than this (so that a
 #: share equal to the threshold up to rounding, e.g. 0.6 + 0.3 against 0.9, does not count).
 EXCEED_TOL = 1e-12
+
+
+def rank_with_ties(values, keys=None, rtol: float = 0.0, atol: float = 0.0,
+                   key_tol=0.0) -> np.ndarray:
+    """Order of candidates by ascending ``values`` in which values that differ by less than a
+    stated tolerance are ties, broken by ``keys``: the canonical ranking of, e.g., the local
+    minima of an optimiser or competing models, independent of rounding noise.
+
+    The smallest remaining value ``v0`` leads a group of every remaining candidate with a
+    value ``<= v0 + max(atol, rtol * |v0|)``; the group is ordered by ``keys`` (m, p),
+    compared lexicographically, two key entries counting as equal when they differ by at
+    most ``key_tol`` (scalar or (p,)); then the original order.  Then the next group.  Returns
+    the indices of the candidates in rank order.  NaN values are refused.
+    """
+    v = np.asarray(values, dtype=float)
+    if v.ndim != 1:
+        raise ValueError(f"values must be one-dimensional, got shape {v.shape}")
+    if not np.all(np.isfinite(v)):
+        raise ValueError("values contain NaN or infinite entries: nothing to rank them by")
+    for name, t in (("rtol", rtol), ("atol", atol)):
+        if not (np.isfinite(t) and t >= 0):
+            raise ValueError(f"{name} must be finite and >= 0, got {t!r}")
+    m = v.size
+    k = np.zeros((m, 0)) if keys is None else np.asarray(keys, dtype=float)
+    k = k[:, None] if k.ndim == 1 else k
+    if k.ndim != 2 or k.shape[0] != m:
+        raise ValueError(f"{k.shape[0]} keys for {m} values")
+    ktol = np.broadcast_to(np.asarray(key_tol, dtype=float), (k.shape[1],))
+
+    def cmp(i, j):
+        for a, b, t in zip(k[i], k[j], ktol, strict=True):
+            if abs(a - b) > t:
+                return -1 if a < b else 1
+        return (i > j) - (i < j)
+
+    left = [int(i) for i in np.argsort(v, kind="stable")]
+    order = []
+    while left:
+        v0 = v[left[0]]
+        limit = v0 + max(atol, rtol * abs(v0))
+        group = [i for i in left if v[i] <= limit]
+        order += sorted(group, key=functools.cmp_to_key(cmp))
+        left = [i for i in left if v[i] > limit]
+    return np.asarray(order, dtype=int)
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,9 @@ with column i taken from B).
 from __future__ import annotations
 
 __all__ = ["base_samples", "from_unit_uniform", "from_unit_normal", "sobol_evaluate",
-           "sobol_estimate", "sobol_bootstrap", "sobol_indices", "linear_indices"]
+           "sobol_estimate", "bootstrap_counts", "sobol_bootstrap_samples", "ci_half_width",
+           "sobol_bootstrap", "sobol_indices", "linear_indices", "FLOAT_NOISE", "TIE_REL",
+           "TIE_ABS", "merge_ties", "cumulative_share_margin", "key_set_frequencies"]
 
 from collections.abc import Callable
 
@@ -116,22 +118,80 @@ def sobol_estimate(ya: np.ndarray, yb: np.ndarray, yab: np.ndarray
     return s1, st
 
 
+def bootstrap_counts(n: int, n_boot: int, seed, chunk: int = 20, block: int = 2**21):
+    """The ``n_boot`` bootstrap resamples of ``n`` rows as counts: yields (k, n) float arrays
+    ``w`` with ``w[b, i]`` = how often row i is drawn in resample b, about ``block / n``
+    resamples at a time (one matrix product each; many small products are slow when a
+    multi-threaded BLAS shares a busy machine).
+
+    The draws are ``rng.integers(0, n, size=(k, n))`` for successive chunks of ``k <= chunk``
+    resamples of one ``numpy.random.default_rng(seed)``: the resamples that
+    ``sobol_bootstrap`` and ``key_set_bootstrap`` have always used."""
+    if int(n_boot) != n_boot or n_boot < 1:
+        raise ValueError(f"n_boot must be a positive integer, got {n_boot!r}")
+    rng = np.random.default_rng(seed)
+    per_block = max(chunk, block // max(n, 1))
+    drawn = []
+    for start in range(0, int(n_boot), chunk):
+        drawn.append(rng.integers(0, n, size=(min(chunk, int(n_boot) - start), n)))
+        if sum(len(d) for d in drawn) >= per_block or start + chunk >= n_boot:
+            idx = np.concatenate(drawn)
+            drawn = []
+            k = idx.shape[0]
+            flat = (idx + n * np.arange(k)[:, None]).ravel()
+            yield np.bincount(flat, minlength=k * n).reshape(k, n).astype(float)
+
+
+def sobol_bootstrap_samples(ya, yb, yab, n_boot: int, seed, chunk: int = 20, block: int = 2**21
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """S1 and ST re-estimated on ``n_boot`` resamples of the N base rows: (n_boot, D, q) each.
+
+    The same estimates as :func:`sobol_estimate` on ``ya[idx], yb[idx], yab[:, idx]`` for the
+    resamples of :func:`bootstrap_counts`, computed without copying the resampled rows: every
+    term of the estimator is a mean over rows, so a resample is a weight vector (the counts)
+    and all resamples of a chunk are one matrix product of the counts with the per-row terms
+    (``ya``, ``yb``, their squares, ``sum_i yab_i``, and per input ``yab_i - ya``,
+    ``yb (yab_i - ya)``, ``(yab_i - ya)^2``).  Outputs are centred on their overall mean first
+    (the indices do not change), so the variance ``E[y^2] - E[y]^2`` has no cancellation.
+    Memory: N x (3 + 3 D) q floats, and ``block`` counts at a time.  Sums in a different order
+    than :func:`sobol_estimate`: equal to it within floating-point rounding (a test checks
+    1e-12).
+    """
+    ya, yb, yab = (np.asarray(v, dtype=float) for v in (ya, yb, yab))
+    n, q = ya.shape
+    d = yab.shape[0]
+    centre = np.concatenate([ya, yb]).mean(0)
+    ya, yb, yab = ya - centre, yb - centre, yab - centre
+    diff = (yab - ya[None]).transpose(1, 0, 2).reshape(n, d * q)          # (N, D q)
+    ybd = diff * np.tile(yb, d)
+    rows = np.concatenate([ya + yb, ya**2 + yb**2, yab.sum(0) + ya + yb, diff, ybd, diff**2],
+                          axis=1)
+    s1s, sts = [], []
+    for w in bootstrap_counts(n, n_boot, seed, chunk, block):
+        m = (w @ rows) / n                                                  # (k, 3q + 3Dq)
+        mean_y = m[:, :q] / 2
+        var = m[:, q:2 * q] / 2 - mean_y**2                                 # (k, q)
+        mu = m[:, 2 * q:3 * q] / (d + 2)
+        md, mybd, md2 = (m[:, (3 + j * d) * q:(3 + (j + 1) * d) * q].reshape(-1, d, q)
+                         for j in range(3))
+        s1s.append((mybd - mu[:, None, :] * md) / var[:, None, :])
+        sts.append(0.5 * md2 / var[:, None, :])
+    return np.concatenate(s1s), np.concatenate(sts)
+
+
+def ci_half_width(samples: np.ndarray, conf: float = 0.95) -> np.ndarray:
+    """Half-width of the ``conf`` interval from bootstrap ``samples`` (leading axis): the
+    normal quantile times their standard deviation (ddof 1), as SALib reports it."""
+    z = stats.norm.ppf(0.5 + conf / 2)
+    return z * np.asarray(samples).std(axis=0, ddof=1)
+
+
 def sobol_bootstrap(ya, yb, yab, n_boot: int, seed, conf: float = 0.95, chunk: int = 20):
     """Bootstrap half-widths of the ``conf`` confidence intervals of S1 and ST (D, q) each,
     from ``n_boot`` resamples of the N base rows (as SALib: normal quantile times the
-    bootstrap standard deviation).  Resamples are batched ``chunk`` at a time."""
-    rng = np.random.default_rng(seed)
-    n = ya.shape[0]
-    s1s, sts = [], []
-    for start in range(0, n_boot, chunk):
-        k = min(chunk, n_boot - start)
-        idx = rng.integers(0, n, size=(k, n))
-        s1, st = sobol_estimate(ya[idx], yb[idx], np.moveaxis(yab[:, idx], 0, 1))
-        s1s.append(s1)
-        sts.append(st)
-    z = stats.norm.ppf(0.5 + conf / 2)
-    return (z * np.concatenate(s1s).std(axis=0, ddof=1),
-            z * np.concatenate(sts).std(axis=0, ddof=1))
+    bootstrap standard deviation); see :func:`sobol_bootstrap_samples`."""
+    s1s, sts = sobol_bootstrap_samples(ya, yb, yab, n_boot, seed, chunk)
+    return ci_half_width(s1s, conf), ci_half_width(sts, conf)
 
 
 def sobol_indices(model, a, b, chunk: int = 200_000, progress=None):
@@ -148,3 +208,95 @@ def linear_indices(jacobian: np.ndarray, sd: np.ndarray) -> np.ndarray:
     v = (np.asarray(jacobian, dtype=float) * np.asarray(sd, dtype=float)) ** 2
     tot = v.sum(axis=-1, keepdims=True)
     return np.divide(v, tot, out=np.zeros_like(v), where=tot > 0)
+
+
+# --------------------------------------------------------------------------------------------
+# Floating-point resolution of the estimates, and canonical ties.
+# --------------------------------------------------------------------------------------------
+
+#: Absolute floating-point resolution declared for Sobol indices estimated from model outputs
+#: of a few hundredths of a mm computed from poses of hundreds of mm.  Such an output carries a
+#: rounding error of about eps x 1000 mm = 2e-13 mm (measured across OpenBLAS kernels:
+#: 2.3e-13 mm), 5e-12 of its standard deviation.  S1 is a mean over N rows of (yb - mu) times
+#: the difference of two outputs, divided by the variance: each term carries 5e-12, so the
+#: index carries at most 5e-12 (all terms of one sign) and typically 5e-12 / sqrt(N) = 6e-14
+#: at N = 8192 (measured across kernels: 5e-14).  ST is a mean of squared differences: its
+#: rounding is smaller still.  1e-11 is twice the worst case.  The sampling uncertainty (the
+#: bootstrap half-widths, 1e-3 for the leading indices) is a different, far larger thing.
+FLOAT_NOISE = 1e-11
+
+#: Values within ``max(TIE_REL * |v|, TIE_ABS)`` of each other are ties for a ranking rule: far
+#: above the floating-point resolution (:data:`FLOAT_NOISE`, 1e-9 of an index of 0.01), far
+#: below any difference the sampling can resolve (1e-4 and more).
+TIE_REL = 1e-9
+TIE_ABS = FLOAT_NOISE
+
+
+def merge_ties(values, rel: float = TIE_REL, abs_tol: float = TIE_ABS) -> np.ndarray:
+    """A copy of ``values`` (D,) or (D, q) in which every group of near-equal values (along
+    axis 0, per column) takes the group's largest value, so that a stable descending sort
+    orders the group by its position (catalogue order) instead of by rounding noise.
+
+    Groups: sort descending; a value joins the group of the value above it when the gap is at
+    most ``max(rel * |larger|, abs_tol)``.  Errors that enter the model identically have equal
+    indices in exact arithmetic; this makes "equal" mean equal within the stated tolerance, so
+    the 90 % rule and the rankings are the same on every machine.  Leading (bootstrap) axes
+    are allowed: ``values`` (..., D, q)."""
+    a = np.array(values, dtype=float)
+    flat = a.ndim == 1
+    if flat:
+        a = a[:, None]
+    order = np.argsort(-a, axis=-2, kind="stable")
+    s = np.take_along_axis(a, order, axis=-2)
+    gap = s[..., :-1, :] - s[..., 1:, :]
+    tol = np.maximum(rel * np.abs(s[..., :-1, :]), abs_tol)
+    new = np.concatenate([np.ones_like(gap[..., :1, :], dtype=bool), gap > tol], axis=-2)
+    leader = np.where(new, np.arange(s.shape[-2])[:, None], 0)
+    leader = np.maximum.accumulate(leader, axis=-2)
+    merged = np.take_along_axis(s, leader, axis=-2)
+    out = np.empty_like(a)
+    np.put_along_axis(out, order, merged, axis=-2)
+    return out[:, 0] if flat else out
+
+
+def cumulative_share_margin(values, threshold: float) -> np.ndarray:
+    """How far the 90 %-type rule is from changing its decision: per column of ``values``
+    (D, q) (e.g. total indices), sort descending and take the cumulative shares; the rule
+    stops at the first share above ``threshold``; the margin is the distance of the
+    threshold from the nearer of that share and the one before.  A margin far above the
+    floating-point resolution of the shares means rounding cannot change the key set."""
+    a = merge_ties(np.clip(np.asarray(values, dtype=float), 0, None))
+    a = a[:, None] if a.ndim == 1 else a
+    s = -np.sort(-a, axis=0)
+    share = np.cumsum(s, axis=0) / s.sum(0)
+    k = np.argmax(share > threshold, axis=0)
+    cols = np.arange(a.shape[1])
+    above = share[k, cols] - threshold
+    below = np.where(k > 0, threshold - share[np.maximum(k - 1, 0), cols], np.inf)
+    return np.minimum(above, below)
+
+
+def key_set_frequencies(st_samples, names, outputs, threshold: float = 0.9):
+    """The 90 % rule applied to each of many re-estimated total indices (``st_samples``
+    (n_boot, >= D, q), e.g. from :func:`sobol_bootstrap_samples`; only the first
+    ``len(names)`` inputs are candidates), after clipping at 0 and :func:`merge_ties`.
+    Returns ``freq`` (per error: the share of resamples in which it is key, per output and
+    for the union) and ``counts`` (per resample: the number of key errors per output and in
+    the union), as ``key_set_bootstrap`` of :mod:`.screening` (which resamples itself)."""
+    import pandas as pd
+
+    from .screening import key_errors_by_output, union_key_set
+
+    names, outputs = list(names), list(outputs)
+    st = merge_ties(np.clip(np.asarray(st_samples, dtype=float)[:, :len(names)], 0, None))
+    hits = {o: np.zeros(len(names)) for o in [*outputs, "union"]}
+    counts = []
+    for b in range(st.shape[0]):  # the rule per resample: a sort of D values, cheap
+        sets = key_errors_by_output(st[b], names, outputs, threshold)
+        for o, ks in sets.items():
+            hits[o][list(ks.index)] += 1
+        union = union_key_set(sets, names)
+        hits["union"][[names.index(u) for u in union]] += 1
+        counts.append({**{o: ks.n_key for o, ks in sets.items()}, "union": len(union)})
+    freq = pd.DataFrame({"symbol": names, **{o: h / st.shape[0] for o, h in hits.items()}})
+    return freq, pd.DataFrame(counts)

@@ -1,0 +1,106 @@
+"""Every notebook executed and checked against what is committed.
+
+The notebooks run in the background while the unit tests run (conftest.py starts them as soon as
+the tests are collected, two at a time, each with ``python -m mtaccuracy.runner NN
+--copy-to DIR``, so nothing in the working tree is touched).  For each notebook:
+
+* every cell executes without error;
+* the cells whose first line is ``# NBVAL_CHECK_OUTPUT`` print the same text as the committed
+  notebook (they print the key tables, rounded);
+* every regenerated CSV equals the committed one: text and integer columns exactly, float
+  columns within the tolerance declared next to where the table is written
+  (``reproduction.save_table(..., tolerance=...)``, recorded in the committed
+  ``provenance.json``) plus one unit of the last printed digit; tables declared ``measured``
+  (wall-clock times) are not compared;
+* the files written are the files committed, each listed in ``provenance.json``.
+
+Notebook 03 also runs twice with small parameters: the two runs must give byte-identical CSVs,
+figures and ``provenance.json``.
+"""
+
+import json
+
+import pytest
+
+from mtaccuracy import paths, provenance, reproduction, runner
+
+STEMS = [p.stem for p in runner.all_notebooks()]
+CHECK = "# NBVAL_CHECK_OUTPUT"
+
+
+def _ok(notebook_runs, name):
+    code, log, seconds = notebook_runs.result(name)
+    assert code == 0, f"{name} failed after {seconds:.0f} s:\n{log[-3000:]}"
+    return notebook_runs.folder(name)
+
+
+def _printed(cell) -> list[str]:
+    out = []
+    for o in cell.get("outputs", []):
+        if o["output_type"] == "stream":
+            out.append("".join(o["text"]))
+        elif "data" in o and "text/plain" in o["data"]:
+            out.append("".join(o["data"]["text/plain"]))
+    return out
+
+
+@pytest.mark.parametrize("stem", STEMS)
+def test_notebook_executes_and_prints_the_committed_tables(stem, notebook_runs):
+    folder = _ok(notebook_runs, stem)
+    fresh = json.loads((folder / f"{stem}.ipynb").read_text(encoding="utf-8"))
+    committed = json.loads((paths.NOTEBOOKS / f"{stem}.ipynb").read_text(encoding="utf-8"))
+    fresh_cells = [c for c in fresh["cells"] if "injected-parameters"
+                   not in c.get("metadata", {}).get("tags", [])]
+    assert len(fresh_cells) == len(committed["cells"])
+    checked = 0
+    for i, (a, b) in enumerate(zip(fresh_cells, committed["cells"], strict=True)):
+        if b["cell_type"] == "code" and "".join(b["source"]).startswith(CHECK):
+            assert _printed(a) == _printed(b), f"{stem}: cell {i} prints something else"
+            checked += 1
+    assert checked, f"{stem}: no cell marked {CHECK}"
+
+
+@pytest.mark.parametrize("stem", STEMS)
+def test_regenerated_tables_equal_committed(stem, notebook_runs):
+    fresh = _ok(notebook_runs, stem) / "figures" / stem
+    committed = paths.FIGURES / stem
+    side = provenance.read(committed)
+    assert side, f"figures/{stem}/provenance.json is missing"
+    files = side["files"]
+    assert sorted(p.name for p in fresh.iterdir()) == sorted([*files, provenance.SIDECAR])
+    assert sorted(p.name for p in committed.iterdir()) == sorted([*files, provenance.SIDECAR])
+    problems = []
+    for name, entry in files.items():
+        if name.endswith(".csv") and not entry.get("measured"):
+            problems += reproduction.compare_tables(fresh / name, committed / name,
+                                                    entry.get("tolerance", {}))
+    assert not problems, "\n".join(problems)
+
+
+def test_two_runs_give_byte_identical_outputs(notebook_runs):
+    """Notebook 03 with small parameters, twice: every CSV, PNG, SVG and the provenance
+    sidecar identical to the byte."""
+    outs = []
+    for k in (1, 2):
+        out = _ok(notebook_runs, f"03_small_{k}") / "figures" / "03_guo2016_spearman_21_errors"
+        outs.append({p.name: p.read_bytes() for p in sorted(out.iterdir())})
+    assert outs[0].keys() == outs[1].keys()
+    assert {".csv", ".png", ".svg", ".json"} <= {"." + n.rsplit(".", 1)[1] for n in outs[0]}
+    assert [n for n in outs[0] if outs[0][n] != outs[1][n]] == []
+
+
+@pytest.mark.parametrize("stem", STEMS)
+def test_outputs_do_not_depend_on_where_the_repository_lives(stem):
+    """A stored output that shows this checkout's absolute path would differ in every clone."""
+    text = (paths.NOTEBOOKS / f"{stem}.ipynb").read_text(encoding="utf-8")
+    assert str(paths.ROOT) not in text
+
+
+@pytest.mark.parametrize("stem", STEMS)
+def test_committed_notebook_stores_no_measurement(stem):
+    """Cells tagged ``measured`` are stored with the runner's note only (re-running an
+    unchanged notebook leaves it unchanged)."""
+    nb = json.loads((paths.NOTEBOOKS / f"{stem}.ipynb").read_text(encoding="utf-8"))
+    for c in nb["cells"]:
+        if "measured" in c.get("metadata", {}).get("tags", []):
+            assert _printed(c) == [runner.MEASURED_NOTE]
