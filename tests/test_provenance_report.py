@@ -30,6 +30,9 @@ def test_record_is_complete_and_deterministic(run_record):
     assert "output_dir" not in rec["parameters"] and rec["parameters"]["n_base"] == 8192
     assert "data/papers/rong_facts.csv" in rec["inputs"]
     assert "data/rong/error_ranges.csv" in rec["inputs"]  # a parameter naming a data file
+    provenance.start("04_xu2022_thermal_mlr_svr", {"data_dir": "data/thermal"})
+    assert "data/thermal/errors.csv" in provenance.record()["inputs"]  # ... or a folder, but
+    assert "data/thermal/provenance.json" not in provenance.record()["inputs"]  # not its record
     assert rec["inputs"]["data/papers/rong_facts.csv"] == provenance.sha256(
         paths.PAPERS / "rong_facts.csv")
     assert rec["packages"]["numpy"].count(".") >= 1

@@ -100,7 +100,8 @@ def start(notebook: str, parameters: dict, source=None) -> None:
         if isinstance(value, str) and value and not value.startswith("/"):
             p = paths.ROOT / value
             for f in ([p] if p.is_file() else sorted(p.rglob("*")) if p.is_dir() else []):
-                track(f)
+                if f.name != SIDECAR:  # a folder's own record is an output, not an input
+                    track(f)
 
 
 def track(path) -> None:
