@@ -481,9 +481,7 @@ def run(notebook: str | Path, overrides: dict | None = None, progress: bool = Tr
     folder also writes the report's HTML export of the notebook (``figures/html/``)."""
     path = notebook_path(notebook)
     params = validate(path, overrides or {}, share)
-    declared = read_parameters(path)
-    target = paths.resolve_output(params.get("output_dir", declared["output_dir"].default)) \
-        if "output_dir" in declared else None
+    target = output_target(path, params)
     running, failed = paths.NOTEBOOKS / ".running", paths.NOTEBOOKS / ".failed"
     for d in (running, failed):
         d.mkdir(exist_ok=True)
@@ -506,6 +504,14 @@ def run(notebook: str | Path, overrides: dict | None = None, progress: bool = Tr
     if export:
         _export(path, target)
     return seconds
+
+
+def output_target(notebook: str | Path, params: dict) -> Path | None:
+    """The folder a run with ``params`` writes into (its ``output_dir``, resolved)."""
+    declared = read_parameters(notebook).get("output_dir")
+    if declared is None:
+        return None
+    return paths.resolve_output(params.get("output_dir", declared.default))
 
 
 def _export(path: Path, target: Path | None) -> None:
@@ -633,7 +639,7 @@ def _run_parallel(targets: list[Path], items: list[str], jobs: int) -> int:
     order = sorted(targets, key=lambda t: -float(known.get(t.stem, {}).get("seconds", 0)))
     pending, active, failures = list(order), {}, 0
     n, t0 = len(order), time.perf_counter()
-    overrides = dict(i.split("=", 1) for i in items)
+    overrides = {k.strip(): parse_value(v.strip()) for k, v in (i.split("=", 1) for i in items)}
     try:
         import nbconvert  # noqa: F401 - this process exports each notebook as its run ends
     except ImportError:  # pragma: no cover - nbconvert is in the lock
@@ -653,12 +659,7 @@ def _run_parallel(targets: list[Path], items: list[str], jobs: int) -> int:
                     del active[t]
                     failures += proc.returncode != 0
                     if proc.returncode == 0:  # while the other run goes on
-                        value = overrides.get("output_dir")
-                        declared = read_parameters(t).get("output_dir")
-                        default = declared.default if declared else None
-                        target = paths.resolve_output(parse_value(value) if value else default) \
-                            if (value or default) else None
-                        _export(t, target)
+                        _export(t, output_target(t, overrides))
     except (KeyboardInterrupt, Interrupted):
         _install(signal.SIG_IGN)
         for proc in active.values():  # each child ends its own run and says so

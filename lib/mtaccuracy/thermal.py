@@ -222,6 +222,14 @@ def _check_range(path, column, values, lo, hi, unit, hint) -> None:
                              f"{unit}; {hint}")
 
 
+def _check_span(path, column, values, least, unit, what) -> None:
+    """Refuse a column whose values span less than ``least`` (a unit mix-up), naming it."""
+    span = float(np.ptp(values))
+    if span < least:
+        raise _problem(path, f"column {column!r} spans only {span:g} {unit} ({values.min():g} .. "
+                             f"{values.max():g}), less than the plausible {least:g} {unit} {what}")
+
+
 def _check_size(path, what, n, limit, why) -> None:
     if n > limit:
         raise _problem(path, f"{n} {what}; at most {limit} are supported ({why})")
@@ -318,19 +326,12 @@ def read_measurements(folder) -> ThermalData:
     e_val = _numeric(ep, er, "error_um")
     _check_range(ep, "error_um", e_val, -ERROR_LIMIT_UM, ERROR_LIMIT_UM, "um",
                  "a machine tool's positioning error; nm? (um = nm / 1000)")
-    span = float(np.ptp(e_val))
-    if span < ERROR_MIN_SPAN_UM:
-        raise _problem(ep, f"column 'error_um' spans only {span:g} um ({e_val.min():g} .. "
-                           f"{e_val.max():g}), less than the plausible {ERROR_MIN_SPAN_UM:g} um "
-                           f"of a positioning error measured over a warm-up; mm? "
-                           f"(um = mm x 1000)")
+    _check_span(ep, "error_um", e_val, ERROR_MIN_SPAN_UM, "um",
+                "of a positioning error measured over a warm-up; mm? (um = mm x 1000)")
     _check_range(ep, "position_mm", e_pos, -POSITION_LIMIT_MM, POSITION_LIMIT_MM, "mm",
                  "a machine tool's axis")
-    span = float(np.ptp(e_pos))
-    if span < POSITION_MIN_SPAN_MM:
-        raise _problem(ep, f"column 'position_mm' spans only {span:g} mm ({e_pos.min():g} .. "
-                           f"{e_pos.max():g}), less than the plausible {POSITION_MIN_SPAN_MM:g} "
-                           f"mm between target positions; m? (mm = m x 1000)")
+    _check_span(ep, "position_mm", e_pos, POSITION_MIN_SPAN_MM, "mm",
+                "between target positions; m? (mm = m x 1000)")
     long = pd.DataFrame({"experiment": e_exp, "measurement": e_meas, "position_mm": e_pos,
                          "error_um": e_val})
     dup = long.duplicated(["experiment", "measurement", "position_mm"])
