@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import contextlib
 import copy
 import json
 import math
@@ -552,20 +553,47 @@ def execute_copy(notebook: str | Path, dest: str | Path, overrides: dict | None 
     return out
 
 
+@contextlib.contextmanager
+def _kernel_stderr(log: Path):
+    """Send what the kernel writes to its standard error (ipykernel's start-up warnings, the
+    tracebacks of a kernel shut down in the middle of a cell) to ``log`` instead of the
+    terminal, which keeps this process's own messages and progress bar."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    old = sys.stderr
+    with open(log, "ab") as fh:
+        os.dup2(fh.fileno(), 2)  # inherited by the kernel started inside
+    sys.stderr = os.fdopen(os.dup(saved), "w", buffering=1)
+    try:
+        yield
+    finally:
+        sys.stderr.flush()
+        sys.stderr.close()
+        sys.stderr = old
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def _execute_and_replace(path, params, out, staging, target, failed, progress) -> float:
     import papermill as pm
 
     t0 = time.perf_counter()
+    log = out.with_suffix(".kernel.log")
+    log.unlink(missing_ok=True)
     try:
         if staging is not None:
             os.environ[paths.STAGING_ENV] = str(staging)
-        pm.execute_notebook(_parameterised(path, params), str(out), cwd=str(paths.NOTEBOOKS),
-                            kernel_name="python3", progress_bar=progress, log_output=False)
+        with _kernel_stderr(log):
+            pm.execute_notebook(_parameterised(path, params), str(out),
+                                cwd=str(paths.NOTEBOOKS), kernel_name="python3",
+                                progress_bar=progress, log_output=False)
     except BaseException as exc:
         _install(signal.SIG_IGN)  # a second Ctrl-C must not interrupt the clean-up
         kept = failed / path.name
         if out.exists():
             shutil.move(str(out), kept)
+        if log.exists():
+            shutil.move(str(log), failed / log.name)
         if staging is not None and staging.exists():
             dest = failed / f"{path.stem}.figures"
             shutil.rmtree(dest, ignore_errors=True)
@@ -590,6 +618,7 @@ def _execute_and_replace(path, params, out, staging, target, failed, progress) -
         _replace_folder(staging, target)
     os.replace(tmp, path)
     out.unlink()
+    log.unlink(missing_ok=True)
     return seconds
 
 
@@ -644,6 +673,7 @@ def _run_parallel(targets: list[Path], items: list[str], jobs: int) -> int:
         import nbconvert  # noqa: F401 - this process exports each notebook as its run ends
     except ImportError:  # pragma: no cover - nbconvert is in the lock
         pass
+    old_handlers = _install(_on_signal)  # even where the shell started us with SIGINT ignored
     try:
         while pending or active:
             while pending and len(active) < jobs:
@@ -658,18 +688,27 @@ def _run_parallel(targets: list[Path], items: list[str], jobs: int) -> int:
                 if proc.poll() is not None:
                     del active[t]
                     failures += proc.returncode != 0
+                    if proc.returncode == 130:  # interrupted: stop the others too
+                        raise Interrupted("")
                     if proc.returncode == 0:  # while the other run goes on
                         _export(t, output_target(t, overrides))
     except (KeyboardInterrupt, Interrupted):
         _install(signal.SIG_IGN)
+        deadline = time.perf_counter() + 1.0  # a Ctrl-C reached the children too
+        while any(p.poll() is None for p in active.values()) and time.perf_counter() < deadline:
+            time.sleep(0.05)
         for proc in active.values():  # each child ends its own run and says so
-            try:
-                proc.send_signal(signal.SIGINT)
-            except OSError:
-                pass
+            if proc.poll() is None:
+                try:
+                    proc.send_signal(signal.SIGINT)
+                except OSError:
+                    pass
         for proc in active.values():
             proc.wait()
         raise Interrupted("") from None
+    finally:
+        for sig, h in old_handlers.items():
+            signal.signal(sig, h)
     print(f"{n} notebook(s) in {time.perf_counter() - t0:.1f} s of wall-clock time"
           f"{f', {failures} failed' if failures else ''}", flush=True)
     return failures
