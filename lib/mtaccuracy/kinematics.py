@@ -126,3 +126,17 @@ def pose_difference(actual: np.ndarray, ideal: np.ndarray) -> np.ndarray:
     p = actual[..., :3, 3] - ideal[..., :3, 3]
     r = actual[..., :3, :3] @ np.swapaxes(ideal[..., :3, :3], -1, -2)
     return np.concatenate([p, vee(r)], axis=-1)
+
+
+def matvec3(r: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Batched matrix-vector product (n, 3, 3) x (n, 3), summed in a fixed order: no BLAS
+    call, so the rounding is the same on every machine (and for 3x3 blocks it is faster than
+    a BLAS call per matrix)."""
+    return r[:, :, 0] * v[:, None, 0] + r[:, :, 1] * v[:, None, 1] + r[:, :, 2] * v[:, None, 2]
+
+
+def matmul3(r: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Batched matrix product (n, 3, 3) x (n, 3, 3), summed in a fixed order (see
+    :func:`matvec3`)."""
+    return (r[:, :, 0, None] * s[:, None, 0, :] + r[:, :, 1, None] * s[:, None, 1, :]
+            + r[:, :, 2, None] * s[:, None, 2, :])

@@ -61,7 +61,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .. import errors as _errors
-from ..kinematics import hat, homogeneous, screw_exp, translation, vee
+from ..kinematics import hat, homogeneous, matmul3, matvec3, screw_exp, translation, vee
 from ._base import Machine
 
 AXES = ("x", "y", "z")
@@ -143,20 +143,6 @@ def _error_motion(eps: np.ndarray, delta: np.ndarray, exact: bool
     rot += (1.0 - b * t2)[:, None, None] * np.eye(3)
     exd = np.cross(eps, delta)
     return rot, delta + b[:, None] * exd + c[:, None] * np.cross(eps, exd)
-
-
-def matvec3(r: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Batched matrix-vector product (n, 3, 3) x (n, 3), summed in a fixed order: no BLAS
-    call, so the rounding is the same on every machine (and for 3x3 blocks it is faster than
-    a BLAS call per matrix)."""
-    return r[:, :, 0] * v[:, None, 0] + r[:, :, 1] * v[:, None, 1] + r[:, :, 2] * v[:, None, 2]
-
-
-def matmul3(r: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Batched matrix product (n, 3, 3) x (n, 3, 3), summed in a fixed order (see
-    :func:`matvec3`)."""
-    return (r[:, :, 0, None] * s[:, None, 0, :] + r[:, :, 1, None] * s[:, None, 1, :]
-            + r[:, :, 2, None] * s[:, None, 2, :])
 
 
 def _transpose(r: np.ndarray) -> np.ndarray:

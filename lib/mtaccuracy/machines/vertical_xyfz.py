@@ -27,9 +27,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from .. import errors as _errors
-from ..kinematics import hat, homogeneous, rotation_exp, translation, vee
+from ..kinematics import hat, homogeneous, matmul3, matvec3, rotation_exp, translation, vee
 from ._base import Machine
-from .horizontal_3axis import matmul3, matvec3
 
 AXES = ("x", "y", "z")
 TOOL_OFFSETS = ("D1", "D2", "D3")
