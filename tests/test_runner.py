@@ -2,6 +2,7 @@
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -183,12 +184,23 @@ def test_output_dir_outside_the_repository(tmp_path, monkeypatch):
         runner.validate(path, {"output_dir": str(foreign / "notes.txt")})
 
 
-def test_cli_refuses_etc_and_another_notebooks_folder(capsys, monkeypatch):
+def test_cli_refuses_a_foreign_folder_and_another_notebooks_folder(capsys, monkeypatch,
+                                                                    tmp_path):
+    """A relative path out of the repository into a folder of the user's (as ``../../etc``
+    would be): refused, like another notebook's folder.  ``--check``: a test that cannot run
+    a notebook into the working tree even when the check is broken."""
     monkeypatch.delenv(paths.OUTPUT_BASE_ENV)  # relative to the repository, as make runs it
-    assert runner.main(["03", "output_dir=../../etc"]) == 2
+    mine = tmp_path / "etc"
+    mine.mkdir()
+    (mine / "passwd").write_text("the user's\n")
+    rel = os.path.relpath(mine, paths.ROOT)
+    assert rel.startswith("..")
+    assert runner.main(["03", f"output_dir={rel}", "--check"]) == 2
     assert "was not written by the compendium" in capsys.readouterr().err
-    assert runner.main(["03", "output_dir=figures/01_zheng2024_pce_sobol_41_errors"]) == 2
+    assert runner.main(["03", "output_dir=figures/01_zheng2024_pce_sobol_41_errors",
+                        "--check"]) == 2
     assert "another notebook's folder" in capsys.readouterr().err
+    assert (mine / "passwd").read_text() == "the user's\n"
 
 
 def test_params_from_the_environment_are_never_evaluated_by_a_shell(tmp_path):
@@ -238,6 +250,23 @@ def test_run_is_all_or_nothing(tmp_path, monkeypatch, caplog):
     nb = json.loads(path.read_text())
     assert not any("injected-parameters" in c["metadata"].get("tags", []) for c in nb["cells"])
     assert "n is 3" in "".join(nb["cells"][-1]["outputs"][0]["text"])
+
+
+def test_a_run_elsewhere_leaves_notebooks_and_figures_untouched(tmp_path, monkeypatch):
+    path = _tiny(tmp_path, monkeypatch, WRITE + "print('n is', n)")
+    runner.run(path, {}, progress=False)
+    committed = path.read_bytes()
+    runs = (tmp_path / "figures" / runner.RUNS).read_bytes()
+    away = tmp_path.parent / f"{tmp_path.name}-elsewhere"
+    runner.run(path, {"n": 7, "output_dir": str(away)}, progress=False)
+    assert path.read_bytes() == committed
+    assert (tmp_path / "figures" / runner.RUNS).read_bytes() == runs
+    assert (tmp_path / "figures" / "01_tiny" / "table.csv").read_text() == "n\n3\n"
+    assert (away / "table.csv").read_text() == "n\n7\n"
+    assert "n is 7" in (away / "01_tiny.ipynb").read_text()
+    assert runner.written_notebook(path, {"output_dir": str(away)}) == away / "01_tiny.ipynb"
+    assert runner.written_notebook(path, {}) == path
+    shutil.rmtree(away)
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])

@@ -24,9 +24,11 @@ All or nothing: a run executes the notebook into ``notebooks/.running/`` and wri
 figures and tables into a staging folder; only when every cell succeeded is the notebook
 replaced in place and the staging folder moved into the output folder, so that a notebook and
 its ``figures/<stem>/`` (``reproduction.csv``, figures, ``provenance.json``) always come from
-one run.  A failed or interrupted run (Ctrl-C, SIGTERM) leaves the committed notebook and
-figures byte-identical and is kept in ``notebooks/.failed/`` (the executed notebook and a
-``<stem>.figures/`` folder with what it had written); it ends with one line saying so.
+one run.  A run with ``output_dir`` elsewhere leaves ``notebooks/`` and ``figures/`` untouched:
+the executed notebook is stored with its outputs, as ``<output_dir>/<stem>.ipynb``.  A failed
+or interrupted run (Ctrl-C, SIGTERM) leaves the committed notebook and figures byte-identical
+and is kept in ``notebooks/.failed/`` (the executed notebook and a ``<stem>.figures/`` folder
+with what it had written); it ends with one line saying so.
 
 Cells tagged ``measured`` print measurements of the machine (wall-clock times): their outputs
 are not stored (a one-line note replaces them), so re-running an unchanged notebook leaves it
@@ -501,10 +503,25 @@ def run(notebook: str | Path, overrides: dict | None = None, progress: bool = Tr
             os.environ[paths.STAGING_ENV] = old_env
         for sig, h in old_handlers.items():
             signal.signal(sig, h)
-    _record_run(path.stem, seconds)
+    if _in_place(path, target):
+        _record_run(path.stem, seconds)
     if export:
         _export(path, target)
     return seconds
+
+
+def _in_place(path: Path, target: Path | None) -> bool:
+    """Whether a run replaces the committed notebook: it does when it writes into the
+    notebook's own ``figures/<stem>/`` (or declares no output folder); a run into another
+    folder stores the executed notebook there, as ``<output_dir>/<stem>.ipynb``."""
+    return target is None or target == paths.FIGURES / path.stem
+
+
+def written_notebook(notebook: str | Path, params: dict) -> Path:
+    """Where a run with ``params`` stores the executed notebook."""
+    path = notebook_path(notebook)
+    target = output_target(path, params)
+    return path if _in_place(path, target) else target / path.name
 
 
 def output_target(notebook: str | Path, params: dict) -> Path | None:
@@ -612,11 +629,16 @@ def _execute_and_replace(path, params, out, staging, target, failed, progress) -
     seconds = time.perf_counter() - t0
     nb = _normalise(json.loads(out.read_text(encoding="utf-8")), _rel(path))
     text = json.dumps(nb, indent=1, ensure_ascii=False) + "\n"
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    if staging is not None and staging.exists():  # a notebook that wrote nothing leaves it
+    if _in_place(path, target):
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        tmp.write_text(text, encoding="utf-8")
+        if staging is not None and staging.exists():  # a notebook that wrote nothing leaves it
+            _replace_folder(staging, target)
+        os.replace(tmp, path)
+    else:  # elsewhere: the executed notebook goes with its outputs, notebooks/ is untouched
+        staging.mkdir(parents=True, exist_ok=True)
+        (staging / path.name).write_text(text, encoding="utf-8")
         _replace_folder(staging, target)
-    os.replace(tmp, path)
     out.unlink()
     log.unlink(missing_ok=True)
     return seconds
@@ -783,7 +805,8 @@ def main(argv=None) -> int:
                 print(f"{_rel(t)} ({shown})", flush=True)
             s = run(t, overrides, progress=not args.quiet, share=args.share,
                     export=not args.quiet)
-            print(f"{t.stem} done in {s:.1f} s -> {_rel(notebook_path(t))}", flush=True)
+            print(f"{t.stem} done in {s:.1f} s -> {_rel(written_notebook(t, overrides))}",
+                  flush=True)
     except Interrupted as exc:
         if str(exc):
             print(f"interrupted: {exc}", file=sys.stderr, flush=True)
