@@ -302,3 +302,39 @@ def test_exponential_coefficients_series_and_closed_form_agree():
         assert got[0] == at0
         assert np.allclose(got[3:], want[3:], rtol=1e-9, atol=0)  # closed form is exact there
         assert np.allclose(got[1:3], [at0, want[2]], rtol=1e-6)
+
+
+def test_tool_length_sweep_is_batched_and_gives_the_last_tool_axis_an_arm():
+    """Batched over tool lengths: bitwise equal to one case at a time; the variance is the
+    pooled one (S_T = share of it); a tool of length L along -z gives the roll ex(y) of the
+    Y headstock the coefficient +L in Ey at every pose (eps x s = e_x x (0, 0, -L)), while
+    ez(y) (about the spindle axis) still cannot move the tip."""
+    b = np.vstack([-SCALE, SCALE])
+    box = dict(x=(0, 700), y=(0, 600), z=(0, 500))
+    lengths = np.array([0.0, 50.0, 200.0])
+    tools = h3.tool_length_offsets(lengths, base=(0.0, 0.0, 0.0))
+    assert np.array_equal(tools["tool_z"], -lengths) and np.all(tools["tool_x"] == 0)
+    s1, st, v = h3.linear_sobol_indices_batch(M, b, dict(tools), box)
+    assert s1.shape == st.shape == (3, 21, 3) and v.shape == (3, 3)
+    for i in range(3):
+        one_s1, one_st = h3.linear_sobol_indices(M, b, {k: t[i] for k, t in tools.items()}, box)
+        assert np.array_equal(one_s1, s1[i]) and np.array_equal(one_st, st[i])
+    j_ex, j_ez = NAMES.index("ex(y)"), NAMES.index("ez(y)")
+    var_angle = SCALE[j_ex] ** 2 / 3
+    assert np.allclose(st[:, j_ex, 1], lengths**2 * var_angle / v[:, 1], rtol=1e-12)
+    assert st[0, j_ex, 1] == 0 and st[2, j_ex, 1] > 0.1
+    assert np.all(st[:, j_ez] == 0)
+    # the variance is that of the first-order model with the pose uniform in the box
+    rng = np.random.default_rng(1)
+    n = 200_000
+    p = {k: rng.uniform(lo, hi, n) for k, (lo, hi) in box.items()}
+    c = M.first_order_jacobian(dict(p, tool_x=0.0, tool_y=0.0, tool_z=-200.0))[:, :3]
+    e = rng.uniform(-1, 1, (n, 21)) * SCALE
+    y = np.einsum("nqj,nj->nq", c, e)
+    assert np.allclose(y.var(0), v[2], rtol=0.02)
+    with pytest.raises(ValueError, match=">= 0"):
+        h3.tool_length_offsets([-5.0])
+    with pytest.raises(ValueError, match="different lengths"):
+        h3.linear_sobol_indices_batch(M, b, dict(tools, tool_x=np.zeros(2)), box)
+    with pytest.raises(ValueError, match="one pose"):
+        h3.linear_sobol_indices(M, b, dict(tools), box)

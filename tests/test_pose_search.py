@@ -10,9 +10,12 @@ from mtaccuracy.machines import build
 from mtaccuracy.machines.ac_double_turntable import (
     POSE_SYMMETRIES,
     canonical_pose,
+    fit_pose_average_to_indices,
     fit_pose_to_indices,
+    index_invariants,
     pose_orbit,
     rank_poses,
+    ratio_interval,
 )
 
 M = build("ac_double_turntable")
@@ -157,3 +160,99 @@ def test_fit_recovers_the_canonical_image_of_a_known_pose():
         fit_pose_to_indices(M, SD, target, rows, cols, [[0.0, 0.0]], free=("A", "C"))
     with pytest.raises(ValueError, match="starts must have 5 columns"):
         fit_pose_to_indices(M, SD, target, rows, cols, [[0.0, 0.0]])
+
+
+# --- necessary conditions: ratios the model fixes at every pose ------------------------------
+
+COMP = ["Px", "Py", "Pz", "Vx", "Vy", "Vz"]
+NAMES = M.error_names
+VX, VY = COMP.index("Vx"), COMP.index("Vy")
+Y_ROT = ["e_yx", "e_yy", "e_yz", "S_xz"]        # rotations about y of the tool chain
+Z_ROT = ["e_za", "e_zc", "g_AM"]                # rotations about z of the A and C frames
+
+
+def random_poses(rng, n, tool=False):
+    p = dict(x=rng.uniform(-400, 400, n), y=rng.uniform(-425, 425, n),
+             z=rng.uniform(-275, 275, n), A=rng.uniform(-2.27, 2.27, n),
+             C=rng.uniform(0, 2 * np.pi, n))
+    if tool:
+        p["L"] = rng.uniform(0, 300, n)
+    return p
+
+
+def entries(pairs):
+    return (np.array([COMP.index(c) for c, _ in pairs]),
+            np.array([NAMES.index(s) for _, s in pairs]))
+
+
+def test_vx_vy_ratio_is_the_same_at_every_pose_tool_length_and_variance():
+    # S(e_yx)/S(e_za) in Vx equals that in Vy (both are 1/sin^2 A times the variance
+    # ratio): whatever the pose, the tool length and the variances of the errors
+    rng = np.random.default_rng(3)
+    for tool in (False, True):
+        sd = SD * rng.uniform(0.2, 5.0, SD.size)
+        s = S.linear_indices(M.linear_jacobian(random_poses(rng, 400, tool)), sd)
+        j, k = NAMES.index("e_yx"), NAMES.index("e_za")
+        q = (s[:, VX, j] / s[:, VX, k]) / (s[:, VY, j] / s[:, VY, k])
+        assert np.abs(q - 1).max() < 1e-9
+        # while each ratio alone moves with the pose by orders of magnitude
+        assert (s[:, VX, j] / s[:, VX, k]).max() > 100 * (s[:, VX, j] / s[:, VX, k]).min()
+    # the mean over two poses with different A breaks it: the test can tell
+    two = dict(x=np.array([100.0, 300.0]), y=np.array([200.0, 350.0]),
+               z=np.array([20.0, 50.0]), A=np.deg2rad([40.0, 80.0]), C=np.deg2rad([60.0, 120.0]))
+    s = S.linear_indices(M.linear_jacobian(two), SD).mean(axis=0)
+    q = (s[VX, j] / s[VX, k]) / (s[VY, j] / s[VY, k])
+    assert abs(q - 1) > 0.02
+
+
+def test_index_invariants_finds_the_structural_groups_and_cross_ratios():
+    pairs = [("Vx", s) for s in Y_ROT + Z_ROT] + [("Vy", s) for s in Y_ROT + Z_ROT] \
+        + [("Pz", "d_yx"), ("Pz", "d_za"), ("Px", "d_xc")]
+    rows, cols = entries(pairs)
+    groups, cross = index_invariants(M, SD, rows, cols, random_poses(np.random.default_rng(4), 50))
+    g = groups.group.to_numpy()
+    assert len(set(g[:4])) == 1 and len(set(g[4:7])) == 1 and g[0] != g[4]   # Vx groups
+    assert len(set(g[7:11])) == 1 and len(set(g[11:14])) == 1                # Vy groups
+    assert len(set(g[14:])) == 3                                             # alone
+    assert np.allclose(groups.factor, 1.0)  # equal variances within each kind
+    # the cross ratio: (y-rotations / z-rotations) in Vx over the same in Vy, fixed at 1;
+    # Pz (d_yx / d_za = sin^2 A) pairs with Vx and Vy too (equal variances within kinds)
+    found = {(int(r.num_k), int(r.den_k), int(r.num_l), int(r.den_l)): r.value
+             for r in cross.itertuples()}
+    assert found[(g[0], g[4], g[7], g[11])] == pytest.approx(1.0, abs=1e-9)
+    assert found[(g[0], g[4], g[15], g[14])] == pytest.approx(1.0, abs=1e-9)
+    assert len(found) == 3
+    # with unequal variances the Vx/Vy quotient stays 1, the Pz one moves
+    sd = SD.copy()
+    sd[NAMES.index("d_yx")] *= 2.0
+    _, cross2 = index_invariants(M, sd, rows, cols, random_poses(np.random.default_rng(4), 50))
+    found2 = {(int(r.num_k), int(r.den_k), int(r.num_l), int(r.den_l)): r.value
+              for r in cross2.itertuples()}
+    assert found2[(g[0], g[4], g[7], g[11])] == pytest.approx(1.0, abs=1e-9)
+    assert found2[(g[0], g[4], g[15], g[14])] == pytest.approx(4.0, rel=1e-9)
+    with pytest.raises(ValueError, match="at least 3 poses"):
+        index_invariants(M, SD, rows, cols, random_poses(np.random.default_rng(4), 2))
+
+
+def test_ratio_interval_propagates_the_printed_precision():
+    lo, hi = ratio_interval(0.08755, 0.08765, 0.07205, 0.07215)
+    assert lo == pytest.approx(0.08755 / 0.07215) and hi == pytest.approx(0.08765 / 0.07205)
+    with pytest.raises(ValueError, match="positive"):
+        ratio_interval(0.1, 0.2, 0.0, 0.1)
+
+
+def test_fit_pose_average_recovers_the_mean_of_two_known_poses():
+    truth = dict(x=np.array([120.0, 300.0]), y=np.array([200.0, 50.0]),
+                 z=np.array([30.0, 150.0]), A=np.deg2rad([35.0, 75.0]),
+                 C=np.deg2rad([50.0, 110.0]))
+    mean = S.linear_indices(M.linear_jacobian(truth), SD).mean(axis=0)
+    rows, cols = np.nonzero(mean > 0.02)
+    start = np.stack([np.c_[truth["x"], truth["y"], truth["z"], truth["A"], truth["C"]]])
+    start = start + [[10.0, -10.0, 5.0, 0.03, -0.03]]
+    fits = fit_pose_average_to_indices(M, SD, mean[rows, cols], rows, cols, start)
+    assert len(fits) == 2 and fits.misfit.max() < 1e-8
+    assert list(fits.pose) == [0, 1] and fits.A.iloc[0] >= fits.A.iloc[1]
+    # the poses up to the symmetries: sin^2 A and sin^2 C of each
+    assert np.sort(np.sin(fits.A) ** 2) == pytest.approx(np.sort(np.sin(truth["A"]) ** 2), abs=1e-6)
+    with pytest.raises(ValueError, match="starts must be"):
+        fit_pose_average_to_indices(M, SD, mean[rows, cols], rows, cols, np.zeros((2, 5)))

@@ -81,7 +81,8 @@ def test_report_marks_a_broken_figure_and_fails(run_record, tmp_path, capsys):
     folder = figs / "02_rong_sobol_21_errors"
     folder.mkdir(parents=True)
     reproduction.write_card([dict(item="Fig. 2", quantity="q", published="1", reproduced="1",
-                                  unit="", tolerance="0", verdict="reproduced", note="")],
+                                  unit="", tolerance="0", verdict="reproduced", basis="independent",
+                                  note="")],
                             folder / "reproduction.csv")
     _fig(folder, "fig02_good")
     _fig(folder, "fig03_truncated")
@@ -119,6 +120,54 @@ def test_report_lists_every_row_and_figure(committed_report):
 @pytest.mark.parametrize("name, label", [("fig05_position_total_sobol", "Fig. 5"),
                                          ("fig08_09_algorithms_compared", "Figs. 8-9"),
                                          ("fig3_spearman_all", "Fig. 3"),
+                                         ("table2_key_errors", "Table 2"),
                                          ("eq06_matrix_eigenvalues", "eq06_matrix_eigenvalues")])
 def test_figure_labels(name, label):
     assert report._figure_label(name) == label
+
+
+@pytest.mark.parametrize("label, title, shown", [
+    ("Fig. 5", "Fig. 5: total Sobol indices", "total Sobol indices"),
+    ("Figs. 8-9", "Figs. 8-9 - GA against DE", "GA against DE"),
+    ("Fig. 3", "Guo 2016 Fig. 3 regenerated", "Guo 2016 Fig. 3 regenerated"),
+])
+def test_a_caption_does_not_repeat_its_label(label, title, shown):
+    assert report._caption_title(label, title) == shown
+
+
+@pytest.mark.parametrize("item, refs", [
+    ("Section 1.3, Figs. 6-7", {("fig", 6), ("fig", 7)}),
+    ("Table 2 PCE", {("table", 2)}),
+    ("Abstract / Fig. 7", {("fig", 7)}),
+    ("Figs. 8 and 9", {("fig", 8), ("fig", 9)}),
+    ("Eq. 13", set()),
+])
+def test_scorecard_items_name_their_figures_and_tables(item, refs):
+    assert report._refs(item) == refs
+
+
+def _luminance(hex_colour):
+    c = [int(hex_colour[i:i + 2], 16) / 255 for i in (1, 3, 5)]
+    c = [x / 12.92 if x <= 0.03928 else ((x + 0.055) / 1.055) ** 2.4 for x in c]
+    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+
+
+def test_verdict_badges_are_readable():
+    """White badge text on each colour: WCAG AA contrast (4.5:1) at least."""
+    for verdict, colour in report.COLOURS.items():
+        assert (1.05 / (_luminance(colour) + 0.05)) >= 4.5, verdict
+
+
+def test_report_shows_verdict_by_basis_and_collapses_long_scorecards(tmp_path):
+    figs = tmp_path / "figures"
+    card = reproduction.Card()
+    pose = card.fitted("pose", to=["Table 2"], how="least squares")
+    for i in range(report.COLLAPSE_ROWS + 1):
+        card.number("Table 2", f"q{i}", "1.0", 1.0, uses=[pose] if i % 2 else ())
+    card.write(figs / "03_guo2016_spearman_21_errors" / "reproduction.csv")
+    text = report.build(figs, notebooks=tmp_path, export=False).read_text()
+    assert text.count('data-basis="fitted"') == report.COLLAPSE_ROWS // 2 + 1
+    assert '<details class="scorecard">' in text  # collapsed: more rows than COLLAPSE_ROWS
+    assert "8 reproduced independently" in text and 'class="crosstab"' in text
+    assert "8 of the 16 published numbers and claims scored were reproduced independently; " \
+        "16 agree in all (the others: 8 fitted)" in text

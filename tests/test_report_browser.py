@@ -90,7 +90,8 @@ _IMAGES_JS = """async (ms) => {
 }"""
 _PAGE_JS = """() => ({
   rows: Array.from(document.querySelectorAll('tr.score-row'),
-                   r => [r.dataset.notebook ?? null, r.dataset.verdict ?? null]),
+                   r => [r.dataset.notebook ?? null,
+                         `${r.dataset.verdict ?? ''}/${r.dataset.basis ?? ''}`]),
   sections: Array.from(document.querySelectorAll('section.paper'), s => s.id),
   summaries: document.querySelectorAll('table.summary').length,
   links: Array.from(document.querySelectorAll('a[href]'),
@@ -120,7 +121,8 @@ def _published_verdicts(figures: Path, stem: str) -> collections.Counter | None:
     if not card.exists():
         return None
     df = pd.read_csv(card, dtype=str, keep_default_na=False)
-    return collections.Counter(df["verdict"])
+    basis = df["basis"] if "basis" in df else [""] * len(df)
+    return collections.Counter(f"{v}/{b}" for v, b in zip(df["verdict"], basis, strict=True))
 
 
 def _watch(page, problems: list[str]):
@@ -216,7 +218,7 @@ def check_report(browser, figures: Path, stems: list[str], screenshot: Path | No
             problems.append(f"{stem}: {got.total()} score rows in the report, "
                             f"{expected.total()} rows in reproduction.csv")
         elif got != expected:
-            problems.append(f"{stem}: score-row verdicts {dict(got)} differ from "
+            problems.append(f"{stem}: score-row verdicts/bases {dict(got)} differ from "
                             f"reproduction.csv {dict(expected)}")
         if found["sections"].count(stem) != 1:
             problems.append(f"{stem}: expected one <section class=\"paper\" id=\"{stem}\">, "
@@ -311,7 +313,7 @@ def test_checker_passes_a_correct_fixture(browser, tmp_path):
     ("broken image", "image did not load: '01_alpha/missing.png'"),
     ("figure not shown", "figure not shown in the report: 02_beta/fig02_curve.png"),
     ("missing row", "02_beta: 2 score rows in the report, 3 rows in reproduction.csv"),
-    ("wrong verdict", "02_beta: score-row verdicts"),
+    ("wrong verdict", "02_beta: score-row verdicts/bases"),
     ("missing section", 'expected one <section class="paper" id="02_beta">'),
     ("dead link", "dead link (HTTP 404): 01_alpha/table9.csv"),
     ("external link", "external link: https://example.org/paper"),

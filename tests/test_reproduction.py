@@ -6,19 +6,14 @@ import pytest
 from mtaccuracy import reproduction as R
 
 ROW = dict(item="Fig. 1", quantity="q", published="1.0", reproduced="1.1", unit="",
-           tolerance="0.2", verdict="reproduced", note="")
+           tolerance="0.2", verdict="reproduced", basis="independent", note="")
 
 
-def test_verdict_rules():
-    assert R.verdict(1.0, 1.1, 0.2, False) == "reproduced"
-    assert R.verdict(1.0, 1.5, 0.2, True) == "close"
-    assert R.verdict(1.0, -1.0, 0.2, False) == "differs"
-
-@pytest.mark.parametrize("pub, ours", [(float("nan"), 1.0), (1.0, float("nan")),
-                                       (1.0, float("inf")), (1.0, "nan")])
+@pytest.mark.parametrize("pub, ours", [("nan", 1.0), ("1.0", float("nan")),
+                                       ("1.0", float("inf")), ("1.0", "nan")])
 def test_a_nan_or_infinite_value_is_never_a_verdict(pub, ours):
     with pytest.raises(R.NonFiniteResult, match="never a verdict|not a number"):
-        R.verdict(pub, ours, 0.2, True)
+        R.Card().number("T", "q", pub, ours)
 
 
 @pytest.mark.parametrize("value, verdict", [(float("nan"), "not reproducible"),
@@ -26,13 +21,16 @@ def test_a_nan_or_infinite_value_is_never_a_verdict(pub, ours):
                                             ("-inf", "close"), ("", "reproduced"),
                                             (None, "differs")])
 def test_write_card_refuses_non_finite_results(tmp_path, value, verdict):
+    basis = "unchecked" if verdict == "not reproducible" else "independent"
     with pytest.raises(R.NonFiniteResult):
-        R.write_card([dict(ROW, reproduced=value, verdict=verdict)], tmp_path / "r.csv")
+        R.write_card([dict(ROW, reproduced=value, verdict=verdict, basis=basis)],
+                     tmp_path / "r.csv")
     assert not (tmp_path / "r.csv").exists()
 
 
 def test_an_empty_result_is_allowed_only_when_not_reproducible(tmp_path):
-    R.write_card([dict(ROW, reproduced="", verdict="not reproducible")], tmp_path / "r.csv")
+    R.write_card([dict(ROW, reproduced="", verdict="not reproducible", basis="unchecked")],
+                 tmp_path / "r.csv")
 
 
 def test_measured_rows_go_to_their_own_card(tmp_path):
@@ -85,6 +83,10 @@ def test_compare_tables_allows_the_printed_digit_and_the_declared_tolerance(tmp_
 def test_write_card_checks_columns_and_verdicts(tmp_path):
     with pytest.raises(ValueError, match="unknown verdict"):
         R.write_card([dict(ROW, verdict="ok")], tmp_path / "r.csv")
+    with pytest.raises(ValueError, match="unknown basis"):
+        R.write_card([dict(ROW, basis="guessed")], tmp_path / "r.csv")
+    with pytest.raises(ValueError, match="'not reproducible' and 'unchecked' go together"):
+        R.write_card([dict(ROW, basis="unchecked")], tmp_path / "r.csv")
     with pytest.raises(ValueError, match="lack column"):
         R.write_card([{k: v for k, v in ROW.items() if k != "note"}], tmp_path / "r.csv")
     R.write_card([ROW], tmp_path / "r.csv")
@@ -118,10 +120,114 @@ def test_gather_fills_the_marked_readme_section(tmp_path):
     R.gather(figs, readme)
     text = readme.read_text()
     assert "old" not in text and text.endswith("tail\n")
-    assert "| Guo et al. 2016 | `03_guo2016_spearman_21_errors` | 1 | 0 | 1 | 0 | 2 |" in text
-    assert "p\\|q" in (figs / "REPRODUCTION.md").read_text()
+    assert "| Guo et al. 2016 | `03_guo2016_spearman_21_errors` | 1 | 0 | 1 | 0 | 2 | 1 |" in text
+    assert "1 of the 2 published numbers and claims scored were reproduced independently" in text
+    assert "| `independent` | 1 | 0 | 1 | 0 | 2 |" in text and "- `fitted`: an input" in text
+    md = (figs / "REPRODUCTION.md").read_text()
+    assert "p\\|q" in md and "| note |" in md and "| note |" not in text
     R.gather(figs, readme)
     assert readme.read_text() == text  # idempotent
     readme.write_text("# no markers\n")
     with pytest.raises(ValueError, match="lacks the scorecard markers"):
         R.gather(figs, readme)
+
+
+# --- the Card -------------------------------------------------------------------------------
+
+def test_tolerance_policy_takes_the_largest_justified_source():
+    assert R.printed_half_unit("0.0776") == pytest.approx(5e-5)
+    assert R.printed_half_unit("12") == 0.5 and R.printed_half_unit("1.2e-05") == \
+        pytest.approx(5e-7)
+    assert R.tolerance_for("0.0776") == (pytest.approx(5e-5), "printed")
+    assert R.tolerance_for("0.0776", paper_rel=0.05) == (pytest.approx(0.00388), "paper")
+    assert R.tolerance_for("0.0776", paper_rel=0.05, sampling_se=0.003) == \
+        (pytest.approx(0.006), "sampling")
+    with pytest.raises(R.NonFiniteResult):
+        R.tolerance_for("0.1", sampling_se=float("nan"))
+
+
+def test_card_number_verdicts_and_conclusions():
+    card = R.Card()
+    assert card.number("T1", "a", "0.100", 0.1004)["verdict"] == "reproduced"
+    assert card.number("T1", "b", "0.100", 0.1006)["verdict"] == "differs"
+    row = card.number("T1", "c", "0.10", 0.2, conclusion="largest of the group", holds=True)
+    assert row["verdict"] == "close" and "same conclusion: largest of the group" in row["note"]
+    assert card.number("T1", "d", "0.10", 0.104, paper_rel=0.05)["verdict"] == "reproduced"
+    assert card.number("T1", "e", "0.10", 0.104, paper_rel=0.05)["tolerance"] == "0.005 (paper)"
+    with pytest.raises(ValueError, match="needs the conclusion in words"):
+        card.number("T1", "f", "0.10", 0.2, holds=True)
+    with pytest.raises(ValueError, match="added twice"):
+        card.number("T1", "a", "0.100", 0.1)
+    with pytest.raises(R.NonFiniteResult):
+        card.number("T1", "g", "0.100", float("nan"))
+    assert card.count("T2", "n", "12", 12)["verdict"] == "reproduced"
+    assert card.count("T2", "m", "12", 11)["verdict"] == "differs"
+
+
+def test_card_sets_count_extra_elements_as_well_as_missing_ones():
+    card = R.Card()
+    assert card.set("K", "a", ["x", "y"], ["y", "x"])["verdict"] == "reproduced"
+    row = card.set("K", "b", list("abcde"), list("abcdef"))
+    assert row["verdict"] == "close" and "extra: f" in row["note"]
+    assert card.set("K", "c", list("abc"), list("abcdef"))["verdict"] == "differs"
+    assert card.set("K", "d", list("abc"), list("abd"))["verdict"] == "differs"  # Jaccard 0.5
+    row = card.set("K", "e", list("abc"), list("acb"), ordered=True)
+    assert row["verdict"] == "close" and "other order" in row["note"]
+
+
+def test_the_basis_follows_the_declared_inputs():
+    card = R.Card()
+    pose = card.fitted("pose", to=["Table 2"], how="least squares")
+    data = card.constructed("thermal data", targets=["Table 7", "Eq. 8: * at 185 mm"],
+                            how="built from Tables 1 and 5")
+    sim = card.simulated("probe signals", how="set profile plus noise")
+    table = card.printed("Table 2 values")
+    assert card.number("Table 3", "x", "1", 1.0)["basis"] == "independent"
+    assert card.number("Table 3", "y", "1", 1.0, uses=[pose])["basis"] == "fitted"
+    assert card.number("Table 7", "RMSE", "1", 1.0, uses=[data])["basis"] == "constructed"
+    assert card.number("Eq. 8", "slope at 185 mm", "1", 1.0, uses=[data])["basis"] == \
+        "constructed"
+    assert card.number("Eq. 8", "slope at 300 mm", "1", 1.0, uses=[data])["basis"] == \
+        "simulated"
+    assert card.number("Fig. 9", "roundness", "1", 1.0, uses=[sim])["basis"] == "simulated"
+    assert card.number("Table 2", "share", "1", 1.0, uses=[table])["basis"] == "internal"
+    assert card.number("Table 2", "mixed", "1", 1.0, uses=[table, pose])["basis"] == "fitted"
+    row = card.claim("Fig. 4", "z", "printed", why="the paper does not give the data")
+    assert (row["verdict"], row["basis"]) == ("not reproducible", "unchecked")
+    assert card.claim("Fig. 5", "z", "printed", why="no data", ours=0.25)["reproduced"] == 0.25
+    assert "pose fitted to Table 2" in card.rows[1]["note"]
+    other = R.Card().fitted("pose", to=["Table 9"], how="x")
+    with pytest.raises(ValueError, match="not an input of this card"):
+        card.number("Table 3", "z", "1", 1.0, uses=[other])
+    with pytest.raises(ValueError, match="name the published items"):
+        card.fitted("range", to=[], how="x")
+
+
+def test_card_tally_and_write(tmp_path):
+    card = R.Card()
+    card.number("T", "a", "1.0", 1.0)
+    card.number("T", "time", "3", 9.0, measured=True)
+    card.claim("F", "b", "x", why="no data")
+    t = card.tally()
+    assert t.loc["independent", "reproduced"] == 1 and t.loc["total", "total"] == 2
+    card.write(tmp_path / "reproduction.csv")
+    df = pd.read_csv(tmp_path / "reproduction.csv", keep_default_na=False)
+    assert list(df.columns) == R.COLUMNS and list(df.basis) == ["independent", "unchecked"]
+    assert (tmp_path / R.MEASURED_CARD).exists()
+
+
+def test_the_tolerance_column_is_compared_by_its_number(tmp_path):
+    card = R.Card()
+    card.number("T", "a", "1.00", 1.04, sampling_se=0.0251)
+    card.write(tmp_path / "new.csv")
+    assert pd.read_csv(tmp_path / "new.csv")["tolerance"][0] == "0.05 (sampling)"
+    tol = json.loads((tmp_path / "provenance.json").read_text())["files"]["new.csv"]["tolerance"]
+    other = (tmp_path / "new.csv").read_text()
+    (tmp_path / "old.csv").write_text(other.replace("0.05 (sampling)", "0.049 (sampling)"))
+    assert R.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv", tol) == []
+    (tmp_path / "old.csv").write_text(other.replace("0.05 (sampling)", "0.08 (sampling)"))
+    assert "column 'tolerance'" in R.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv",
+                                                    tol)[0]
+    (tmp_path / "old.csv").write_text(other.replace("0.05 (sampling)", "0.05 (paper)"))
+    assert "'0.05 (sampling)' != committed '0.05 (paper)'" in \
+        R.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv", tol)[0]

@@ -86,3 +86,53 @@ def test_equal_spearman_coefficients_are_equal_to_the_bit():
     assert [s for s, _ in ranked[:2]] == ["a", "b"]
     assert S.rank_by_magnitude(-rho, ["a", "b", "c"])[0][0] == "a"
 
+
+
+def test_rank_positions_and_intervals():
+    rho = np.array([[0.1, -0.9], [-0.5, 0.2], [0.5, 0.0]])  # |rho| tie 0.5: catalogue order
+    assert S.rank_positions(rho).tolist() == [[3, 1], [1, 2], [2, 3]]
+    rep = np.stack([rho, rho[[2, 1, 0]], rho])  # (3, 3, 2)
+    lo, hi = S.rank_intervals(rep, level=0.5)
+    assert lo[:, 0].tolist() == [1, 1, 2] and hi[:, 1].tolist() == [3, 2, 3]
+    with pytest.raises(ValueError, match="at least 2 designs"):
+        S.rank_intervals(rho[None])
+    with pytest.raises(ValueError, match="level must be in"):
+        S.rank_intervals(rep, level=1.0)
+
+
+def _models(x):
+    u = (x - x.min(axis=0)) / np.ptp(x, axis=0)
+    return np.c_[u[:, 0], u @ np.arange(1.0, 7.0), np.exp(3 * u[:, 0]) * u[:, 1],
+                 np.abs(u[:, 2] - 0.5), np.sin(6 * u[:, :3]).sum(axis=1)]
+
+
+def test_sum_of_squared_spearman_is_bounded_for_independent_inputs():
+    """Bessel: the population sum is <= 1 for any model of independent inputs (= 1 for a
+    rank-linear one); a sample of n adds about d / n and spreads by about 2 / sqrt(n).  The
+    sample R^2 of the rank regression is <= 1 exactly and approaches the sum of squares."""
+    n, d = 4000, 6
+    allowance = d / n + 4 / np.sqrt(n)
+    x = S.latin_hypercube(n, np.c_[np.zeros(d), np.ones(d)].T, 5)
+    y = _models(x)
+    ss = S.sum_of_squares(S.spearman(x, y))
+    assert 1.0 <= ss[0] <= 1 + 3 * d / n  # y = x0: equality, plus the others' noise
+    assert np.all(ss <= 1 + allowance)
+    assert ss[3] < 0.05  # |x2 - 0.5|: no monotone trend, nearly nothing
+    r2 = S.rank_r_squared(x, y)
+    assert np.all(r2 <= 1 + 1e-12) and np.allclose(r2, ss, atol=allowance)
+
+
+def test_sum_of_squares_holds_for_the_vertical_machine_at_any_pose():
+    """The Guo et al. machine at 12 random poses (Abbe arms up to 500 mm): every component's
+    sum over the 21 errors stays within the sampling allowance of the bound 1."""
+    m = build("vertical_xyfz")
+    scale = np.r_[[3e-3] * 3, [4e-3] * 6, [3.2e-5] * 9, [1.9e-6] * 3]
+    n = 8000
+    x = S.latin_hypercube(n, np.c_[np.zeros(21), scale].T, 8)
+    rng = np.random.default_rng(9)
+    poses = {"x": np.zeros(12), **{k: rng.uniform(-500, 500, 12) for k in ("y", "z")},
+             **{k: rng.uniform(-200, 200, 12) for k in ("D1", "D2", "D3")}}
+    ss = S.sum_of_squares(S.spearman_over_poses(m, x, poses))  # (12, 4)
+    assert ss.shape == (12, 4)
+    assert np.all(ss <= 1 + 21 / n + 4 / np.sqrt(n))
+    assert ss[:, :3].min() > 0.8  # each component is nearly rank-linear in the errors

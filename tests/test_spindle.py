@@ -184,6 +184,41 @@ def test_lower_bound_of_h_holds_and_is_reached_at_even_k():
         S.bound_layout(7)
 
 
+def test_weights_only_bound_holds_for_every_angle_and_is_reached_in_phase():
+    rng = np.random.default_rng(12)
+    w = rng.uniform(-4, 4, (200, 3))                       # a1..a3, any signs, no Eq. 15
+    phi = rng.uniform(0, 2 * np.pi, (200, 500, 3))         # 500 random angle sets per weight set
+    ks = np.array([2, 3, 10, 20, 41, 80])
+    q2 = S.transfer(phi, np.broadcast_to(w[:, None], phi.shape), ks)
+    bound = S.weights_bound_H(w)
+    assert np.all(q2 >= bound[:, None, None] * (1 - 1e-12))
+    assert np.all(bound >= S.lower_bound_H(4) - 1e-15)
+    # reached when every a_l exp(i k phi_l) has one phase: k phi_l = 0 (a_l > 0) or pi (a_l < 0)
+    k = 20
+    phi_eq = (2 * np.pi * rng.integers(1, k, (200, 3)) + np.pi * (w < 0)) / k
+    assert np.allclose(S.transfer(phi_eq, w, [k])[:, 0], bound, rtol=1e-9)
+    # hand value: a = (1, 1, 1, 2): 7 / 25
+    assert S.weights_bound_H([1.0, 1.0, 2.0]) == pytest.approx(7 / 25)
+    # a0..a3 given explicitly gives the same; signs do not matter
+    assert S.weights_bound_H([1.0, -1.0, 1.0, 2.0]) == pytest.approx(7 / 25)
+
+
+def test_weights_only_bound_covers_every_weight_within_rounding():
+    rng = np.random.default_rng(13)
+    centre = np.array([2.430, 3.82, 1.39])
+    half = np.array([5e-4, 5e-3, 5e-3])
+    box_bound = S.weights_bound_H(centre, half)
+    inside = centre + rng.uniform(-1, 1, (20000, 3)) * half
+    assert np.all(S.weights_bound_H(inside) >= box_bound)
+    assert box_bound < S.weights_bound_H(centre) < box_bound + 0.01
+    # an interval containing 0 contributes nothing to sum a^2 (m_l = 0)
+    assert S.weights_bound_H([0.001, 1.0, 1.0], [0.01, 0, 0]) == pytest.approx(3 / 3.011 ** 2)
+    with pytest.raises(ValueError, match="last axis"):
+        S.weights_bound_H([1.0, 2.0])
+    with pytest.raises(ValueError, match=">= 0"):
+        S.weights_bound_H([1.0, 2.0, 3.0], [-1e-3, 0, 0])
+
+
 def test_optimal_a3_matches_a_scan():
     rng = np.random.default_rng(2)
     phi = rng.uniform(0, 2 * np.pi, (20, 3))
@@ -217,9 +252,12 @@ def test_adaptive_probabilities_follow_eqs_22_23():
     pc1, pm1 = S.adaptive_probabilities(f, 1.0, 200, 200)
     assert np.allclose(pc0, 0.99) and np.allclose(pm0, 0.005)
     assert np.allclose(pc1, [0.99, 0.4, 0.4]) and np.allclose(pm1, [0.005, 0.09, 0.09])
-    # printed Eq. 23: a negative probability for every fit individual after generation 0
+    # printed Eq. 23: falls from 0.005, negative for the fit individuals once alpha / alpha_max >
+    # 0.005 / 0.085, i.e. from generation 12 of 200 on
     _, pmp = S.adaptive_probabilities(f, 1.0, 50, 200, eq23="printed")
     assert pmp[0] == pytest.approx(0.005) and np.all(pmp[1:] < 0)
+    assert np.all(S.adaptive_probabilities(f, 1.0, 11, 200, eq23="printed")[1] > 0)
+    assert np.all(S.adaptive_probabilities(f, 1.0, 12, 200, eq23="printed")[1][1:] < 0)
 
 
 def test_ga_runs_are_batched_reproducible_and_use_the_probabilities():
@@ -377,3 +415,21 @@ def test_simulated_measurements_average_the_noise():
 def test_bad_inputs_are_refused_clearly(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_coincidence_ratio_separates_scatter_from_a_systematic_difference():
+    rng = np.random.default_rng(21)
+    base = np.sin(np.linspace(0, 2 * np.pi, 64, endpoint=False))
+    same = base + 0.1 * rng.standard_normal((4, 20, 64))             # one curve, four groups
+    r = S.coincidence_ratio(same)
+    assert r.shape == (4, 4) and np.all(np.diag(r) == 0) and np.allclose(r, r.T)
+    assert 0.3 < r[np.triu_indices(4, 1)].mean() < 0.7              # about 1/k = 0.5
+    shifted = same.copy()
+    shifted[2] += 0.2 * np.cos(np.linspace(0, 2 * np.pi, 64, endpoint=False))
+    r2 = S.coincidence_ratio(shifted)
+    assert r2[2, [0, 1, 3]].min() > 2 and r2[0, 1] == pytest.approx(r[0, 1])
+    # hand case: two groups of two, variances 0.5 each, means 0 and 1: 1 / sqrt((0.5 + 0.5) / 2)
+    hand = S.coincidence_ratio([[[0.5], [-0.5]], [[1.5], [0.5]]], k=1)
+    assert hand[0, 1] == pytest.approx(np.sqrt(2))
+    with pytest.raises(ValueError, match="measurements >= 2"):
+        S.coincidence_ratio(np.zeros((3, 1, 5)))

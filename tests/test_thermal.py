@@ -130,6 +130,51 @@ def test_levels_closer_than_the_tolerance_are_one_level_and_ties_stay_ties():
     assert np.array_equal(np.delete(r[2], [2, 5]), np.delete(r[5], [2, 5])) and r[2, 5] == 1.0
 
 
+def _partition(labels) -> list[list[int]]:
+    labels = np.asarray(labels)
+    return sorted(np.flatnonzero(labels == g).tolist() for g in np.unique(labels))
+
+
+def _assert_lambda_cuts_are_single_linkage(x):
+    """The max-min transitive closure of R is the single-linkage (minimax path) similarity:
+    scipy's cophenetic distances of single linkage on d = 1 - R are exactly 1 - t(R), and the
+    lambda cut at every level of t(R) is scipy's flat clustering at distance 1 - lambda."""
+    from scipy.cluster.hierarchy import cophenet, fcluster, linkage
+    from scipy.spatial.distance import squareform
+
+    r = thermal.similarity_matrix(x)
+    t, _ = thermal.transitive_closure(r)
+    z = linkage(squareform(1.0 - r, checks=False), method="single")
+    assert np.array_equal(squareform(cophenet(z)), 1.0 - t)
+    levels = thermal.cut_levels(t)
+    assert len(levels) >= 3
+    for lam in levels:
+        assert _partition(thermal.lambda_cut(t, lam)) == \
+            _partition(fcluster(z, 1.0 - lam, criterion="distance")), lam
+    return z
+
+
+def test_lambda_cuts_of_the_closure_are_scipy_single_linkage_on_random_data():
+    for n_vars in (5, 12, 30):
+        x = RNG.normal(size=(16, n_vars)).cumsum(axis=0)      # random walks: varied similarity
+        _assert_lambda_cuts_are_single_linkage(x)
+
+
+def test_lambda_cuts_are_scipy_single_linkage_on_the_notebooks_data(recon):
+    """On the inputs of the notebook's selections (training experiments 1-3: temperature rises
+    for Table 3 and b, absolute temperatures for k), and for the cut fuzzy_clusters picks."""
+    from scipy.cluster.hierarchy import fcluster
+
+    tr = recon.subset([1, 2, 3])
+    for temps in (tr.rises(), tr.temperatures):
+        x = temps.to_numpy()
+        z = _assert_lambda_cuts_are_single_linkage(x)
+        cl = thermal.fuzzy_clusters(x, temps.columns, 3)
+        assert len(cl.groups) == 3
+        assert _partition(cl.labels) == _partition(fcluster(z, 1.0 - cl.lam,
+                                                            criterion="distance"))
+
+
 def test_fuzzy_clusters_refuses_impossible_counts():
     with pytest.raises(ValueError, match="n_clusters must be in 1..2"):
         thermal.fuzzy_clusters(RNG.normal(size=(5, 2)), ["a", "b"], 3)
@@ -555,6 +600,78 @@ def test_reconstruction_is_physically_plausible(recon):
     hottest = recon.temperatures.groupby(recon.index.experiment).max().max().idxmax()
     assert hottest in ("T7", "T12")                       # the motor runs hottest
     assert np.all(np.diff(recon.index.time_min.to_numpy().reshape(4, 8)) > 0)
+
+
+def test_noise_replicates_start_with_the_reconstruction_and_redraw_only_the_noise(recon):
+    reps = thermal_data.noise_replicates(2022, 4)
+    assert len(reps) == 4 and reps.sensors == recon.sensors
+    assert np.array_equal(reps.temperatures[0], recon.temperatures.to_numpy())
+    assert np.array_equal(reps.errors[0], recon.errors)
+    spread = reps.temperatures.std(axis=0).max(axis=0)           # per sensor
+    t12 = reps.sensors.index("T12")
+    assert spread[t12] == 0.0                                    # noise-free, read at 0.1 degC
+    assert 0.0 < np.delete(spread, t12).max() < 0.05             # 0.005-0.01 degC noise
+    assert np.all(reps.errors[:, recon.index.measurement == 1, 0] == 0.0)   # laser zeroing
+    assert not np.array_equal(reps.errors[1], reps.errors[2])
+    with pytest.raises(ValueError, match="at least 2 replicates"):
+        thermal_data.noise_replicates(2022, 1)
+
+
+def test_fit_linear_is_linear_regression_batched():
+    from sklearn.linear_model import LinearRegression
+
+    x, y = RNG.normal(size=(3, 20, 4)), RNG.normal(size=(3, 20, 2))
+    c = thermal.fit_linear(x, y)
+    c1 = thermal.fit_linear(x, y[..., 0])
+    for r in range(3):
+        m = LinearRegression().fit(x[r], y[r])
+        assert np.allclose(c[r, 0], m.intercept_) and np.allclose(c[r, 1:].T, m.coef_)
+        assert np.allclose(c1[r], c[r, :, 0])
+        assert np.allclose(thermal.predict_linear(c, x)[r], m.predict(x[r]))
+    assert np.allclose(thermal.predict_linear(c1, x), thermal.predict_linear(c, x)[..., 0])
+    res = RNG.normal(size=(3, 5, 7))
+    bm = thermal.batch_metrics(res)
+    for r in range(3):
+        assert {k: v[r] for k, v in bm.items()} == pytest.approx(thermal.metrics(res[r]))
+
+
+def test_replicate_split_on_replicate_0_is_the_notebooks_split(recon):
+    """Replicate 0 is the reconstruction itself: the batched fits give evaluate_split's
+    coefficients and metrics (MLR), and the SVR with fixed hyperparameters what
+    StandardisedSVR gives on the same inputs."""
+    fixed = {"point": ["T1", "T11", "T12"], "k": ["T1", "T6", "T12"], "b": ["T2", "T7", "T11"]}
+    params = {"k": {"kernel": "linear", "C": 10.0, "epsilon": 0.1},
+              "b": {"kernel": "rbf", "C": 10.0, "gamma": 0.1, "epsilon": 0.1}}
+    reps = thermal_data.noise_replicates(2022, 3)
+    f = thermal.replicate_split(reps, [1, 2, 3], [4], fixed, params)
+    assert len(f) == 3 and f.iloc[1:].std().max() > 0
+    r = thermal.evaluate_split(recon, [1, 2, 3], [4], kinds=("mlr",), sensors=fixed)
+    for (method, target), row in r.table.set_index(["method", "target"]).iterrows():
+        for m in ("rmse", "max_residual", "mae"):
+            assert f[(method, target, m)].iloc[0] == pytest.approx(row[m], rel=1e-9)
+    eq9 = r.models["decoupled_mlr"].coefficients()
+    for _, c in eq9.iterrows():
+        assert f[("eq9", c.target, c.term)].iloc[0] == pytest.approx(c.coefficient, rel=1e-9)
+    eq8 = r.models["point_by_point_mlr"].coefficients(recon.positions_mm)
+    assert f[("eq8", "445", "T11")].iloc[0] == pytest.approx(eq8.T11.iloc[-1], rel=1e-9)
+    resid = r.measured - r.predictions["point_by_point_mlr"]
+    assert f[("point_by_point_mlr", "largest residual at", "185")].iloc[0] == \
+        pytest.approx(np.abs(resid[:, 0]).max())
+    assert f[("decoupled_mlr", "residual of the error", "lowest")].iloc[0] == \
+        pytest.approx((r.measured - r.predictions["decoupled_mlr"]).min())
+    assert f[("test", "largest |error|", "")].iloc[0] == np.abs(recon.subset(4).errors).max()
+    tr, te = recon.subset([1, 2, 3]), recon.subset(4)
+    d = thermal.Decoupled(fixed["k"], fixed["b"])
+    k, b = thermal.decouple(tr.offsets_mm(), tr.errors)
+    (xk, xb), (tk, tb) = d.inputs(tr), d.inputs(te)
+    kp = thermal.StandardisedSVR(**params["k"]).fit(xk, k).predict(tk)
+    bp = thermal.StandardisedSVR(**params["b"]).fit(xb, b).predict(tb)
+    want = thermal.metrics(te.errors - thermal.compose(kp, bp, te.offsets_mm()))
+    for m, v in want.items():
+        assert f[("decoupled_svr", "thermal positioning error", m)].iloc[0] == \
+            pytest.approx(v, rel=1e-9)
+    with pytest.raises(ValueError, match=r"no sensor\(s\) \['T99'\]"):
+        thermal.replicate_split(reps, [1, 2, 3], [4], {**fixed, "k": ["T99"]})
 
 
 def test_prepare_never_writes_a_readers_folder(good_dir):

@@ -101,8 +101,27 @@ def test_typo_list_finds_the_known_typos():
     assert rows[("Eq. 13", "ey(x)*ey(y)")]["printed"] == "-D3 + z"  # sign of z term
     assert ("Eq. 8", "-ey(z)") in rows
     # No first-order term is wrong except the spurious constants.
-    in_eqs = [r for r in rows.values() if r["equation"] != "Eq. 8"]
+    in_eqs = [r for r in rows.values() if r["equation"] != "Eq. 8" and r["kind"] != "bracket"]
     assert {r["degree"] for r in in_eqs} == {0, 2}  # no first-order term is wrong
+    # Eq. 13: the missing z*S_xz*ey(x) and the bracket after y, never closed as printed
+    assert rows[("Eq. 13", "S_xz*ey(x)")]["derived"] == "z"
+    assert rows[("Eq. 13", "y*(S_xy*ey(x) + ex(x))")]["kind"] == "bracket"
+
+
+def test_the_bracket_reading_is_the_one_compared():
+    """The y terms of the transcribed Eq. 13 are exactly the declared reading of its unclosed
+    bracket, and that reading is also what the matrix product gives."""
+    e, p = guo.symbols()
+    pose = (p[k] for k in ("x", "y", "z", "D1", "D2", "D3"))
+    ez = sp.expand(guo.printed_closed_form(e, *pose)[2])
+    y_terms = sp.expand(sp.diff(ez, p["y"]) * p["y"])
+    (eq, comp, _, reading, degree), = guo.PRINTED_UNBALANCED
+    assert (eq, comp, degree) == ("Eq. 13", "Ez", 1)
+    expected = p["y"] * (e["S_xy"] * e["ey(x)"] + e["ex(x)"])
+    assert str(expected) == reading
+    assert sp.expand(y_terms - expected) == 0
+    derived_y = sp.expand(sp.diff(guo.second_order()[2], p["y"]) * p["y"])
+    assert sp.expand(derived_y - expected) == 0
 
 
 def test_printed_form_differs_from_product_only_by_its_typos():

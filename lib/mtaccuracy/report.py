@@ -32,8 +32,11 @@ from PIL import Image
 
 from . import paths, provenance, reproduction, runner
 
-COLOURS = {"reproduced": "#1a9850", "close": "#d9a400", "differs": "#d73027",
-           "not reproducible": "#7f7f7f"}
+#: Badge colours, each at least 5:1 against the white badge text (WCAG AA asks 4.5:1).
+COLOURS = {"reproduced": "#1a7a40", "close": "#8a6500", "differs": "#b3261e",
+           "not reproducible": "#5f5f5f"}
+#: Above this many rows a paper's scorecard starts collapsed (its summary line says what is in it).
+COLLAPSE_ROWS = 15
 CSS = """
 body { font-family: system-ui, sans-serif; margin: 2rem auto; max-width: 1200px; color: #222;
        line-height: 1.4; padding: 0 1rem; }
@@ -47,6 +50,9 @@ th { background: #f3f3f3; } td.num { text-align: right; }
 figure { margin: 1.5rem 0; border: 1px solid #eee; padding: 0.5rem; }
 figure img { max-width: 100%; height: auto; }
 figcaption { font-size: 0.9rem; } details { font-size: 0.8rem; } code { font-size: 0.8rem; }
+details.scorecard { font-size: 0.85rem; } details.scorecard > summary { cursor: pointer;
+       font-size: 1rem; margin: 0.5rem 0; } .headline { font-size: 1.1rem; }
+.basis { white-space: nowrap; border-bottom: 1px dotted #888; }
 .citation { color: #555; } .links a { margin-right: 0.8rem; }
 .broken { background: #fde0dd; border-left: 4px solid #d73027; padding: 0.3rem 0.6rem; }
 """
@@ -61,13 +67,31 @@ def _badge(verdict: str) -> str:
             f"{_e(verdict)}</span>")
 
 
+def _basis(basis: str) -> str:
+    return (f'<span class="basis" title="{_e(reproduction.BASES.get(basis, ""))}">'
+            f"{_e(basis)}</span>")
+
+
 def _figure_label(name: str) -> str:
-    """``fig05_...`` -> "Fig. 5"; ``fig08_09_...`` -> "Figs. 8-9"; other names as they are."""
-    m = re.match(r"figs?(\d+)(?:_(\d+))?(?:_|$)", name)
+    """``fig05_...`` -> "Fig. 5"; ``fig08_09_...`` -> "Figs. 8-9"; ``table2_...`` ->
+    "Table 2"; other names as they are."""
+    m = re.match(r"(figs?|table)(\d+)(?:_(\d+))?(?:_|$)", name)
     if not m:
         return name
-    a, b = int(m.group(1)), m.group(2)
+    a, b = int(m.group(2)), m.group(3)
+    if m.group(1) == "table":
+        return f"Table {a}"
     return f"Figs. {a}-{int(b)}" if b and b.isdigit() and len(b) <= 2 else f"Fig. {a}"
+
+
+def _caption_title(label: str, title: str) -> str:
+    """The figure's own title without a leading repetition of its label ("Fig. 5: ...")."""
+    t = title.strip()
+    for lead in (label, label.replace("Figs.", "Fig."), label.replace(". ", ".")):
+        if t.lower().startswith(lead.lower()):
+            t = t[len(lead):].lstrip(" :.-\u2013")
+            break
+    return t
 
 
 def _numbers(label: str) -> set[int]:
@@ -75,21 +99,56 @@ def _numbers(label: str) -> set[int]:
     return set(range(nums[0], nums[-1] + 1)) if len(nums) >= 2 and "-" in label else set(nums)
 
 
+_REF = re.compile(r"\b(Figs?|Tables?)\.?\s*(\d+)(?:\s*(?:-|\u2013|/|and|,)\s*(\d+))?",
+                  re.IGNORECASE)
+
+
+def _refs(item: str) -> set[tuple[str, int]]:
+    """The figures and tables a scorecard item names: ``"Section 1.3, Figs. 6-7"`` ->
+    {("fig", 6), ("fig", 7)}; ``"Table 2 PCE"`` -> {("table", 2)}."""
+    out = set()
+    for m in _REF.finditer(item):
+        kind = "fig" if m.group(1).lower().startswith("fig") else "table"
+        a = int(m.group(2))
+        b = int(m.group(3)) if m.group(3) else a
+        out |= {(kind, n) for n in range(a, b + 1)} if 0 <= b - a <= 20 else {(kind, a)}
+    return out
+
+
 def _differs_for(card: pd.DataFrame, label: str) -> str:
     """What the scorecard says about a figure: verdict counts of the rows naming its number."""
-    if card.empty or not label.startswith("Fig"):
+    if card.empty or not label.startswith(("Fig", "Table")):
         return ""
-    want = _numbers(label)
-    rows = card[[bool(want & _numbers(str(i))) and str(i).lower().startswith("fig")
-                 for i in card["item"]]]
+    kind = "fig" if label.startswith("Fig") else "table"
+    want = {(kind, n) for n in _numbers(label)}
+    rows = card[[bool(want & _refs(str(i))) for i in card["item"]]]
     if rows.empty:
-        return "No scorecard row names this figure."
-    counts = rows["verdict"].value_counts()
-    text = ", ".join(f"{n} {v}" for v, n in counts.items())
+        return ("No scorecard row is tied to this figure: it is regenerated for comparison by "
+                "eye with the paper's.")
+    counts = rows.groupby(["verdict", "basis"], sort=False).size()
+    text = ", ".join(f"{n} {v} ({b})" for (v, b), n in counts.items())
     bad = rows[rows["verdict"].isin(["differs", "close", "not reproducible"])]
     note = f" First difference: {bad.iloc[0]['quantity']} ({bad.iloc[0]['note']})." \
         if not bad.empty else ""
     return f"Scorecard rows for {label}: {text}.{note}"
+
+
+def _crosstab_html(t: pd.DataFrame) -> str:
+    """Verdict x basis counts as a table (bases as rows)."""
+    head = ("<tr><th>basis</th>" + "".join(f"<th>{_badge(v)}</th>"
+                                           for v in reproduction.VERDICTS)
+            + "<th>total</th></tr>")
+    body = "".join(
+        "<tr>" + (f"<th>{_e(b)}</th>" if b == "total" else f"<td>{_basis(b)}</td>")
+        + "".join(f'<td class="num">{r[v]}</td>' for v in reproduction.VERDICTS)
+        + f'<td class="num">{r["total"]}</td></tr>' for b, r in t.iterrows())
+    return f'<table class="crosstab">{head}{body}</table>'
+
+
+def _bases_html() -> str:
+    return ("<details><summary>What each basis means</summary><dl>"
+            + "".join(f"<dt><strong>{_e(b)}</strong></dt><dd>{_e(d)}</dd>"
+                      for b, d in reproduction.BASES.items()) + "</dl></details>")
 
 
 def _provenance_html(rec: dict) -> str:
@@ -199,6 +258,9 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
                    + "".join(f'<th class="num">{tot[v]}</th>' for v in reproduction.VERDICTS)
                    + f'<th class="num">{tot["total"]}</th><th class="num">{total_rt}</th></tr>')
     out.append("</table>")
+    if not cards.empty:
+        out += [f'<p class="headline">{_e(reproduction.headline(cards))}</p>',
+                _crosstab_html(reproduction.crosstab(cards)), _bases_html()]
 
     for stem in stems:
         folder = figures / stem
@@ -211,26 +273,36 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
             export_notebook(nb, figures / "html" / f"{stem}.html")
         links += [f'<a href="{_e(stem)}/{_e(p.name)}">{_e(p.name)}</a>'
                   for p in sorted(folder.glob("*.csv"))]
+        n_rows = len(card)
+        counts = ", ".join(f"{n} {v}" for v, n in card["verdict"].value_counts()
+                           .reindex(reproduction.VERDICTS).dropna().astype(int).items() if n)
+        indep = int(((card["verdict"] == "reproduced")
+                     & (card["basis"] == "independent")).sum())
         out += [f'<section class="paper" id="{_e(stem)}">',
                 f"<h2>{_e(meta.get('paper', stem))}</h2>",
                 f'<p class="citation">{_e(meta.get("citation", ""))}</p>',
                 f'<p class="links">{" ".join(links)}</p>',
-                "<h3>Scorecard</h3><table><tr><th>item</th><th>quantity</th><th>published</th>"
+                f'<details class="scorecard"{"" if n_rows > COLLAPSE_ROWS else " open"}>'
+                f"<summary><strong>Scorecard</strong>: {n_rows} rows ({_e(counts)}); "
+                f"{indep} reproduced independently</summary>",
+                _crosstab_html(reproduction.crosstab(card)),
+                "<table><tr><th>item</th><th>quantity</th><th>published</th>"
                 "<th>reproduced</th><th>unit</th><th>tolerance</th><th>verdict</th>"
-                "<th>note</th></tr>"]
+                "<th>basis</th><th>note</th></tr>"]
         rows = [("score-row", r) for _, r in card.iterrows()]
         rows += [("measured-row", r) for _, r in measured[measured["notebook"] == stem].iterrows()]
         for cls, r in rows:
             out.append(f'<tr class="{cls}" data-notebook="{_e(stem)}" '
-                       f'data-verdict="{_e(r["verdict"])}"><td>{_e(r["item"])}</td>'
+                       f'data-verdict="{_e(r["verdict"])}" data-basis="{_e(r["basis"])}">'
+                       f"<td>{_e(r['item'])}</td>"
                        f"<td>{_e(r['quantity'])}</td><td>{_e(r['published'])}</td>"
                        f"<td>{_e(r['reproduced'])}</td><td>{_e(r['unit'])}</td>"
                        f"<td>{_e(r['tolerance'])}</td><td>{_badge(r['verdict'])}</td>"
-                       f"<td>{_e(r['note'])}"
+                       f"<td>{_basis(r['basis'])}</td><td>{_e(r['note'])}"
                        + (" <em>(measured on the machine that ran it: changes from run to "
                           "run; not counted in the summary)</em>" if cls == "measured-row" else "")
                        + "</td></tr>")
-        out.append("</table><h3>Figures</h3>")
+        out.append("</table></details><h3>Figures</h3>")
         side = provenance.read(folder)
         for fig in sorted([*folder.glob("*.png"), *folder.glob("*.svg")]):
             why = figure_problem(fig, side)
@@ -253,7 +325,8 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
                 f'<figure id="{_e(stem)}-{_e(png.stem)}"><img class="figure" '
                 f'src="{_e(stem)}/{_e(png.name)}" alt="{_e(label)}: {_e(title or png.stem)}">'
                 f"<figcaption><strong>{_e(label)}</strong>"
-                f"{': ' + _e(title) if title else ''}. {_e(_differs_for(card, label))} "
+                f"{': ' + _e(_caption_title(label, title)) if title else ''}. "
+                f"{_e(_differs_for(card, label))} "
                 + (f'<a href="{_e(stem)}/{_e(svg.name)}">SVG</a>' if svg.exists() else "")
                 + f"{_provenance_html(provenance.from_png(png))}</figcaption></figure>")
         out.append("</section>")

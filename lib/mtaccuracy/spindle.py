@@ -90,10 +90,12 @@ __all__ = [
     "probe_angles", "weights", "full_weights", "eigenvalues", "transfer", "circulant_matrix",
     "probe_signals", "separate", "separate_details", "rotation_error", "motion_from_scalar",
     "MAPPINGS", "objective_H", "objective_worst", "fitness", "optimal_a3", "genes_to_layout",
-    "lower_bound_H", "bound_layout", "worst_case_bound", "adaptive_probabilities", "run_ga",
-    "run_de", "convergence_generation", "reference_optimum", "reference_optima",
+    "lower_bound_H", "weights_bound_H", "bound_layout", "worst_case_bound",
+    "adaptive_probabilities", "run_ga", "run_de", "convergence_generation", "reference_optimum",
+    "reference_optima",
     "equivalent_genes", "canonical_genes", "select_best", "harmonic_coefficients",
     "lowpass", "lsc_roundness", "mz_roundness", "random_profile", "simulate_measurements",
+    "coincidence_ratio",
 ]
 
 
@@ -571,6 +573,48 @@ def lower_bound_H(n_probes: int = 4) -> float:
     return 1.0 / n_probes
 
 
+def weights_bound_H(w, half_units=None) -> np.ndarray:
+    """Lower bound of ``H = q_k^2`` that depends on the weights only: valid for every choice of
+    probe angles and every harmonic ``k``.
+
+    ``w``: weights ``a1..a3`` (last axis 3, ``a0 = 1`` exact) or ``a0..a3`` (last axis 4),
+    batched over leading axes.  ``half_units`` (same shape, optional): half-widths of the
+    intervals ``[w - half_units, w + half_units]`` the weights are only known to lie in (e.g. half
+    a unit of their last printed digit); the bound then holds for every weight in those intervals.
+
+    Proof.  ``Lambda_k = sum_l a_l exp(i k phi_l)``, so by the triangle inequality
+    ``|Lambda_k| <= sum_l |a_l|`` whatever the angles, and therefore
+
+        H = sum_l a_l^2 / |Lambda_k|^2 >= sum_l a_l^2 / (sum_l |a_l|)^2 =: B(a),
+
+    for every ``phi_1, phi_2, phi_3`` and every ``k`` (equality exactly when all ``a_l e^{i k
+    phi_l}`` share one phase, e.g. ``k phi_l = 0 mod 2 pi`` with positive weights, so ``B`` is the
+    infimum over unconstrained angles).  If ``a_l`` is only known to lie in ``[c_l - h_l, c_l +
+    h_l]``, then ``a_l^2 >= m_l^2`` with ``m_l = max(|c_l| - h_l, 0)`` (the distance from 0 to the
+    interval) and ``|a_l| <= |c_l| + h_l``, so ``B(a) >= sum m_l^2 / (sum (|c_l| + h_l))^2`` for
+    every ``a`` in the intervals.  ``B(a) >= 1/4`` (Cauchy-Schwarz, :func:`lower_bound_H`), with
+    equality for equal ``|a_l|``; the interval version can fall slightly below 1/4.  The bound
+    does not use Eq. 15: it holds whether or not the weights cancel the first harmonic, and it
+    ignores the signs of the weights (a sign lost in print does not change it).
+    """
+    w = np.asarray(w, dtype=float)
+    if w.ndim == 0 or w.shape[-1] not in (3, 4):
+        raise ValueError("weights must be a1..a3 (last axis 3, a0 = 1) or a0..a3 (last axis 4); "
+                         f"got shape {w.shape}")
+    h = np.zeros_like(w) if half_units is None else np.broadcast_to(
+        np.asarray(half_units, dtype=float), w.shape)
+    if not (np.all(np.isfinite(w)) and np.all(np.isfinite(h))) or np.any(h < 0):
+        raise ValueError("weights must be finite and half_units finite and >= 0")
+    if w.shape[-1] == 3:
+        w = np.concatenate([np.ones(w.shape[:-1] + (1,)), w], axis=-1)
+        h = np.concatenate([np.zeros(h.shape[:-1] + (1,)), h], axis=-1)
+    low = np.maximum(np.abs(w) - h, 0.0)
+    high = np.abs(w) + h
+    if np.any(high.sum(axis=-1) == 0):
+        raise ValueError("all weights are zero: H is undefined")
+    return (low ** 2).sum(axis=-1) / high.sum(axis=-1) ** 2
+
+
 def bound_layout(k: int, m: int = 1) -> np.ndarray:
     """Genes of a layout reaching ``H = 1/4`` at even ``k``: two diametral pairs,
     ``phi = (0, 2 pi m / k, pi, pi + 2 pi m / k)``, ``a = (1, 1, 1, 1)`` (for k = 2:
@@ -607,9 +651,11 @@ def adaptive_probabilities(f, f_mean, generation, max_generation, *, pc_max=PC_M
 
     ``Pc = Pc_max`` if ``F < F_mean``, else ``Pc_max - (Pc_max - Pc_min) alpha / alpha_max``;
     ``Pm = Pm_min`` if ``F < F_mean``, else, as printed (``eq23="printed"``),
-    ``Pm_min - (Pm_max - Pm_min) alpha / alpha_max``, which is negative for every ``alpha > 0``;
-    corrected (default), ``Pm_min + (Pm_max - Pm_min) alpha / alpha_max``, rising from 0.005 to
-    0.09 as the text describes.  ``alpha`` = ``generation``, ``alpha_max`` = ``max_generation``.
+    ``Pm_min - (Pm_max - Pm_min) alpha / alpha_max``, which falls from ``Pm_min`` and is negative
+    once ``alpha / alpha_max > Pm_min / (Pm_max - Pm_min)`` (after 6 % of the run with the paper's
+    values); corrected (default), ``Pm_min + (Pm_max - Pm_min) alpha / alpha_max``, rising from
+    0.005 to 0.09 as the text describes.  ``alpha`` = ``generation``, ``alpha_max`` =
+    ``max_generation``.
     Returns the raw values (the printed Eq. 23 is not clipped here; :func:`run_ga` clips to [0, 1]).
     """
     if eq23 not in ("corrected", "printed"):
@@ -1237,3 +1283,32 @@ def simulate_measurements(profile, dx, dy, positions, *, n_rev: int, interleave:
         * np.sin(phi)[:, None]                                       # (m, sets, 4, N)
     noise = rng.standard_normal((m, sets, 4, n)) * noise_sd
     return clean + (proj + noise).mean(axis=1)
+
+
+def coincidence_ratio(curves, k: float = 2.0) -> np.ndarray:
+    """How far apart the mean curves of groups of repeated measurements are, in units of ``k``
+    standard errors of their difference: ``(G, G)`` matrix, 0 on the diagonal.
+
+    ``curves``: ``(G, M, P)``, ``G`` groups (e.g. spindle speeds), ``M >= 2`` repeated
+    measurements of a curve of ``P`` points each.  For groups ``a, b`` with means ``m_a, m_b`` and
+    pointwise sample variances ``v_a, v_b`` (``ddof = 1``):
+
+        ratio_ab = rms_P(m_a - m_b) / (k * sqrt(mean_P(v_a + v_b) / M)).
+
+    If both groups measure the same curve with independent scatter, ``E[rms^2] =
+    mean_P(v_a + v_b) / M``, so the ratio is about ``1 / k``; a ratio at most 1 means the groups'
+    curves coincide within ``k`` standard errors of the measurement scatter (the ``k = 2`` of the
+    compendium's tolerance policy), a ratio above 1 a systematic difference between groups.
+    """
+    c = np.asarray(curves, dtype=float)
+    if c.ndim != 3 or c.shape[1] < 2 or c.shape[2] < 1:
+        raise ValueError(f"curves must be (groups, measurements >= 2, points), got {c.shape}")
+    if not np.all(np.isfinite(c)) or not (np.isfinite(k) and k > 0):
+        raise ValueError("curves must be finite and k > 0")
+    m = c.mean(axis=1)                                               # (G, P)
+    v = c.var(axis=1, ddof=1)                                        # (G, P)
+    rms = np.sqrt(((m[:, None] - m[None]) ** 2).mean(axis=-1))       # (G, G)
+    se = np.sqrt((v[:, None] + v[None]).mean(axis=-1) / c.shape[1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.where(se > 0, rms / (k * se), np.where(rms > 0, np.inf, 0.0))
+    return out

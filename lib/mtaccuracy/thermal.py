@@ -15,6 +15,8 @@
   scores go to the simplest candidate (:func:`canonical_best`).
 * :func:`metrics`, :func:`evaluate_split`, :func:`leave_one_experiment_out`: RMSE, largest
   residual, MAE; one train/test split; every experiment held out in turn.
+* :func:`replicate_split` (with :func:`fit_linear`, :func:`batch_metrics`): the same fits with
+  fixed inputs on a stack of noise replicates at once, for sampling standard errors.
 
 Units: positions in mm, errors in um, slopes k in um/m (so ``k * x_mm / 1000`` is um), temperatures
 in degrees Celsius.  The position axis is shifted to start at 0 (the paper models 185..445 mm as
@@ -47,6 +49,7 @@ __all__ = [
     "PointByPoint", "Decoupled", "svr_search", "svr_simplicity", "canonical_best",
     "tie_margin", "StandardisedSVR", "SVR_SOLVER_TOL", "evaluate_split",
     "leave_one_experiment_out", "SVR_GRID", "SVR_TIE_RTOL", "LSTSQ_TOLERANCE", "SVR_TOLERANCE",
+    "fit_linear", "predict_linear", "batch_metrics", "rises_of", "replicate_split",
     "TEMPERATURES_FILE", "ERRORS_FILE", "EXPERIMENTS_FILE", "TEMPERATURE_RANGE_C",
     "ERROR_LIMIT_UM", "ERROR_MIN_SPAN_UM", "POSITION_MIN_SPAN_MM", "POSITION_LIMIT_MM",
     "MAX_SENSORS", "MAX_POSITIONS", "MAX_MEASUREMENTS", "MAX_FILE_BYTES",
@@ -1039,3 +1042,118 @@ def leave_one_experiment_out(data: ThermalData, n_clusters: int = 3, rho: float 
             t.insert(i, f"{key}_sensors", " ".join(r.inputs[key]))
         frames.append(t)
     return pd.concat(frames, ignore_index=True)
+
+
+# --------------------------------------------------------------------------------------------
+# Noise replicates: the same fits on a stack of datasets (leading replicate axis)
+# --------------------------------------------------------------------------------------------
+
+def fit_linear(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least squares with an intercept on a stack of problems: ``x`` (R, n, p), ``y`` (R, n)
+    or (R, n, q); returns the coefficients (R, 1 + p) or (R, 1 + p, q), intercept first.  The
+    batched twin of scikit-learn's ``LinearRegression`` (the tests check they agree), so that
+    many replicates are fitted at once."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    a = np.concatenate([np.ones(x.shape[:-1] + (1,)), x], axis=-1)
+    single = y.ndim == x.ndim - 1
+    c = np.linalg.pinv(a) @ (y[..., None] if single else y)
+    return c[..., 0] if single else c
+
+
+def predict_linear(coef: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``intercept + x @ slopes`` for the coefficients of :func:`fit_linear`."""
+    coef, x = np.asarray(coef, dtype=float), np.asarray(x, dtype=float)
+    if coef.ndim == x.ndim - 1:
+        return coef[..., :1] + np.einsum("rnp,rp->rn", x, coef[..., 1:])
+    return coef[..., :1, :] + x @ coef[..., 1:, :]
+
+
+def batch_metrics(residuals) -> dict:
+    """:func:`metrics` of every replicate: ``residuals`` (R, ...) -> {name: (R,)}."""
+    r = np.asarray(residuals, dtype=float)
+    r = r.reshape(len(r), -1)
+    return {"rmse": np.sqrt(np.mean(r**2, axis=1)), "max_residual": np.abs(r).max(axis=1),
+            "mae": np.abs(r).mean(axis=1)}
+
+
+def rises_of(temperatures: np.ndarray, experiments) -> np.ndarray:
+    """Temperatures (R, n, S) relative to the first row of each experiment (as
+    :meth:`ThermalData.rises`, batched)."""
+    experiments = np.asarray(experiments)
+    first = pd.Series(np.arange(len(experiments))).groupby(experiments).transform("first")
+    t = np.asarray(temperatures, dtype=float)
+    return t - t[:, first.to_numpy(), :]
+
+
+def replicate_split(replicates, train, test, inputs: dict, svr_params: dict | None = None
+                    ) -> pd.DataFrame:
+    """The fits of :func:`evaluate_split` with fixed inputs, on every replicate at once.
+
+    ``replicates`` has ``index``, ``sensors``, ``temperatures`` (R, n, S), ``errors``
+    (R, n, P) and ``positions_mm`` (``thermal_data.noise_replicates``); ``inputs`` is
+    ``{"point": [...], "k": [...], "b": [...]}``.  The MLRs are fitted batched
+    (:func:`fit_linear`); the SVRs, when ``svr_params = {"k": params, "b": params}`` fixes
+    their hyperparameters, one replicate at a time (libsvm solves one problem per call).
+    Sensitive points and hyperparameters are not chosen again: the spread over the replicates
+    is that of the fits and metrics for the given choices.
+
+    Returns one row per replicate; the columns are 3-tuples: (method, target, metric) for
+    the metrics of :func:`metrics`; ``("eq8", position, term)`` and ``("eq9", target, term)``
+    for the MLR coefficients; ``(method, "residual of the error", "lowest" | "highest")``;
+    ``("point_by_point_mlr", "largest residual at", position)``; and
+    ``("test", "largest |error|", "")``.
+    """
+    exp = replicates.index.experiment.to_numpy()
+    tr, te = np.isin(exp, list(train)), np.isin(exp, list(test))
+    col = {s: i for i, s in enumerate(replicates.sensors)}
+    missing = sorted({s for v in inputs.values() for s in v} - set(col))
+    if missing:
+        raise ValueError(f"the replicates have no sensor(s) {missing}")
+    t = np.asarray(replicates.temperatures, dtype=float)
+    e = np.asarray(replicates.errors, dtype=float)
+    rises = rises_of(t, exp)
+    offsets = np.asarray(replicates.positions_mm, dtype=float)
+    offsets = offsets - offsets[0]
+    k, b = decouple(offsets, e)                                           # (R, n)
+    pick = {key: [col[s] for s in v] for key, v in inputs.items()}
+    out, residuals = {}, {}
+
+    x_p = rises[..., pick["point"]]
+    c8 = fit_linear(x_p[:, tr], e[:, tr])                                # (R, 1 + p, P)
+    residuals["point_by_point_mlr"] = e[:, te] - predict_linear(c8, x_p[:, te])
+    for j, pos in enumerate(replicates.positions_mm):
+        for i, term in enumerate(["intercept", *inputs["point"]]):
+            out[("eq8", f"{pos:g}", term)] = c8[:, i, j]
+    x_k, x_b = t[..., pick["k"]], rises[..., pick["b"]]
+    kb = {}
+    ck, cb = fit_linear(x_k[:, tr], k[:, tr]), fit_linear(x_b[:, tr], b[:, tr])
+    for target, c, names in (("k (um/m)", ck, ["intercept", *inputs["k"]]),
+                             ("b (um)", cb, ["intercept", *("d" + s for s in inputs["b"])])):
+        for i, term in enumerate(names):
+            out[("eq9", target, term)] = c[:, i]
+    kb["decoupled_mlr"] = (predict_linear(ck, x_k[:, te]), predict_linear(cb, x_b[:, te]))
+    if svr_params is not None:
+        preds = []
+        for r in range(len(t)):
+            mk = StandardisedSVR(**_svr_params(svr_params["k"])).fit(x_k[r, tr], k[r, tr])
+            mb = StandardisedSVR(**_svr_params(svr_params["b"])).fit(x_b[r, tr], b[r, tr])
+            preds.append((mk.predict(x_k[r, te]), mb.predict(x_b[r, te])))
+        kb["decoupled_svr"] = tuple(np.array(p) for p in zip(*preds, strict=True))
+    for name, (kp, bp) in kb.items():
+        residuals[name] = e[:, te] - compose(kp, bp, offsets)
+        for target, meas, pred in (("slope k", k[:, te], kp), ("intercept b", b[:, te], bp)):
+            for m, v in batch_metrics(meas - pred).items():
+                out[(name, target, m)] = v
+    for name, res in residuals.items():
+        for m, v in batch_metrics(res).items():
+            out[(name, "thermal positioning error", m)] = v
+        flat = res.reshape(len(res), -1)
+        out[(name, "residual of the error", "lowest")] = flat.min(axis=1)
+        out[(name, "residual of the error", "highest")] = flat.max(axis=1)
+    by_pos = np.abs(residuals["point_by_point_mlr"]).max(axis=1)          # (R, P)
+    for j, pos in enumerate(replicates.positions_mm):
+        out[("point_by_point_mlr", "largest residual at", f"{pos:g}")] = by_pos[:, j]
+    out[("test", "largest |error|", "")] = np.abs(e[:, te]).reshape(len(e), -1).max(axis=1)
+    frame = pd.DataFrame(out)
+    frame.index.name = "replicate"
+    return frame

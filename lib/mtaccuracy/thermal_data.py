@@ -39,7 +39,9 @@ orthogonal to the straight lines; decoupling (Eq. 6) therefore returns Table 5 e
 the 0.001 um rounding of the CSV.  The laser is zeroed at the first target of the first
 measurement of every experiment, as in the paper, so that reading is exactly 0.
 
-Everything random comes from ``numpy.random.default_rng(seed)``.
+Everything random comes from ``numpy.random.default_rng(seed)``.  :func:`noise_replicates`
+redraws every noise term ``n`` times at once (replicate 0 is :func:`reconstruct` itself), for the
+sampling uncertainty of results computed on the reconstruction.
 """
 
 from __future__ import annotations
@@ -172,40 +174,88 @@ def _unit_residual_shapes(offsets: np.ndarray) -> tuple[np.ndarray, ...]:
     return static, bow, zero, proj
 
 
-def reconstruct(seed: int = DEFAULT_SEED, papers_folder=None) -> ThermalData:
-    """The reconstructed dataset: 4 experiments x 8 measurements, 12 temperatures, 14 errors."""
-    rng = np.random.default_rng(seed)
-    k, b, t1 = published_targets(papers_folder)
-    n_exp, n_meas = k.shape
+def _generate(rng: np.random.Generator, k: np.ndarray, b: np.ndarray, t1: pd.DataFrame,
+              reps: tuple = ()) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Sensor names and the rounded temperatures (*reps, E, J, S) and errors (*reps, E, J, P)
+    drawn from ``rng``: the noise-free histories of :func:`simulate` plus sensor noise, and
+    Table 5's lines plus the residual.  ``reps`` is a leading shape of independent noise
+    realisations; with ``reps = ()`` the draws are exactly those of one reconstruction."""
     names = list(SENSORS)
     clean = simulate(SENSORS, GROUP_OFFSETS, t1)                   # (E, S, J)
     air = ambient(t1, TIMES_MIN.astype(float))                      # (E, J)
-
     temps = {}
     for j, s in enumerate(names):
         sd = NOISE_C.get(s, NOISE_C["default"])
-        v = clean[:, j, :] + sd * rng.standard_normal(clean[:, j, :].shape)
+        v = clean[:, j, :] + sd * rng.standard_normal(reps + clean[:, j, :].shape)
         temps[s] = np.round(v / T12_RESOLUTION_C) * T12_RESOLUTION_C if s == "T12" else v
-    temps[AMBIENT] = air + NOISE_C["default"] * rng.standard_normal(air.shape)
+    temps[AMBIENT] = air + NOISE_C["default"] * rng.standard_normal(reps + air.shape)
     order = sorted(temps, key=lambda s: int(s[1:]))
 
+    n_exp, n_meas = k.shape
     offsets = (POSITIONS_MM - POSITIONS_MM[0]).astype(float)
     static, bow, zero, proj = _unit_residual_shapes(offsets)
-    nut_rise = temps["T11"] - temps["T11"][:, :1]
-    noise = INTERFEROMETER_NOISE_UM * rng.standard_normal((n_exp, n_meas, len(offsets)))
+    nut_rise = temps["T11"] - temps["T11"][..., :1]
+    noise = INTERFEROMETER_NOISE_UM * rng.standard_normal(reps + (n_exp, n_meas, len(offsets)))
     resid = (STATIC_SHAPE_UM * static + BOW_UM_PER_C * nut_rise[..., None] * bow
              + noise @ proj.T)
     # zero the laser at the first target of each experiment's first measurement
-    resid[:, 0, :] += ((-b[:, 0] - resid[:, 0, 0]) / zero[0])[:, None] * zero
+    resid[..., 0, :] += ((-b[:, 0] - resid[..., 0, 0]) / zero[0])[..., None] * zero
     errors = k[..., None] * offsets / 1000.0 + b[..., None] + resid
+    temperatures = np.round(np.stack([temps[s] for s in order], axis=-1), 2)
+    return order, temperatures, np.round(errors, 3)
 
-    index = pd.DataFrame({"experiment": np.repeat(np.arange(1, n_exp + 1), n_meas),
-                          "measurement": np.tile(np.arange(1, n_meas + 1), n_exp),
-                          "time_min": np.tile(TIMES_MIN, n_exp)})
-    temperatures = pd.DataFrame({s: np.round(temps[s].ravel(), 2) for s in order})
+
+def _index(n_exp: int, n_meas: int) -> pd.DataFrame:
+    return pd.DataFrame({"experiment": np.repeat(np.arange(1, n_exp + 1), n_meas),
+                         "measurement": np.tile(np.arange(1, n_meas + 1), n_exp),
+                         "time_min": np.tile(TIMES_MIN, n_exp)})
+
+
+def reconstruct(seed: int = DEFAULT_SEED, papers_folder=None) -> ThermalData:
+    """The reconstructed dataset: 4 experiments x 8 measurements, 12 temperatures, 14 errors."""
+    k, b, t1 = published_targets(papers_folder)
+    n_exp, n_meas = k.shape
+    order, temps, errors = _generate(np.random.default_rng(seed), k, b, t1)
+    temperatures = pd.DataFrame(temps.reshape(n_exp * n_meas, -1), columns=order)
     feeds = dict(zip(t1.experiment.astype(int), t1.feed_mm_per_min, strict=True))
-    return ThermalData(index, temperatures, np.round(errors.reshape(n_exp * n_meas, -1), 3),
+    return ThermalData(_index(n_exp, n_meas), temperatures, errors.reshape(n_exp * n_meas, -1),
                        POSITIONS_MM.astype(float), feeds, source="reconstructed")
+
+
+@dataclass(frozen=True)
+class Replicates:
+    """``n`` realisations of the reconstruction's noise, stacked on a leading axis:
+    ``temperatures`` (n, measurements, sensors) in the column order ``sensors``, ``errors``
+    (n, measurements, positions); ``index`` and ``positions_mm`` as in :class:`ThermalData`.
+    Replicate 0 is :func:`reconstruct` with the same seed, value for value."""
+
+    index: pd.DataFrame
+    sensors: list[str]
+    temperatures: np.ndarray
+    errors: np.ndarray
+    positions_mm: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.temperatures)
+
+
+def noise_replicates(seed: int = DEFAULT_SEED, n: int = 40, papers_folder=None) -> Replicates:
+    """Replicate 0 is the reconstruction of ``seed``; replicates 1..n-1 redraw every noise term
+    (sensor noise, T12's quantisation of it, interferometer noise, the bow that follows the
+    nut's noisy rise) from one generator seeded by ``SeedSequence(seed).spawn(1)``, all at
+    once.  The noise-free histories and Table 5's lines are the same in every replicate: the
+    spread of a result over the replicates is the sampling uncertainty that the reconstruction's
+    noise gives it, not the uncertainty of the reconstruction's choices."""
+    if n < 2:
+        raise ValueError(f"need at least 2 replicates for a spread, got {n}")
+    k, b, t1 = published_targets(papers_folder)
+    n_exp, n_meas = k.shape
+    order, t0, e0 = _generate(np.random.default_rng(seed), k, b, t1)
+    rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
+    _, tr, er = _generate(rng, k, b, t1, reps=(n - 1,))
+    temps = np.concatenate([t0[None], tr]).reshape(n, n_exp * n_meas, -1)
+    errors = np.concatenate([e0[None], er]).reshape(n, n_exp * n_meas, -1)
+    return Replicates(_index(n_exp, n_meas), order, temps, errors, POSITIONS_MM.astype(float))
 
 
 def is_default_dir(data_dir) -> bool:

@@ -634,3 +634,135 @@ def _cos_sin(x):
         s *= x
         return c, s
     return 1.0 - 0.5 * x2 * (1.0 - x2 / 12.0), x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0))
+
+
+# --------------------------------------------------------------------------------------
+# Necessary conditions on a table of indices: ratios the model fixes at every pose
+# --------------------------------------------------------------------------------------
+
+def index_invariants(machine: ACDoubleTurntable, sd, rows, cols, poses: Mapping,
+                     rtol: float = 1e-9):
+    """Ratios of normalised linear indices that the model fixes at every pose.
+
+    ``rows``, ``cols``: the (component, error) entries of a table (e.g. Table 2); ``poses``:
+    pose arrays (many random poses).  The normalised linear index is
+    ``S_ki = J_ki^2 sd_i^2 / V_k``, so
+
+    - within a component, two errors whose Jacobian entries stay proportional at every pose
+      (the same structure: e.g. translations along one direction of one moving frame) have
+      ``S_ki / S_kj`` fixed by their variance ratio, whatever the pose: they form a *group*;
+    - across components, a ratio of two groups in component k and one in component l can be
+      the same function of the pose (e.g. ``sin^2 A`` in Vx and in Vy), so their quotient is
+      fixed too (``V_k``, ``V_l`` cancel).
+
+    Returns ``(groups, cross)``: ``groups`` a DataFrame, one row per entry, with ``group``
+    (an integer; entries of one group share a component) and ``factor``, the fixed ratio
+    ``S_entry / S_head`` (head: the group's first entry); ``cross`` a DataFrame with the
+    groups ``num_k, den_k, num_l, den_l`` and ``value``, the fixed quotient
+    ``(S_num_k / S_den_k) / (S_num_l / S_den_l)`` of the heads.  A ratio counts as fixed when
+    its largest relative spread over ``poses`` is below ``rtol``; entries whose index is zero
+    at some pose are left alone (no ratio).
+    """
+    import pandas as pd
+
+    from ..sensitivity.sobol import linear_indices
+
+    rows, cols = np.asarray(rows), np.asarray(cols)
+    s = linear_indices(machine.linear_jacobian(poses), sd)[:, rows, cols]   # (P, entries)
+    if s.shape[0] < 3:
+        raise ValueError("index_invariants needs at least 3 poses to tell a fixed ratio")
+    ok = (s > 0).all(axis=0)
+    logs = np.log(np.where(s > 0, s, 1.0))
+
+    def fixed(r):
+        return float(np.abs(np.expm1(r - r.mean())).max()) < rtol
+
+    group = -np.ones(len(rows), dtype=int)
+    factor = np.full(len(rows), np.nan)
+    heads = []
+    for a in range(len(rows)):
+        if group[a] >= 0 or not ok[a]:
+            continue
+        group[a], factor[a] = len(heads), 1.0
+        for b in range(a + 1, len(rows)):
+            if group[b] < 0 and ok[b] and rows[b] == rows[a] and fixed(logs[:, b] - logs[:, a]):
+                group[b], factor[b] = len(heads), float(np.exp((logs[:, b] - logs[:, a]).mean()))
+        heads.append(a)
+    pairs = [(g, h) for g in range(len(heads)) for h in range(g + 1, len(heads))
+             if rows[heads[g]] == rows[heads[h]]]
+    cross = []
+    for i, (g, h) in enumerate(pairs):
+        rk = logs[:, heads[g]] - logs[:, heads[h]]
+        for g2, h2 in pairs[i + 1:]:
+            if rows[heads[g2]] == rows[heads[g]]:
+                continue
+            for num, den in ((g2, h2), (h2, g2)):
+                q = rk - (logs[:, heads[num]] - logs[:, heads[den]])
+                if fixed(q):
+                    cross.append(dict(num_k=g, den_k=h, num_l=num, den_l=den,
+                                      value=float(np.exp(q.mean()))))
+    groups = pd.DataFrame({"entry": np.arange(len(rows)), "component": rows, "error": cols,
+                           "group": group, "factor": factor})
+    return groups, pd.DataFrame(cross, columns=["num_k", "den_k", "num_l", "den_l", "value"])
+
+
+def ratio_interval(num_lo, num_hi, den_lo, den_hi):
+    """The interval of ``num / den`` for positive intervals (interval arithmetic): how the
+    printed precision of two published values propagates into their ratio."""
+    if np.any(np.asarray(den_lo) <= 0) or np.any(np.asarray(num_lo) < 0):
+        raise ValueError("ratio_interval needs positive intervals")
+    return np.asarray(num_lo) / np.asarray(den_hi), np.asarray(num_hi) / np.asarray(den_lo)
+
+
+def fit_pose_average_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, starts,
+                                ftol: float = 1e-12, xtol: float = 1e-12,
+                                max_nfev: int = 300):
+    """Least-squares fits of ``m`` poses whose *mean* normalised linear indices best match
+    ``target`` (the hypothesis that a table reports indices averaged over several poses,
+    equal weights).  ``starts`` (s, m, 5): x, y, z (mm), A, C (rad) of each pose.  As
+    :func:`fit_pose_to_indices` otherwise (x, y, z, A within their travels, batched
+    central-difference Jacobian, single-threaded BLAS).  Each fitted pose is reported as its
+    canonical image (:func:`canonical_pose`), the poses of one fit ordered by decreasing A
+    (the mean does not depend on their order).  Returns a DataFrame, one row per start and
+    pose: ``start``, ``pose`` (0..m-1), x, y, z, A, C, ``misfit`` (RMS over the entries)
+    and ``status``."""
+    import pandas as pd
+    from scipy.optimize import least_squares
+    from threadpoolctl import threadpool_limits
+
+    from ..sensitivity.sobol import linear_indices
+
+    starts = np.asarray(starts, dtype=float)
+    if starts.ndim != 3 or starts.shape[2] != 5:
+        raise ValueError(f"starts must be (starts, poses, 5), got {starts.shape}")
+    m = starts.shape[1]
+    target = np.asarray(target, dtype=float)
+    rows, cols = np.asarray(rows), np.asarray(cols)
+    scale = np.tile([100.0, 100.0, 100.0, 1.0, 1.0], m)
+    lo = np.tile([TRAVELS["x"][0], TRAVELS["y"][0], TRAVELS["z"][0], TRAVELS["A"][0], -np.inf], m)
+    hi = np.tile([TRAVELS["x"][1], TRAVELS["y"][1], TRAVELS["z"][1], TRAVELS["A"][1], np.inf], m)
+    step = 1e-6 * scale
+
+    def residuals(v):  # v: (B, 5 m) -> (B, entries)
+        p = v.reshape(-1, 5)
+        pose = {a: p[:, i] for i, a in enumerate(AXES)}
+        s = linear_indices(machine.linear_jacobian(pose), sd)[:, rows, cols]
+        return s.reshape(v.shape[0], m, -1).mean(axis=1) - target
+
+    def jac(v):
+        e = np.eye(v.size) * step
+        r = residuals(np.concatenate([v + e, v - e]))
+        return ((r[:v.size] - r[v.size:]) / (2 * step[:, None])).T
+
+    out = []
+    with threadpool_limits(limits=1, user_api="blas"):
+        for k, v0 in enumerate(starts):
+            r = least_squares(lambda v: residuals(v[None])[0], np.clip(v0.ravel(), lo, hi),
+                              jac=jac, bounds=(lo, hi), x_scale=scale, ftol=ftol, xtol=xtol,
+                              gtol=None, max_nfev=max_nfev, method="trf")
+            misfit = float(np.sqrt(np.mean(residuals(r.x[None])[0] ** 2)))
+            poses = [canonical_pose(dict(zip(AXES, p, strict=True))) for p in r.x.reshape(m, 5)]
+            poses.sort(key=lambda p: -p["A"])
+            out += [dict(start=k, pose=j, **p, misfit=misfit, status=int(r.status))
+                    for j, p in enumerate(poses)]
+    return pd.DataFrame(out)

@@ -340,12 +340,35 @@ def linear_sobol_indices(machine: Horizontal3Axis, bounds, pose: Mapping | None 
     their squares are exact with 2-point Gauss-Legendre quadrature per coordinate.  This is the
     reference the Monte Carlo (Saltelli) estimates converge to, up to the second-order terms of
     the full model (about 1e-4 of the error here).  Errors that enter identically (same
-    coefficients, same range) get bitwise-equal indices.
+    coefficients, same range) get bitwise-equal indices.  One case of
+    :func:`linear_sobol_indices_batch`.
     """
+    base = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in (pose or {}).items()}
+    if any(v.shape != (1,) for v in base.values()):
+        raise ValueError("linear_sobol_indices takes one pose (scalars); "
+                         "use linear_sobol_indices_batch for many")
+    s1, st, _ = linear_sobol_indices_batch(machine, bounds, base, pose_bounds, components)
+    return s1[0], st[0]
+
+
+def linear_sobol_indices_batch(machine: Horizontal3Axis, bounds, poses: Mapping | None = None,
+                               pose_bounds: Mapping | None = None, components: int = 3
+                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`linear_sobol_indices` for T cases at once: ``poses`` maps pose names to scalars
+    or (T,) arrays (e.g. T tool lengths), ``pose_bounds`` as there (the same box for every
+    case).  Returns ``S1`` and ``ST`` (T, 21, components) and the output variance ``V``
+    (T, components) in mm^2 (pooled over the box), all from one batched Jacobian over the
+    T x 2^k quadrature poses."""
     mean, var = _linear_parts(machine, bounds, components)
-    base = dict(pose or {})
+    base = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in (poses or {}).items()}
+    if any(v.ndim != 1 for v in base.values()):
+        raise ValueError("pose values must be scalars or 1-d arrays")
+    sizes = {v.shape[0] for v in base.values()} - {1}
+    if len(sizes) > 1:
+        raise ValueError(f"pose arrays of different lengths {sorted(sizes)}")
+    n_cases = sizes.pop() if sizes else 1
     box = dict(pose_bounds or {})
-    unknown = [k for k in box if k not in machine.axes + machine.tool_offsets]
+    unknown = [k for k in [*box, *base] if k not in machine.axes + machine.tool_offsets]
     if unknown:
         raise ValueError(f"unknown pose name(s) {unknown}")
     missing = [a for a in machine.axes if a not in base and a not in box]
@@ -355,15 +378,32 @@ def linear_sobol_indices(machine: Horizontal3Axis, bounds, pose: Mapping | None 
     keys = list(box)
     grid = (np.array(np.meshgrid(*[nodes] * len(keys), indexing="ij")).reshape(len(keys), -1)
             if keys else np.zeros((0, 1)))
-    poses = {k: np.full(grid.shape[1], float(v)) for k, v in base.items()}
+    n_nodes = grid.shape[1]
+    flat = {k: np.repeat(np.broadcast_to(v, (n_cases,)), n_nodes) for k, v in base.items()}
     for k, u in zip(keys, grid, strict=True):
         lo, hi = box[k]
-        poses[k] = lo + u * (hi - lo)
-    c = machine.first_order_jacobian(poses)[:, :components]   # (P, q, 21), equal weights
-    ec, ec2 = c.mean(0), (c**2).mean(0)
-    mean_part = (c * mean).sum(-1)                            # (P, q)
-    v = (ec2 * var).sum(-1) + mean_part.var(0)                # (q,)
-    return (ec**2 * var / v[:, None]).T, (ec2 * var / v[:, None]).T
+        flat[k] = np.tile(lo + u * (hi - lo), n_cases)
+    c = machine.first_order_jacobian(flat)[:, :components]     # (T * G, q, 21)
+    c = c.reshape(n_cases, n_nodes, *c.shape[1:])              # (T, G, q, 21), equal weights
+    ec, ec2 = c.mean(1), (c**2).mean(1)                        # (T, q, 21)
+    mean_part = (c * mean).sum(-1)                             # (T, G, q)
+    v = (ec2 * var).sum(-1) + mean_part.var(1)                 # (T, q)
+    s1 = np.swapaxes(ec**2 * var / v[..., None], 1, 2)
+    st = np.swapaxes(ec2 * var / v[..., None], 1, 2)
+    return s1, st, v
+
+
+def tool_length_offsets(tool_lengths, base=(0.0, 0.0, 0.0)) -> dict[str, np.ndarray]:
+    """Tool offsets (``tool_x, tool_y, tool_z``, (T,) arrays, mm) of tools of the given
+    lengths (mm, >= 0) on the horizontal spindle: the tip sits ``length`` mm from the
+    carriages' reference point towards the workpiece, i.e. along -z (ISO 841: +z points from
+    the workpiece to the tool), on top of the ``base`` offsets."""
+    lengths = np.atleast_1d(np.asarray(tool_lengths, dtype=float))
+    if lengths.ndim != 1 or np.any(lengths < 0) or not np.all(np.isfinite(lengths)):
+        raise ValueError(f"tool lengths must be finite and >= 0, got {tool_lengths!r}")
+    bx, by, bz = (float(v) for v in base)
+    return {"tool_x": np.full(lengths.shape, bx), "tool_y": np.full(lengths.shape, by),
+            "tool_z": bz - lengths}
 
 
 def linear_indices_at_poses(machine: Horizontal3Axis, bounds, poses: Mapping,

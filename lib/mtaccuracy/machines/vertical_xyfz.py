@@ -105,8 +105,8 @@ def printed_closed_form(e: Mapping, x, y, z, D1, D2, D3):
     """Eqs. 11-13 exactly as printed in Guo et al. 2016, typos included.
 
     ``e`` maps paper symbols to values; works with numpy arrays and with sympy symbols.
-    Ambiguous brackets are read as follows: in Eq. 13, ``y(ey(x) S_xy + ex(x)`` is closed
-    after ``ex(x)``.  Returns ``(Ex, Ey, Ez)``.
+    Ambiguous brackets are read as follows (:data:`PRINTED_UNBALANCED`): in Eq. 13,
+    ``y(ey(x) S_xy + ex(x)`` is closed after ``ex(x)``.  Returns ``(Ex, Ey, Ez)``.
     """
     d = lambda s: e[s]  # noqa: E731  (short alias keeps the transcription readable)
     ex = (d("dx(z)") + d("dx(x)") + d("dx(y)") - y * (d("ez(x)") + d("S_xy"))
@@ -140,6 +140,15 @@ def printed_closed_form(e: Mapping, x, y, z, D1, D2, D3):
 
 # Eq. 8 as printed: the (3,1) entry reads -ey(y) where the pattern of Eqs. 6-7 needs -ey(z).
 PRINTED_EQ8_ROW3 = ("-ey(y)", "ex(z)", "1", "dz(z)")
+
+# Brackets of Eqs. 11-13 that are opened and never closed as printed, with the reading
+# :func:`printed_closed_form` takes and the lowest degree in the errors of the terms the
+# reading decides: (equation, component, as printed, reading taken, degree).  Eq. 13: read to
+# the end, y would multiply every later term (the first-order ex(x) term among them).
+PRINTED_UNBALANCED = (
+    ("Eq. 13", "Ez", "y(ey(x)S_xy + ex(x) + ex(x)(dy(y) + dy(z)) - ... (the bracket after y is "
+     "never closed)", "y*(S_xy*ey(x) + ex(x))", 1),
+)
 
 
 # --------------------------------------------------------------------------------------
@@ -205,7 +214,10 @@ def closed_form_typos():
     where a term is a monomial in the error symbols (with its pose factor folded into the
     coefficients) and kind is ``spurious`` (printed, not derived), ``missing`` (derived, not
     printed) or ``coefficient`` (both, different coefficient).  Eq. 8's (3,1) entry is
-    checked against the skew-symmetric pattern of Eqs. 6-7 and reported too.
+    checked against the skew-symmetric pattern of Eqs. 6-7 and reported too, and every
+    bracket opened and never closed as printed (:data:`PRINTED_UNBALANCED`) is a row of kind
+    ``bracket`` (printed: the text as printed; derived: the reading whose terms are compared;
+    degree: the lowest degree in the errors it affects).
     """
     import sympy as sp
 
@@ -220,6 +232,10 @@ def closed_form_typos():
                          derived="-ey(z)", kind="coefficient"))
     for eq, comp, pr, de in zip(("Eq. 11", "Eq. 12", "Eq. 13"), ("Ex", "Ey", "Ez"),
                                 printed, derived, strict=True):
+        for eq_, comp_, text, reading, low in PRINTED_UNBALANCED:
+            if eq_ == eq:
+                rows.append(dict(equation=eq, component=comp_, term=reading, degree=low,
+                                 printed=text, derived=reading, kind="bracket"))
         tp = dict(sp.Poly(sp.expand(pr), *gens).terms())
         td = dict(sp.Poly(sp.expand(de), *gens).terms())
         for mono in sorted(set(tp) | set(td), key=lambda m: (sum(m), str(m))):

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 __all__ = ["as_generator", "latin_hypercube", "repeated_latin_hypercube", "average_ranks",
            "spearman", "centred_ranks", "rank_by_magnitude", "below_group_mean",
-           "position_outputs", "spearman_over_poses"]
+           "position_outputs", "spearman_over_poses", "rank_positions", "rank_intervals",
+           "sum_of_squares", "rank_r_squared"]
 
 import numpy as np
 from scipy import stats
@@ -157,3 +158,61 @@ def spearman_over_poses(machine, samples: np.ndarray, poses: dict, outputs=posit
         ry = _centred(average_ranks(y))
         out.append(_correlate(np.broadcast_to(rx, (k,) + rx.shape), ry))
     return np.concatenate(out, axis=0)
+
+
+def rank_positions(coefficients: np.ndarray) -> np.ndarray:
+    """Rank (1 = largest ``|rho|``) of every input in every output column, batched.
+
+    ``coefficients`` (..., p, q) as returned by :func:`spearman`; returns integer ranks of the
+    same shape, equal ``|rho|`` ranked in input (catalogue) order as in
+    :func:`rank_by_magnitude`."""
+    a = -np.abs(np.asarray(coefficients, dtype=float))
+    order = np.argsort(a, axis=-2, kind="stable")  # stable: equal |rho| keep catalogue order
+    ranks = np.empty(a.shape, dtype=int)
+    np.put_along_axis(ranks, order, np.broadcast_to(
+        np.arange(1, a.shape[-2] + 1)[:, None], a.shape), axis=-2)
+    return ranks
+
+
+def rank_intervals(repeated: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    """Sampling interval of each input's rank: the central ``level`` range of its rank over
+    independent repeated designs.
+
+    ``repeated`` (R, p, q): coefficients of R independent designs of the same size.  Returns
+    ``(lo, hi)`` integer ranks (p, q) (``numpy.quantile`` with ``method="inverted_cdf"``, so
+    both ends are ranks that occurred)."""
+    r = rank_positions(repeated)
+    if r.ndim != 3 or r.shape[0] < 2:
+        raise ValueError(f"need coefficients of at least 2 designs, shape (R, p, q); got {r.shape}")
+    if not 0 < level < 1:
+        raise ValueError(f"level must be in (0, 1), got {level!r}")
+    a = (1 - level) / 2
+    lo = np.quantile(r, a, axis=0, method="inverted_cdf")
+    hi = np.quantile(r, 1 - a, axis=0, method="inverted_cdf")
+    return lo.astype(int), hi.astype(int)
+
+
+def sum_of_squares(coefficients: np.ndarray) -> np.ndarray:
+    """Sum over the inputs (axis -2) of the squared Spearman coefficients, (..., q).
+
+    A necessary condition, whatever the model: for *independent* inputs the population sum is
+    at most 1.  The population Spearman coefficient is Pearson's correlation of
+    ``U_i = F_i(X_i)`` with ``V = G(Y)``; independent inputs give independent, hence
+    uncorrelated, ``U_i``, and Bessel's inequality for the orthonormal standardised ``U_i``
+    gives ``sum_i corr(U_i, V)^2 <= 1`` (equality when ``V`` is a linear function of the
+    ``U_i``: a rank-linear model).  A sample of n points adds about (number of inputs) / n on
+    average (each coefficient's sampling variance) and spreads by its own sampling noise;
+    :func:`rank_r_squared` gives the exact sample bound."""
+    return (np.asarray(coefficients, dtype=float) ** 2).sum(axis=-2)
+
+
+def rank_r_squared(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """R^2 of the least-squares regression of the ranks of each ``y`` column on the ranks of
+    all ``x`` columns, ``r^T C^{-1} r`` with ``r`` the Spearman coefficients and ``C`` the
+    rank correlation matrix of the design: at most 1 in every sample (it is an R^2), and equal
+    to :func:`sum_of_squares` when the design's ranks are exactly uncorrelated.  ``x`` (n, p),
+    ``y`` (n, q); returns (q,)."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    r = spearman(x, y)
+    c = spearman(x, x)
+    return np.einsum("pq,pq->q", r, np.linalg.solve(c, r))
