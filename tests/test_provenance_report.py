@@ -171,3 +171,21 @@ def test_report_shows_verdict_by_basis_and_collapses_long_scorecards(tmp_path):
     assert "8 reproduced independently" in text and 'class="crosstab"' in text
     assert "8 of the 16 published numbers and claims scored were reproduced independently; " \
         "16 agree in all (the others: 8 fitted)" in text
+
+
+def test_a_figure_is_captioned_with_the_rows_it_declares(run_record, tmp_path):
+    figs = tmp_path / "figures"
+    folder = figs / "03_guo2016_spearman_21_errors"
+    card = reproduction.Card()
+    card.number("Table 2", "index in Px", "0.10", 0.1)
+    card.number("Table 2", "index in Vx", "0.10", 0.3)
+    card.number("Table 5", "k", "1.0", 1.0)
+    card.write(folder / "reproduction.csv")
+    for name, rows in (("fig05_position", ["Table 2: * in P?"]), ("fig06_other", None)):
+        fig, ax = plt.subplots()
+        ax.plot([0, 1])
+        plotting.save(fig, folder, name, title="demo", scored_with=rows)
+        plt.close(fig)
+    text = report.build(figs, notebooks=tmp_path, export=False).read_text()
+    assert "Scorecard rows for Fig. 5: 1 reproduced (independent)." in text
+    assert "No scorecard row is tied to this figure" in text

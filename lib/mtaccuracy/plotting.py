@@ -40,9 +40,19 @@ def use_style() -> None:
     mpl.rcParams.update(STYLE)
 
 
-def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = None) -> None:
+#: PNG text key naming the scorecard rows a figure is scored with (read by the report).
+SCORED_WITH = "mtaccuracy:scored-with"
+
+
+def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = None,
+         scored_with=None) -> None:
     """Save ``fig`` as ``folder/name.<fmt>`` for each format, without timestamps.  Returns
-    nothing, so that a notebook cell ending with it shows no machine-specific path."""
+    nothing, so that a notebook cell ending with it shows no machine-specific path.
+
+    ``scored_with``: patterns (:mod:`fnmatch`, on a scorecard row's ``item`` or
+    ``"item: quantity"``) of the rows that score what the figure shows, for a figure whose
+    name is not the item of its rows (``fig05_...`` drawing what Table 2 scores); the report
+    captions the figure with their verdicts."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     stamp = provenance.as_text()
@@ -56,6 +66,8 @@ def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = Non
             meta = {}
         if title:
             meta["Title"] = title
+        if scored_with and fmt == "png":
+            meta[SCORED_WITH] = " | ".join(scored_with)
         with mpl.rc_context(STYLE):
             fig.savefig(path, format=fmt, metadata=meta, bbox_inches="tight")
         provenance.register_output(path)

@@ -20,6 +20,7 @@ mtaccuracy.report`` builds it; ``make reproduce`` does so at the end.
 from __future__ import annotations
 
 import argparse
+import fnmatch
 import html
 import os
 import re
@@ -30,7 +31,7 @@ from pathlib import Path
 import pandas as pd
 from PIL import Image
 
-from . import paths, provenance, reproduction, runner
+from . import paths, plotting, provenance, reproduction, runner
 
 #: Badge colours, each at least 5:1 against the white badge text (WCAG AA asks 4.5:1).
 COLOURS = {"reproduced": "#1a7a40", "close": "#8a6500", "differs": "#b3261e",
@@ -115,18 +116,23 @@ def _refs(item: str) -> set[tuple[str, int]]:
     return out
 
 
-def _differs_for(card: pd.DataFrame, label: str) -> str:
-    """What the scorecard says about a figure: verdict counts of the rows naming its number."""
-    if card.empty or not label.startswith(("Fig", "Table")):
+def _differs_for(card: pd.DataFrame, label: str, scored_with: str = "") -> str:
+    """What the scorecard says about a figure: verdict counts of the rows naming its number,
+    or of the rows the figure declares it is scored with (:data:`plotting.SCORED_WITH`)."""
+    pats = [p.strip() for p in scored_with.split("|") if p.strip()]
+    if card.empty or not (pats or label.startswith(("Fig", "Table"))):
         return ""
     kind = "fig" if label.startswith("Fig") else "table"
-    want = {(kind, n) for n in _numbers(label)}
-    rows = card[[bool(want & _refs(str(i))) for i in card["item"]]]
+    want = {(kind, n) for n in _numbers(label)} if label.startswith(("Fig", "Table")) else set()
+    rows = card[[bool(want & _refs(str(i))) or any(
+        fnmatch.fnmatchcase(str(i), p) or fnmatch.fnmatchcase(f"{i}: {q}", p) for p in pats)
+        for i, q in zip(card["item"], card["quantity"], strict=True)]]
     if rows.empty:
         return ("No scorecard row is tied to this figure: it is regenerated for comparison by "
                 "eye with the paper's.")
     counts = rows.groupby(["verdict", "basis"], sort=False).size()
     text = ", ".join(f"{n} {v} ({b})" for (v, b), n in counts.items())
+    label = label if want else "this figure"
     bad = rows[rows["verdict"].isin(["differs", "close", "not reproducible"])]
     note = f" First difference: {bad.iloc[0]['quantity']} ({bad.iloc[0]['note']})." \
         if not bad.empty else ""
@@ -318,6 +324,7 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
             label = _figure_label(png.stem)
             with Image.open(png) as im:
                 title = im.info.get("Title", "")
+                scored_with = im.info.get(plotting.SCORED_WITH, "")
             svg = png.with_suffix(".svg")
             if svg.name in bad:
                 svg = Path("/nonexistent")
@@ -326,7 +333,7 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
                 f'src="{_e(stem)}/{_e(png.name)}" alt="{_e(label)}: {_e(title or png.stem)}">'
                 f"<figcaption><strong>{_e(label)}</strong>"
                 f"{': ' + _e(_caption_title(label, title)) if title else ''}. "
-                f"{_e(_differs_for(card, label))} "
+                f"{_e(_differs_for(card, label, scored_with))} "
                 + (f'<a href="{_e(stem)}/{_e(svg.name)}">SVG</a>' if svg.exists() else "")
                 + f"{_provenance_html(provenance.from_png(png))}</figcaption></figure>")
         out.append("</section>")
