@@ -143,8 +143,9 @@ class ThermalData:
 
     def rises(self) -> pd.DataFrame:
         """Temperatures relative to the first measurement of each experiment (Eq. 9's T - T0)."""
-        first = self.temperatures.groupby(self.index.experiment.to_numpy()).transform("first")
-        return self.temperatures - first
+        t = self.temperatures
+        r = rises_of(t.to_numpy(dtype=float)[None], self.index.experiment.to_numpy())[0]
+        return pd.DataFrame(r, index=t.index, columns=t.columns)
 
     def offsets_mm(self) -> np.ndarray:
         """Target positions shifted to start at 0 (185..445 mm -> 0..260 mm)."""
@@ -694,9 +695,7 @@ def compose(k_um_per_m, b_um, offsets_mm) -> np.ndarray:
 
 def metrics(residuals) -> dict:
     """RMSE, largest absolute residual (the paper's delta_max) and MAE."""
-    r = np.asarray(residuals, dtype=float).ravel()
-    return {"rmse": float(np.sqrt(np.mean(r**2))), "max_residual": float(np.max(np.abs(r))),
-            "mae": float(np.mean(np.abs(r)))}
+    return {k: float(v[0]) for k, v in batch_metrics(np.asarray(residuals)[None]).items()}
 
 
 # --------------------------------------------------------------------------------------------
@@ -1069,7 +1068,8 @@ def predict_linear(coef: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def batch_metrics(residuals) -> dict:
-    """:func:`metrics` of every replicate: ``residuals`` (R, ...) -> {name: (R,)}."""
+    """:func:`metrics` of every replicate (its one implementation): ``residuals`` (R, ...) ->
+    {name: (R,)}."""
     r = np.asarray(residuals, dtype=float)
     r = r.reshape(len(r), -1)
     return {"rmse": np.sqrt(np.mean(r**2, axis=1)), "max_residual": np.abs(r).max(axis=1),
@@ -1077,8 +1077,8 @@ def batch_metrics(residuals) -> dict:
 
 
 def rises_of(temperatures: np.ndarray, experiments) -> np.ndarray:
-    """Temperatures (R, n, S) relative to the first row of each experiment (as
-    :meth:`ThermalData.rises`, batched)."""
+    """Temperatures (R, n, S) relative to the first row of each experiment (the one
+    implementation of :meth:`ThermalData.rises`, batched)."""
     experiments = np.asarray(experiments)
     first = pd.Series(np.arange(len(experiments))).groupby(experiments).transform("first")
     t = np.asarray(temperatures, dtype=float)

@@ -423,6 +423,35 @@ def rank_poses(candidates, misfit: str = "misfit", rtol: float = 1e-6,
     return minima.iloc[ranked].reset_index(drop=True)
 
 
+def _least_squares_fits(residuals, starts, lo, hi, scale, ftol, xtol, max_nfev) -> list:
+    """scipy's ``least_squares`` (trust-region reflective, bounds ``lo``/``hi``) from each
+    start, with a central-difference Jacobian (steps ``1e-6 * scale``) evaluated in one batched
+    call of ``residuals`` ((B, n) -> (B, m)); BLAS single-threaded (small matrices: threads only
+    cost time, and the result is then the same for any thread count).  Returns
+    ``[(x, rms misfit, status)]``, one per start."""
+    from scipy.optimize import least_squares
+    from threadpoolctl import threadpool_limits
+
+    n, step = len(scale), 1e-6 * scale
+
+    def fun(v):
+        return residuals(v[None])[0]
+
+    def jac(v):
+        e = np.eye(n) * step
+        r = residuals(np.concatenate([v + e, v - e]))
+        return ((r[:n] - r[n:]) / (2 * step[:, None])).T
+
+    out = []
+    with threadpool_limits(limits=1, user_api="blas"):
+        for v0 in starts:
+            r = least_squares(fun, np.clip(v0, lo, hi), jac=jac, bounds=(lo, hi),
+                              x_scale=scale, ftol=ftol, xtol=xtol, gtol=None,
+                              max_nfev=max_nfev, method="trf")
+            out.append((r.x, float(np.sqrt(np.mean(fun(r.x) ** 2))), int(r.status)))
+    return out
+
+
 def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, starts,
                         free=AXES, fixed: Mapping | None = None, ftol: float = 1e-15,
                         xtol: float = 1e-15, max_nfev: int = 500):
@@ -440,8 +469,6 @@ def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, star
     for any thread count).
     """
     import pandas as pd
-    from scipy.optimize import least_squares
-    from threadpoolctl import threadpool_limits
 
     from ..sensitivity.sobol import linear_indices
 
@@ -457,33 +484,20 @@ def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, star
     scale = np.array([100.0 if a in "xyz" else 1.0 for a in free])
     lo = np.array([TRAVELS[a][0] if a != "C" else -np.inf for a in free])
     hi = np.array([TRAVELS[a][1] if a != "C" else np.inf for a in free])
-    step = 1e-6 * scale
 
     def residuals(v):  # v: (P, len(free)) -> (P, len(target))
         pose = {a: v[:, i] for i, a in enumerate(free)}
         pose.update({a: np.full(v.shape[0], float(fixed[a])) for a in fixed})
         return linear_indices(machine.linear_jacobian(pose), sd)[:, rows, cols] - target
 
-    def fun(v):
-        return residuals(v[None])[0]
-
-    def jac(v):
-        e = np.eye(len(free)) * step
-        r = residuals(np.concatenate([v + e, v - e]))
-        return ((r[:len(free)] - r[len(free):]) / (2 * step[:, None])).T
-
     out = []
-    with threadpool_limits(limits=1, user_api="blas"):
-        for v0 in starts:
-            r = least_squares(fun, np.clip(v0, lo, hi), jac=jac, bounds=(lo, hi),
-                              x_scale=scale, ftol=ftol, xtol=xtol, gtol=None,
-                              max_nfev=max_nfev, method="trf")
-            row = {a: float(fixed[a]) for a in fixed}
-            row.update({a: float(r.x[i]) for i, a in enumerate(free)})
-            row["C"] = float(np.mod(row["C"], 2 * np.pi))
-            row["misfit"] = float(np.sqrt(np.mean(fun(r.x) ** 2)))
-            row["status"] = int(r.status)
-            out.append({k: row[k] for k in (*AXES, "misfit", "status")})
+    for x, misfit, status in _least_squares_fits(residuals, starts, lo, hi, scale, ftol, xtol,
+                                                 max_nfev):
+        row = {a: float(fixed[a]) for a in fixed}
+        row.update({a: float(x[i]) for i, a in enumerate(free)})
+        row["C"] = float(np.mod(row["C"], 2 * np.pi))
+        row["misfit"], row["status"] = misfit, status
+        out.append({k: row[k] for k in (*AXES, "misfit", "status")})
     return pd.DataFrame(out)
 
 
@@ -727,8 +741,6 @@ def fit_pose_average_to_indices(machine: ACDoubleTurntable, sd, target, rows, co
     pose: ``start``, ``pose`` (0..m-1), x, y, z, A, C, ``misfit`` (RMS over the entries)
     and ``status``."""
     import pandas as pd
-    from scipy.optimize import least_squares
-    from threadpoolctl import threadpool_limits
 
     from ..sensitivity.sobol import linear_indices
 
@@ -741,7 +753,6 @@ def fit_pose_average_to_indices(machine: ACDoubleTurntable, sd, target, rows, co
     scale = np.tile([100.0, 100.0, 100.0, 1.0, 1.0], m)
     lo = np.tile([TRAVELS["x"][0], TRAVELS["y"][0], TRAVELS["z"][0], TRAVELS["A"][0], -np.inf], m)
     hi = np.tile([TRAVELS["x"][1], TRAVELS["y"][1], TRAVELS["z"][1], TRAVELS["A"][1], np.inf], m)
-    step = 1e-6 * scale
 
     def residuals(v):  # v: (B, 5 m) -> (B, entries)
         p = v.reshape(-1, 5)
@@ -749,20 +760,12 @@ def fit_pose_average_to_indices(machine: ACDoubleTurntable, sd, target, rows, co
         s = linear_indices(machine.linear_jacobian(pose), sd)[:, rows, cols]
         return s.reshape(v.shape[0], m, -1).mean(axis=1) - target
 
-    def jac(v):
-        e = np.eye(v.size) * step
-        r = residuals(np.concatenate([v + e, v - e]))
-        return ((r[:v.size] - r[v.size:]) / (2 * step[:, None])).T
-
     out = []
-    with threadpool_limits(limits=1, user_api="blas"):
-        for k, v0 in enumerate(starts):
-            r = least_squares(lambda v: residuals(v[None])[0], np.clip(v0.ravel(), lo, hi),
-                              jac=jac, bounds=(lo, hi), x_scale=scale, ftol=ftol, xtol=xtol,
-                              gtol=None, max_nfev=max_nfev, method="trf")
-            misfit = float(np.sqrt(np.mean(residuals(r.x[None])[0] ** 2)))
-            poses = [canonical_pose(dict(zip(AXES, p, strict=True))) for p in r.x.reshape(m, 5)]
-            poses.sort(key=lambda p: -p["A"])
-            out += [dict(start=k, pose=j, **p, misfit=misfit, status=int(r.status))
-                    for j, p in enumerate(poses)]
+    fits = _least_squares_fits(residuals, starts.reshape(len(starts), -1), lo, hi, scale, ftol,
+                               xtol, max_nfev)
+    for k, (x, misfit, status) in enumerate(fits):
+        poses = [canonical_pose(dict(zip(AXES, p, strict=True))) for p in x.reshape(m, 5)]
+        poses.sort(key=lambda p: -p["A"])
+        out += [dict(start=k, pose=j, **p, misfit=misfit, status=status)
+                for j, p in enumerate(poses)]
     return pd.DataFrame(out)
