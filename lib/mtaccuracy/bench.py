@@ -1,81 +1,267 @@
-"""``make bench``: the speed targets named in the issues, measured (median of repeats; the two
-commands, ``make reproduce`` and ``make test``, min of two runs in a fresh clone, skipped with
-``--quick``).
+"""``make bench``: the speed targets named in the issues, measured.
 
-Targets are shown here, never asserted in timed tests.  Each row: what is timed, its size, the
-wall-clock time, the target where an issue names one, and the paper's published time with our
-ratio to it where there is one.
+Every task runs in a fresh Python process of its own (``python -m mtaccuracy.bench --task
+NAME``), so its memory is that task's alone: the row gives the process's peak RSS and, of it,
+what the task added above the RSS the process had when the task started (imports and inputs).
+Times are the minimum of ``repeat`` runs (3 unless a row says otherwise) after one warm-up run
+(caches of multi-indices and polynomial families filled), wall clock.  Targets are shown here,
+never asserted in timed tests.  ``make reproduce`` and ``make test`` are timed in a fresh clone
+(min of two; skipped with ``--quick``).
+
+The sparse-PCE benchmarks (issue 13) run the same cases, on the same samples, through our
+``fit_sparse_pce`` (OMP and LARS, basis and length validated) and through OpenTURNS
+(``FunctionalChaosAlgorithm``, LARS with corrected LOO, the Legendre basis at a fixed degree),
+an optional dependency of the bench only: without it those rows say so and the rest runs.  Each
+prints the time and the largest error of S1 and ST against the exact indices.
 """
 
 from __future__ import annotations
 
+import json
+import os
 import resource
-import statistics
+import subprocess
+import sys
 import time
 
 import numpy as np
 
-from . import errors, sensitivity
-from .machines import build
+REPEAT = 3
 
 
-def _median(fn, repeat: int = 3) -> float:
-    fn()  # warm-up
-    times = []
+def _rss_mb() -> float:
+    """Current resident set size of this process, MB (Linux /proc)."""
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def _min_time(fn, repeat: int = REPEAT):
+    """Warm-up run, then the minimum wall time of ``repeat`` runs; returns (seconds, result)."""
+    out = fn()
+    best = np.inf
     for _ in range(repeat):
         t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
 
 
-def _guo_rows():
+# ------------------------------------------------------------------------------------------
+# Tasks: each returns dict(time=..., note=..., [err_s1, err_st]) and runs in its own process.
+# ------------------------------------------------------------------------------------------
+
+def _zheng():
+    from .machines import build
+
+    m = build("ac_double_turntable")
+    sd = np.array([e.to_library * (15.0 if e.translational else 10.0) / 3 for e in m.catalogue])
+    pose = dict(x=106.1, y=-58.6, z=-255.3, A=np.deg2rad(60.7), C=np.deg2rad(56.7))
+    return m, sd, pose
+
+
+def task_guo_pose_error():
+    from . import errors, sensitivity
+    from .machines import build
+
     m = build("vertical_xyfz")
     b = errors.uniform_bounds(m.catalogue, {"positioning": (0, 3), "straightness": (0, 4),
                                             "angular": (0, 3.2e-5), "squareness": (0, 1.9)})
     x = sensitivity.latin_hypercube(1_000_000, b, 0)
     pose = dict(x=100.0, y=100.0, z=100.0)
-    t = _median(lambda: m.pose_error(x, pose))
-    yield ("Guo 2016", "vertical_xyfz pose error", "1e6 samples", t, "",
-           f"{1e6 / t / 1e6:.2f} M samples/s", None)
+    t, _ = _min_time(lambda: m.pose_error(x, pose))
+    return dict(time=t, note=f"{1 / t:.2f} M samples/s")
+
+
+def task_guo_spearman():
+    from . import errors, sensitivity
+    from .machines import build
+
+    m = build("vertical_xyfz")
+    b = errors.uniform_bounds(m.catalogue, {"positioning": (0, 3), "straightness": (0, 4),
+                                            "angular": (0, 3.2e-5), "squareness": (0, 1.9)})
+    pose = dict(x=100.0, y=100.0, z=100.0)
     d = sensitivity.repeated_latin_hypercube(500, b, 200, 2)
     y = sensitivity.position_outputs(m.pose_error(d.reshape(-1, 21), pose)).reshape(200, 500, 4)
-    t = _median(lambda: sensitivity.spearman(d, y))
-    yield "Guo 2016", "Spearman, batched", "200 x 500 x 21 x 4", t, "", "", None
+    t, _ = _min_time(lambda: sensitivity.spearman(d, y))
+    return dict(time=t, note="")
 
 
-def _zheng_rows():
-    m = build("ac_double_turntable")
-    sd = np.array([e.to_library * (15.0 if e.translational else 10.0) / 3 for e in m.catalogue])
-    pose = dict(x=106.1, y=-58.6, z=-255.3, A=np.deg2rad(60.7), C=np.deg2rad(56.7))
+def task_zheng_pose_error():
+    m, sd, pose = _zheng()
     x = np.random.default_rng(0).standard_normal((1_000_000, 41)) * sd
-    t = _median(lambda: m.pose_error(x, pose))
-    yield ("Zheng 2024", "ac_double_turntable pose error", "1e6 samples", t,
-           ">= 1 M samples/s", f"{1e6 / t / 1e6:.2f} M samples/s", None)
+    t, _ = _min_time(lambda: m.pose_error(x, pose))
+    return dict(time=t, note=f"{1 / t:.2f} M samples/s")
 
-    def pce(components):
-        u = sensitivity.base_samples(1000, 41, "lhs", 1)[0]
-        xi = sensitivity.from_unit_normal(u, np.ones(41))
-        yv = m.pose_error(xi * sd, pose)
-        alphas = sensitivity.multi_indices(41, 3)
-        psi = sensitivity.design_matrix(xi, alphas)
-        return [sensitivity.pce_sobol(sensitivity.fit_pce(xi, yv[:, k], psi=psi, alphas=alphas))
-                for k in components]
-    t = _median(lambda: pce([0]))
-    yield ("Zheng 2024", "PCE pipeline, one component", "1e3 samples, 13244-term basis, OMP",
-           t, "<= 1.5 s", "", 7.8761)
-    t = _median(lambda: pce(range(6)), 1)
-    yield ("Zheng 2024", "PCE pipeline, all six components", "1e3 samples, degree 3", t, "", "",
-           7.8761)
 
-    def mcs():
-        ua, ub = sensitivity.base_samples(100_000, 41, "mc", 2)
-        a, b = sensitivity.from_unit_normal(ua, sd), sensitivity.from_unit_normal(ub, sd)
-        return sensitivity.sobol_indices(lambda z: m.pose_error(z, pose), a, b, chunk=250_000)
-    t = _median(mcs, 1)
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    yield ("Zheng 2024", "MCS Sobol (S1, ST), one pose", "N = 1e5, 4.3e6 runs", t, "<= 5 s",
-           f"chunked; bench process peak RSS {peak / 1024:.0f} MB", 244.0789)
+def _zheng_pce(components):
+    from . import sensitivity as S
+
+    m, sd, pose = _zheng()
+    u = S.base_samples(1000, 41, "lhs", 1)[0]
+    xi = S.from_unit_normal(u, np.ones(41))
+    yv = m.pose_error(xi * sd, pose)
+
+    def run():
+        alphas = S.multi_indices(41, 3)
+        psi = S.design_matrix(xi, alphas)
+        fits = S.fit_pce_outputs(xi, yv[:, list(components)], psi=psi, alphas=alphas)
+        return [S.pce_sobol(f) for f in fits]
+    t, out = _min_time(run)
+    return dict(time=t, note=f"terms kept: {', '.join(str(int((o[1] > 0).sum())) for o in out)}"
+                             " inputs with an index")
+
+
+def task_zheng_pce_one():
+    return _zheng_pce([0])
+
+
+def task_zheng_pce_six():
+    return _zheng_pce(range(6))
+
+
+def task_zheng_mcs():
+    from . import sensitivity as S
+
+    m, sd, pose = _zheng()
+
+    def run():
+        ua, ub = S.base_samples(100_000, 41, "mc", 2)
+        a, b = S.from_unit_normal(ua, sd), S.from_unit_normal(ub, sd)
+        return S.sobol_indices(lambda z: m.pose_error(z, pose), a, b, chunk=250_000)
+    t, (s1, st) = _min_time(run)
+    lin = S.linear_indices(m.linear_jacobian(pose), sd)[0]
+    return dict(time=t, note=f"largest |ST - linear closed form| {np.abs(st.T - lin).max():.1e}")
+
+
+PCE_CASES = {  # name: (benchmark, n, degrees for ours, OpenTURNS degree, OpenTURNS repeats)
+    "ishigami": ("ishigami", 1000, range(1, 15), 12, REPEAT),
+    "g_function_8d": ("g_function_8d", 500, range(1, 7), 6, REPEAT),
+    "g_function_41d": ("g_function_41d", 1000, (1, 2, 3), 3, 0),
+    "interaction_polynomial": ("interaction_polynomial", 120, (1, 2, 3), 2, REPEAT),
+}
+
+
+def _case(name):
+    from .sensitivity.benchmarks import BENCHMARKS
+
+    bench, n, degrees, ot_degree, ot_repeat = PCE_CASES[name]
+    b = BENCHMARKS[bench]()
+    x = b.sample(n, 1)
+    return b, x, b.model(x), degrees, ot_degree, ot_repeat
+
+
+def _errors(b, s1, st):
+    top = np.argsort(-np.asarray(st), kind="stable")
+    rank = "" if b.dim < 10 else ("; top six right" if set(top[:6]) == set(range(6))
+                                  else f"; top six {sorted(int(i) for i in top[:6])}")
+    return dict(err_s1=float(np.abs(s1 - b.s1).max()), err_st=float(np.abs(st - b.st).max()),
+                rank=rank)
+
+
+def _task_ours(name, method):
+    import warnings
+
+    from .sensitivity import pce as P
+
+    b, x, y, degrees, _, _ = _case(name)
+    inp = P.ChaosInputs(b.marginals)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", P.PoorFitWarning)
+        t, res = _min_time(lambda: P.fit_sparse_pce(x, y, inp, degrees=degrees, method=method))
+    f = res.fit
+    return dict(time=t, **_errors(b, res.s1, res.st),
+                note=f"degree {f.degree}, q {f.q_norm:g}, {len(f.coef)} terms of {f.n_candidates}"
+                     f", validation {f.validation:.1e}, LOO {f.loo:.1e}"
+                     + ("" if res.reliable else ", PoorFitWarning"))
+
+
+def _task_openturns(name):
+    try:
+        import openturns as ot
+    except ImportError:
+        return dict(time=float("nan"), note="OpenTURNS not installed (pip install openturns): "
+                                            "skipped")
+    b, x, y, _, degree, repeat = _case(name)
+    d = x.shape[1]
+    dists = [ot.Uniform(*m.support()) for m in b.marginals]
+
+    def run():
+        enum = ot.HyperbolicAnisotropicEnumerateFunction(d, 1.0)
+        basis = ot.OrthogonalProductPolynomialFactory(
+            [ot.StandardDistributionPolynomialFactory(m) for m in dists], enum)
+        adaptive = ot.FixedStrategy(basis, enum.getStrataCumulatedCardinal(degree))
+        proj = ot.LeastSquaresStrategy(ot.LeastSquaresMetaModelSelectionFactory(
+            ot.LARS(), ot.CorrectedLeaveOneOut()))
+        algo = ot.FunctionalChaosAlgorithm(ot.Sample(x), ot.Sample(y[:, None]),
+                                           ot.JointDistribution(dists), adaptive, proj)
+        algo.run()
+        res = algo.getResult()
+        sens = ot.FunctionalChaosSobolIndices(res)
+        return (np.array([sens.getSobolIndex(i) for i in range(d)]),
+                np.array([sens.getSobolTotalIndex(i) for i in range(d)]),
+                res.getIndices().getSize())
+    if repeat:
+        t, (s1, st, terms) = _min_time(run, repeat)
+    else:  # one run (a minute): no warm-up
+        t0 = time.perf_counter()
+        s1, st, terms = run()
+        t = time.perf_counter() - t0
+    return dict(time=t, **_errors(b, s1, st),
+                note=f"LARS + corrected LOO, Legendre degree {degree}, {terms} terms"
+                     + ("" if repeat else "; one run"))
+
+
+def _pce_tasks():
+    for name in PCE_CASES:
+        for method in ("omp", "lars"):
+            yield f"pce_{name}_{method}", (lambda nm=name, me=method: _task_ours(nm, me))
+        yield f"pce_{name}_openturns", (lambda nm=name: _task_openturns(nm))
+
+
+TASKS = {
+    "guo_pose_error": task_guo_pose_error,
+    "guo_spearman": task_guo_spearman,
+    "zheng_pose_error": task_zheng_pose_error,
+    "zheng_pce_one": task_zheng_pce_one,
+    "zheng_pce_six": task_zheng_pce_six,
+    "zheng_mcs": task_zheng_mcs,
+    **dict(_pce_tasks()),
+}
+
+#: (paper, task, what, size, target, published seconds)
+ROWS = [
+    ("Guo 2016", "guo_pose_error", "vertical_xyfz pose error", "1e6 samples", "", None),
+    ("Guo 2016", "guo_spearman", "Spearman, batched", "200 x 500 x 21 x 4", "", None),
+    ("Zheng 2024", "zheng_pose_error", "ac_double_turntable pose error", "1e6 samples",
+     ">= 2 M samples/s", None),
+    ("Zheng 2024", "zheng_pce_one", "PCE, one component", "n 1e3, degree 3, 13244 terms",
+     "<= 0.5 s", 7.8761),
+    ("Zheng 2024", "zheng_pce_six", "PCE, all six components", "n 1e3, degree 3", "", 7.8761),
+    ("Zheng 2024", "zheng_mcs", "MCS Sobol (S1, ST), one pose", "N 1e5, 4.3e6 runs",
+     "<= 3 s, <= 300 MB", 244.0789),
+]
+for _name, (_b, _n, _deg, _otd, _) in PCE_CASES.items():
+    for _m in ("omp", "lars", "openturns"):
+        ROWS.append(("PCE bench", f"pce_{_name}_{_m}", f"{_name} ({_m})",
+                     f"n {_n}, degree <= {max(_deg) if _m != 'openturns' else _otd}",
+                     "<= 3 s" if _name == "g_function_41d" and _m == "omp" else "", None))
+
+
+def run_task(name: str) -> dict:
+    """Run one task in this process; its time, peak RSS and RSS above the start, MB."""
+    start = _rss_mb()
+    out = TASKS[name]()
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return dict(out, peak_mb=peak, task_mb=peak - start)
+
+
+def _in_subprocess(name: str) -> dict:
+    res = subprocess.run([sys.executable, "-m", "mtaccuracy.bench", "--task", name],
+                         capture_output=True, text=True)
+    if res.returncode != 0:
+        return dict(time=float("nan"), peak_mb=float("nan"), task_mb=float("nan"),
+                    note="FAILED: " + (res.stderr.strip().splitlines() or ["?"])[-1])
+    return json.loads(res.stdout.strip().splitlines()[-1])
 
 
 _MEASURE = """
@@ -90,9 +276,6 @@ def _command_rows(repeat: int = 2):
     """Issue 11's targets: ``make reproduce`` <= 90 s and ``make test`` <= 150 s, each in a
     fresh clone of HEAD sharing this checkout's .venv (the environment exists), min of
     ``repeat`` runs; memory: the largest single process of the run (peak RSS)."""
-    import os
-    import subprocess
-    import sys
     import tempfile
     from pathlib import Path
 
@@ -111,41 +294,49 @@ def _command_rows(repeat: int = 2):
                 seconds, rss, rc = res.stdout.split()
                 runs.append((float(seconds), int(rss), int(rc)))
             best = min(runs)
-            yield ("all", f"make {target} (fresh clone)", f"min of {repeat}", best[0], goal,
-                   f"peak RSS of its largest process {max(r[1] for r in runs) / 1024:.0f} MB"
-                   + ("" if all(r[2] == 0 for r in runs) else "; A RUN FAILED"), None)
-
-
-def rows(commands: bool = True):
-    yield from _guo_rows()
-    yield from _zheng_rows()
-    if commands:
-        yield from _command_rows()
+            yield (f"make {target} (fresh clone)", f"min of {repeat}", goal,
+                   dict(time=best[0], peak_mb=max(r[1] for r in runs) / 1024,
+                        task_mb=float("nan"),
+                        note="" if all(r[2] == 0 for r in runs) else "A RUN FAILED"))
 
 
 def main(argv=None) -> int:
     import argparse
+    import shlex
 
     ap = argparse.ArgumentParser(prog="python -m mtaccuracy.bench")
     ap.add_argument("--quick", action="store_true",
                     help="skip timing make reproduce and make test (a few minutes)")
     ap.add_argument("--from-env", action="store_true",
                     help="also read arguments from $BENCH_ARGS (as make bench passes them)")
+    ap.add_argument("--task", choices=sorted(TASKS), help="run one task here, print JSON")
+    ap.add_argument("--only", default="", help="run only the rows whose task contains this")
     args = ap.parse_args(argv)
     if args.from_env:
-        import os
-        import shlex
-
         args = ap.parse_args([*(argv or []), *shlex.split(os.environ.get("BENCH_ARGS", ""))])
-    head = f"{'paper':<11} {'what':<34} {'size':<36} {'median':>9}  {'target':<17} " \
-           f"{'published':>9} {'ratio':>7}  note"
+    if args.task:
+        print(json.dumps(run_task(args.task)))
+        return 0
+    head = (f"{'paper':<10} {'what':<34} {'size':<30} {'min time':>9}  {'target':<18} "
+            f"{'peak MB':>8} {'task MB':>8} {'err S1':>8} {'err ST':>8}  note")
     print(head)
-    print("-" * len(head))
-    for paper, what, size, t, target, note, published in rows(commands=not args.quick):
-        pub = f"{published:>8.2f}s" if published else f"{'':>9}"
-        ratio = f"{t / published:>7.3f}" if published else f"{'':>7}"
-        print(f"{paper:<11} {what:<34} {size:<36} {t:>8.2f}s  {target:<17} {pub} {ratio}  {note}",
-              flush=True)
+    print("-" * len(head), flush=True)
+
+    def show(paper, what, size, target, r, published=None):
+        e1 = f"{r['err_s1']:>8.1e}" if "err_s1" in r else f"{'':>8}"
+        et = f"{r['err_st']:>8.1e}" if "err_st" in r else f"{'':>8}"
+        note = r.get("note", "") + r.get("rank", "")
+        if published:
+            note += f"; paper {published:.2f} s (ratio {r['time'] / published:.3f})"
+        print(f"{paper:<10} {what:<34} {size:<30} {r['time']:>8.3f}s  {target:<18} "
+              f"{r['peak_mb']:>8.0f} {r['task_mb']:>8.0f} {e1} {et}  {note}", flush=True)
+
+    for paper, task, what, size, target, published in ROWS:
+        if args.only in task:
+            show(paper, what, size, target, _in_subprocess(task), published)
+    if not args.quick and not args.only:
+        for what, size, target, r in _command_rows():
+            show("all", what, size, target, r)
     return 0
 
 

@@ -7,10 +7,13 @@ One submodule per method; everything is re-exported here, so notebooks write
 | --- | --- |
 | ``spearman`` | Latin hypercube sampling (scipy.qmc), Spearman ranking (Guo et al. 2016) |
 | ``sobol`` | Sobol first-order and total indices (Saltelli/Jansen), chunked model evaluation |
-| ``pce`` | sparse polynomial chaos (OMP) and Sobol indices from its coefficients (Zheng et al.) |
+| ``pce`` | sparse polynomial chaos (OMP/LARS, bases by input law, validated basis adaptivity) and
+  Sobol indices from its coefficients (Zheng et al.) |
+| ``benchmarks`` | Ishigami, G function, interaction polynomial: exact indices for tests and bench |
 | ``screening`` | key-error selection rules and reduced models (Rong et al.) |
 """
 
+from . import benchmarks  # noqa: F401
 from .pce import *  # noqa: F403
 from .screening import *  # noqa: F403
 from .sobol import *  # noqa: F403
