@@ -255,9 +255,13 @@ def run_task(name: str) -> dict:
     return dict(out, peak_mb=peak, task_mb=peak - start)
 
 
-def _in_subprocess(name: str) -> dict:
-    res = subprocess.run([sys.executable, "-m", "mtaccuracy.bench", "--task", name],
-                         capture_output=True, text=True)
+def _in_subprocess(name: str, timeout: float | None = None) -> dict:
+    try:
+        res = subprocess.run([sys.executable, "-m", "mtaccuracy.bench", "--task", name],
+                             capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return dict(time=float("nan"), peak_mb=float("nan"), task_mb=float("nan"),
+                    note=f"stopped after {timeout:.0f} s (--timeout)")
     if res.returncode != 0:
         return dict(time=float("nan"), peak_mb=float("nan"), task_mb=float("nan"),
                     note="FAILED: " + (res.stderr.strip().splitlines() or ["?"])[-1])
@@ -311,6 +315,8 @@ def main(argv=None) -> int:
                     help="also read arguments from $BENCH_ARGS (as make bench passes them)")
     ap.add_argument("--task", choices=sorted(TASKS), help="run one task here, print JSON")
     ap.add_argument("--only", default="", help="run only the rows whose task contains this")
+    ap.add_argument("--timeout", type=float, default=600.0,
+                    help="stop an OpenTURNS task after this many seconds (default 600)")
     args = ap.parse_args(argv)
     if args.from_env:
         args = ap.parse_args([*(argv or []), *shlex.split(os.environ.get("BENCH_ARGS", ""))])
@@ -333,7 +339,8 @@ def main(argv=None) -> int:
 
     for paper, task, what, size, target, published in ROWS:
         if args.only in task:
-            show(paper, what, size, target, _in_subprocess(task), published)
+            limit = args.timeout if task.endswith("openturns") else None
+            show(paper, what, size, target, _in_subprocess(task, limit), published)
     if not args.quick and not args.only:
         for what, size, target, r in _command_rows():
             show("all", what, size, target, r)
