@@ -262,7 +262,7 @@ def test_loo_of_selected_terms_is_optimistic_and_validation_is_not():
     inp = P.ChaosInputs(b.marginals)
     psi = P.design_matrix(inp.to_standard(x), P.multi_indices(16, 3), inp.families)
     order, loo = P.omp_path(psi, y, 120, None)
-    curve, _ = P._validation_curve(psi, y, "omp", 120, 5, P._column_norms(psi), 0)
+    curve, _ = P.validation_curve(psi, y, "omp", 120, 5, P.column_norms(psi), 0)
     assert loo[120] < 0.1 * curve[1:].min()  # the LOO at 120 terms claims 10x better than any
     assert curve[120] > 2 * curve[1:].min()  # ... and validation says it has overfitted
 
@@ -301,7 +301,16 @@ def test_omp_on_a_fold_equals_omp_on_the_fold_rows():
     psi = P.design_matrix(z, P.multi_indices(3, 3))
     y = z[:, 0] * z[:, 1] + z[:, 2] ** 2 + 0.1 * RNG.standard_normal(60)
     rows = np.sort(RNG.choice(60, 45, replace=False))
-    norms = P._column_norms(psi)
+    norms = P.column_norms(psi)
     o1, l1 = P.omp_path(psi, y, 15, None, norms=norms, rows=rows)
     o2, l2 = P.omp_path(np.asfortranarray(psi[rows]), y[rows], 15, None, norms=norms)
     assert np.array_equal(o1, o2) and np.allclose(l1, l2, rtol=1e-10)
+
+
+def test_validation_curve_refuses_bad_arguments():
+    z = RNG.standard_normal((40, 2))
+    psi = P.design_matrix(z, P.multi_indices(2, 2))
+    with pytest.raises(ValueError, match="unknown sparse solver 'lasso'"):
+        P.validation_curve(psi, z[:, 0], "lasso", 3)
+    with pytest.raises(ValueError, match="folds must be an integer from 2 to n/2 = 20"):
+        P.validation_curve(psi, z[:, 0], "omp", 3, folds=30)

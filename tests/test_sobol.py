@@ -54,6 +54,49 @@ def test_chunking_does_not_change_the_result_and_reports_progress():
     assert seen[-1] == (500, 500) and len(seen) > 10
 
 
+@pytest.mark.parametrize("n, chunk", [(300, 10_000), (300, 700), (300, 128)])
+def test_streaming_indices_equal_the_stored_estimate(n, chunk):
+    """sobol_indices never holds yab; it must give sobol_estimate's numbers, for every way
+    the runs are batched (several AB blocks per call, one, or one block over several)."""
+    ua, ub = S.base_samples(n, 5, "mc", 11)
+
+    def model(x):   # two outputs far from zero (centring matters) with interactions
+        return np.c_[ishigami(x) + 40.0, x[:, 3] * x[:, 4] - 3.0 + x[:, 0]]
+    a, b = S.from_unit_uniform(ua, np.array([[-np.pi] * 5, [np.pi] * 5])), S.from_unit_uniform(
+        ub, np.array([[-np.pi] * 5, [np.pi] * 5]))
+    seen = []
+    s1, st = S.sobol_indices(model, a, b, chunk=chunk, progress=lambda d, t: seen.append((d, t)))
+    e1, et = S.sobol_estimate(*S.sobol_evaluate(model, a, b, chunk=chunk))
+    assert s1.shape == (5, 2) and np.allclose(s1, e1, rtol=0, atol=1e-12)
+    assert np.allclose(st, et, rtol=0, atol=1e-12)
+    assert seen[-1] == (7 * n, 7 * n)
+
+
+def test_a_model_returning_a_view_of_its_input_is_safe():
+    """The AB blocks share one buffer, changed between calls: outputs must be copied."""
+    ua, ub = S.base_samples(50, 4, "mc", 5)
+    ya, yb, yab = S.sobol_evaluate(lambda x: x, ua, ub, chunk=120)
+    assert np.array_equal(ya, ua) and np.array_equal(yb, ub)
+    for i in range(4):
+        ab = ua.copy()
+        ab[:, i] = ub[:, i]
+        assert np.array_equal(yab[i], ab)
+    s1, st = S.sobol_indices(lambda x: x, ua, ub, chunk=120)
+    e1, et = S.sobol_estimate(ya, yb, yab)
+    assert np.allclose(s1, e1, atol=1e-12) and np.allclose(st, et, atol=1e-12)
+
+
+def test_estimate_by_input_blocks_equals_one_block(monkeypatch):
+    ua, ub = S.base_samples(64, 6, "mc", 8)
+    y = S.sobol_evaluate(lambda x: np.c_[ishigami(x), x.sum(1)], ua, ub)
+    whole = S.sobol_estimate(*y)
+    monkeypatch.setattr(S.sobol, "_ESTIMATE_BLOCK", 130)     # one input at a time
+    for x, z in zip(whole, S.sobol_estimate(*y), strict=True):
+        assert np.allclose(x, z, rtol=0, atol=1e-14)
+    boot = S.sobol_estimate(y[0][None], y[1][None], y[2][None])   # a leading axis
+    assert np.allclose(boot[1][0], whole[1], rtol=0, atol=1e-14)
+
+
 def test_bootstrap_half_width_shrinks_with_n():
     widths = []
     for n in (256, 4096):

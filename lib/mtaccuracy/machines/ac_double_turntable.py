@@ -507,47 +507,60 @@ def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, star
 # Every rotation is three elementary rotations of vectors held as structure of arrays (one
 # contiguous row per coordinate), so each step is a few elementwise numpy operations over a
 # chunk of samples: no stacked small matmul (which numpy hands to BLAS one 4x4 product at a
-# time: slow, and rounded differently by each BLAS kernel).  The general implementation above
-# is the reference; the tests require both to agree to rounding.
+# time: slow, and rounded differently by each BLAS kernel).  All operations write into one
+# workspace allocated per call (not per chunk), so a chunk allocates nothing.  The general
+# implementation above is the reference; the tests require both to agree to rounding.
 # --------------------------------------------------------------------------------------
 
 
-def _rx(v, c, s, inverse=False):
-    """Rx(a) v (``inverse``: Rx(a)^T v) for v a list of three coordinate rows (each (2, k):
-    the tool tip and the tool axis), c, s the cosines and sines (k,)."""
+class _Workspace:
+    """Scratch rows for :func:`fast_pose_error` on chunks of ``k`` samples: the gathered
+    errors ``blk`` (41, k), cosines and sines ``c``, ``s`` (23, k; row 22 for the combined
+    C + g_AM rotation), the three coordinate rows ``v`` (each (2, k): tip and axis) and two
+    rows ``t`` for the rotations."""
+
+    def __init__(self, k: int):
+        self.k = k
+        self.rows = np.empty((k, 41))
+        self.blk = np.empty((41, k))
+        self.c, self.s, self.x2 = np.empty((23, k)), np.empty((23, k)), np.empty((22, k))
+        self.v = [np.empty((2, k)) for _ in range(3)]
+        self.t = [np.empty((2, k)) for _ in range(2)]
+
+
+def _rot(w, i, j, c, s, inverse=False):
+    """The plane rotation of coordinates i, j of ``w.v`` by the angle with cosine c and sine
+    s (rows (k,)), in place: v_i' = c v_i - s v_j, v_j' = s v_i + c v_j (``inverse``: the
+    transpose).  Rx is (1, 2), Ry (2, 0), Rz (0, 1).  The same products and sums as the
+    expressions written out, so the same rounding."""
+    vi, vj, t0, t1 = w.v[i], w.v[j], w.t[0], w.t[1]
+    np.multiply(vi, s, out=t0)
+    np.multiply(vj, s, out=t1)
+    vi *= c
+    vj *= c
     if inverse:
-        v[1], v[2] = c * v[1] + s * v[2], c * v[2] - s * v[1]
+        vi += t1
+        vj -= t0
     else:
-        v[1], v[2] = c * v[1] - s * v[2], s * v[1] + c * v[2]
+        vi -= t1
+        vj += t0
 
 
-def _ry(v, c, s, inverse=False):
-    if inverse:
-        v[0], v[2] = c * v[0] - s * v[2], c * v[2] + s * v[0]
-    else:
-        v[0], v[2] = c * v[0] + s * v[2], c * v[2] - s * v[0]
+def _rxyz(w, k):
+    """Rx Ry Rz v, angles k, k+1, k+2 of the workspace's (cos, sin) rows."""
+    c, s = w.c, w.s
+    _rot(w, 0, 1, c[k + 2], s[k + 2])
+    _rot(w, 2, 0, c[k + 1], s[k + 1])
+    _rot(w, 1, 2, c[k], s[k])
 
 
-def _rz(v, c, s, inverse=False):
-    if inverse:
-        v[0], v[1] = c * v[0] + s * v[1], c * v[1] - s * v[0]
-    else:
-        v[0], v[1] = c * v[0] - s * v[1], s * v[0] + c * v[1]
-
-
-def _rxyz(v, c, s, k):
-    """Rx Ry Rz v, angles k, k+1, k+2 of the (cos, sin) rows c, s."""
-    _rz(v, c[k + 2], s[k + 2])
-    _ry(v, c[k + 1], s[k + 1])
-    _rx(v, c[k], s[k])
-
-
-def _rxyz_t(v, c, s, k, last=True):
+def _rxyz_t(w, k, last=True):
     """(Rx Ry Rz)^T v = Rz^T Ry^T Rx^T v; ``last=False`` leaves out Rz^T."""
-    _rx(v, c[k], s[k], True)
-    _ry(v, c[k + 1], s[k + 1], True)
+    c, s = w.c, w.s
+    _rot(w, 1, 2, c[k], s[k], True)
+    _rot(w, 2, 0, c[k + 1], s[k + 1], True)
     if last:
-        _rz(v, c[k + 2], s[k + 2], True)
+        _rot(w, 0, 1, c[k + 2], s[k + 2], True)
 
 
 #: angles of the fast path, in the order it reads them (three per rotation block)
@@ -567,7 +580,7 @@ def fast_pose_error(machine: ACDoubleTurntable, errors: np.ndarray, pose: Mappin
     through the tool chain g_bt = I_Y E_Y Sq_Y I_X E_X Sq_X I_Z E_Z (innermost factor
     first), then through the inverse of the workpiece chain g_bw = I_A E_A L_A I_C E_C L_C
     (outermost first): each step a rotation of both, plus a shift of the tip; ``chunk``
-    samples at a time (small chunks keep every row in cache).
+    samples at a time (small chunks keep every row in cache), in a workspace allocated once.
     """
     if machine.convention != "moving":
         return machine.pose_error(errors, pose)
@@ -583,15 +596,25 @@ def fast_pose_error(machine: ACDoubleTurntable, errors: np.ndarray, pose: Mappin
     at = {k: 22 + 3 * i for i, k in enumerate(shift)}   # first row of each shift
     ca, sa, cc, sc = np.cos(p["A"]), np.sin(p["A"]), np.cos(p["C"]), np.sin(p["C"])
     res = np.empty((n, 6)) if out is None else out
+    work = {}
     for s0 in range(0, n, chunk):
         k = min(chunk, n - s0)
-        blk = np.ascontiguousarray(e[s0:s0 + k, rows].T)  # (41, k): angles, then shifts
+        w = work.get(k) or work.setdefault(k, _Workspace(k))
+        blk, c, sn, v = w.blk, w.c, w.s, w.v
+        np.take(e[s0:s0 + k], rows, axis=1, out=w.rows, mode="clip")
+        blk[...] = w.rows.T                                 # (41, k): angles, then shifts
         blk[11] += blk[5]  # Sq_Y = Rz(S_xy) is followed by Rz(e_zy) of E_Y: one rotation
-        c, sn = _cos_sin(blk[:22])
+        _cos_sin(blk[:22], c[:22], sn[:22], w.x2)
         # L_A^-1 ends with Rz(g_AM)^T, followed by I_C^-1 = Rz(C)^T: one rotation by C + g_AM
-        c_cg, s_cg = cc * c[17] - sc * sn[17], sc * c[17] + cc * sn[17]
+        t = w.t[0][0]
+        np.multiply(c[17], cc, out=c[22])
+        np.multiply(sn[17], sc, out=t)
+        c[22] -= t
+        np.multiply(c[17], sc, out=sn[22])
+        np.multiply(sn[17], cc, out=t)
+        sn[22] += t
 
-        def shift_tip(v, key, sign=1, blk=blk):
+        def shift_tip(key, sign=1, blk=blk, v=v):
             for i in range(3):
                 if sign > 0:
                     v[i][0] += blk[at[key] + i]
@@ -599,55 +622,70 @@ def fast_pose_error(machine: ACDoubleTurntable, errors: np.ndarray, pose: Mappin
                     v[i][0] -= blk[at[key] + i]
 
         # tool chain, innermost first: E_Z, I_Z, Sq_X, E_X, I_X, Sq_Y with E_Y, I_Y
-        v = [np.zeros((2, k)), np.zeros((2, k)), np.empty((2, k))]
+        v[0].fill(0.0)
+        v[1].fill(0.0)
         v[2][0], v[2][1] = p["L"], 1.0
-        _ry(v, c[1], sn[1])  # Rz leaves (0, 0, a) alone
-        _rx(v, c[0], sn[0])
-        shift_tip(v, "z")
+        _rot(w, 2, 0, c[1], sn[1])  # Rz leaves (0, 0, a) alone
+        _rot(w, 1, 2, c[0], sn[0])
+        shift_tip("z")
         v[2][0] += p["z"]
-        _ry(v, c[4], sn[4])
-        _rx(v, c[3], sn[3])
-        _rxyz(v, c, sn, 6)
-        shift_tip(v, "x")
+        _rot(w, 2, 0, c[4], sn[4])
+        _rot(w, 1, 2, c[3], sn[3])
+        _rxyz(w, 6)
+        shift_tip("x")
         v[0][0] += p["x"]
-        _rxyz(v, c, sn, 9)
-        shift_tip(v, "y")
+        _rxyz(w, 9)
+        shift_tip("y")
         v[1][0] += p["y"]
         # inverse of the workpiece chain: I_A^-1, E_A^-1, L_A^-1, I_C^-1, E_C^-1, L_C^-1
-        _rx(v, ca, sa, True)
-        shift_tip(v, "a", -1)
-        _rxyz_t(v, c, sn, 12)
-        shift_tip(v, "am", -1)
-        _rxyz_t(v, c, sn, 15, last=False)
-        _rz(v, c_cg, s_cg, True)
-        shift_tip(v, "c", -1)
-        _rxyz_t(v, c, sn, 18)
+        _rot(w, 1, 2, ca, sa, True)
+        shift_tip("a", -1)
+        _rxyz_t(w, 12)
+        shift_tip("am", -1)
+        _rxyz_t(w, 15, last=False)
+        _rot(w, 0, 1, c[22], sn[22], True)
+        shift_tip("c", -1)
+        _rxyz_t(w, 18)
         v[1][0] -= blk[40]
-        _ry(v, c[21], sn[21], True)
+        _rot(w, 2, 0, c[21], sn[21], True)
         for i in range(3):
-            res[s0:s0 + k, i] = v[i][0] - ideal_t[i]
-            res[s0:s0 + k, 3 + i] = v[i][1] - ideal_v[i]
+            np.subtract(v[i][0], ideal_t[i], out=res[s0:s0 + k, i])
+            np.subtract(v[i][1], ideal_v[i], out=res[s0:s0 + k, 3 + i])
     return res
 
 
-def _cos_sin(x):
-    """cos and sin; for |x| < 1e-3 rad (all geometric errors) a Taylor polynomial whose
-    truncation error is far below double precision, several times faster than numpy's cos
-    and sin: to x^4 and x^5 below 1e-3 rad (errors < x^6/720 and x^7/5040), to x^2 and x^3
-    below 1e-4 rad (errors < x^4/24 < 5e-18 and x^5/120 < 1e-22, under half an ulp of 1 and
-    of x)."""
+def _cos_sin(x, c, s, x2):
+    """cos and sin of x into c and s (x2: scratch of x's shape); for |x| < 1e-3 rad (all
+    geometric errors) a Taylor polynomial whose truncation error is far below double
+    precision, several times faster than numpy's cos and sin: to x^4 and x^5 below 1e-3 rad
+    (errors < x^6/720 and x^7/5040), to x^2 and x^3 below 1e-4 rad (errors < x^4/24 < 5e-18
+    and x^5/120 < 1e-22, under half an ulp of 1 and of x)."""
     m = max(x.max(initial=0.0), -x.min(initial=0.0))
     if m >= 1e-3:
-        return np.cos(x), np.sin(x)
-    x2 = x * x
-    if m < 1e-4:
-        c = x2 * -0.5
+        np.cos(x, out=c)
+        np.sin(x, out=s)
+        return
+    np.multiply(x, x, out=x2)
+    if m < 1e-4:                       # c = 1 - x^2/2, s = x (1 - x^2/6)
+        np.multiply(x2, -0.5, out=c)
         c += 1.0
-        s = x2 * (-1.0 / 6.0)
+        np.multiply(x2, -1.0 / 6.0, out=s)
         s += 1.0
         s *= x
-        return c, s
-    return 1.0 - 0.5 * x2 * (1.0 - x2 / 12.0), x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0))
+        return
+    # c = 1 - (x^2/2)(1 - x^2/12), s = x (1 - (x^2/6)(1 - x^2/20))
+    np.divide(x2, 12.0, out=c)
+    np.subtract(1.0, c, out=c)
+    np.divide(x2, 20.0, out=s)
+    np.subtract(1.0, s, out=s)
+    np.multiply(x2, 0.5, out=x2)       # x^2/2 for the cosine
+    c *= x2
+    np.subtract(1.0, c, out=c)
+    np.multiply(x, x, out=x2)          # x^2 anew for the sine's x^2/6 (same rounding as
+    np.divide(x2, 6.0, out=x2)         # x * x / 6, not (x^2/2)/3)
+    s *= x2
+    np.subtract(1.0, s, out=s)
+    s *= x
 
 
 # --------------------------------------------------------------------------------------

@@ -34,7 +34,8 @@ third of the time of the scikit-learn path.  A test checks that both pick the sa
 from __future__ import annotations
 
 __all__ = ["ChaosInputs", "multi_indices", "hermite_table", "poly_table", "design_matrix",
-           "loo_error", "loo_path", "omp_path", "lars_order", "PCEFit", "fit_pce",
+           "loo_error", "loo_path", "column_norms", "omp_path", "lars_order",
+           "validation_curve", "PCEFit", "fit_pce",
            "fit_pce_outputs", "LOO_RTOL", "TARGET", "POOR_FIT", "PoorFitWarning",
            "pce_selection_order", "select_pce", "SparsePCE", "fit_sparse_pce", "pce_sobol"]
 
@@ -301,7 +302,7 @@ def _prefix_coefficients(psi_sel: np.ndarray, y: np.ndarray) -> np.ndarray:
 # Sparse solver paths.
 # ------------------------------------------------------------------------------------------
 
-def _column_norms(psi: np.ndarray) -> np.ndarray:
+def column_norms(psi: np.ndarray) -> np.ndarray:
     """Euclidean norms of the columns of ``psi`` (n, P), rows of its contiguous transpose."""
     t = psi.T if psi.flags.f_contiguous else np.ascontiguousarray(psi.T)
     norms = np.sqrt(np.einsum("ij,ij->i", t, t))
@@ -342,7 +343,7 @@ def omp_path(psi: np.ndarray, y: np.ndarray, max_terms: int | None = None,
         m = int(w.sum())
         y = y * w
     if norms is None:
-        norms = _column_norms(psi)
+        norms = column_norms(psi)
     cap = min(max_terms if max_terms is not None else m - 2, p - 1, m - 2)
     var = float(np.var(y)) if w is None else float(np.var(y[w > 0]))
     big = max(cap, 0) + 1
@@ -405,7 +406,7 @@ def omp_path(psi: np.ndarray, y: np.ndarray, max_terms: int | None = None,
     return np.asarray(order, dtype=np.int64), np.asarray(loo)
 
 
-def lars_order(psi: np.ndarray, y: np.ndarray, max_terms: int, norms: np.ndarray | None = None,
+def lars_order(psi: np.ndarray, y: np.ndarray, max_terms: int,
                rows: np.ndarray | None = None) -> np.ndarray:
     """The non-constant columns of ``psi`` in the order least-angle regression
     (``sklearn.linear_model.lars_path``, method ``lar``: columns only enter) activates them,
@@ -439,7 +440,7 @@ def _solver_path(psi, y, method, max_terms, patience, target, norms, rows=None):
     length = min(32, cap)
     yy = y if rows is None else y[rows]
     while True:
-        order = lars_order(psi, y, length, norms, rows)
+        order = lars_order(psi, y, length, rows)
         sub = psi[:, [0, *order]] if rows is None else psi[np.ix_(rows, [0, *order])]
         loo = loo_path(sub, yy)
         best = int(np.argmin(loo))
@@ -520,7 +521,7 @@ def fit_pce_outputs(xi: np.ndarray, y: np.ndarray, degree: int = 3, q_norm: floa
             alphas = multi_indices(xi.shape[1], degree, q_norm)
         if psi is None:
             psi = design_matrix(xi, alphas, families)
-        norms = _column_norms(psi)
+        norms = column_norms(psi)
         fits = []
         for col in y.T:
             order, loo = _solver_path(psi, col, method, max_terms, patience, target, norms)
@@ -622,14 +623,21 @@ def _folds(n: int, k: int, seed) -> list[np.ndarray]:
     return [np.sort(perm[i::k]) for i in range(k)]
 
 
-def _validation_curve(psi, y, method, length, folds, norms, seed):
+def validation_curve(psi: np.ndarray, y: np.ndarray, method: str = "omp", length: int = 100,
+                     folds: int = 5, norms: np.ndarray | None = None, seed=0
+                     ) -> tuple[np.ndarray, np.ndarray]:
     """k-fold validation error of the path against its length: for each fold the solver path
     is run on the other parts (to ``length`` terms, no early stop), the least-squares fits on
     its prefixes predict the held-out part, and the squared errors are pooled over folds.
     Returns ``curve`` (length + 1,): mean squared error / Var(y) (index k: the constant plus
     k terms; lengths a fold's path did not reach are infinite) and ``se`` (length + 1,): its
     standard error (standard deviation of the n pooled squared errors / sqrt(n), / Var(y))."""
+    if method not in ("omp", "lars"):
+        raise ValueError(f"unknown sparse solver {method!r}; allowed: omp, lars")
     n = psi.shape[0]
+    if int(folds) != folds or not 2 <= folds <= n // 2:
+        raise ValueError(f"folds must be an integer from 2 to n/2 = {n // 2}, got {folds!r}")
+    norms = column_norms(psi) if norms is None else norms
     sq = np.zeros((n, length + 1))
     reached = length
     for test in _folds(n, folds, seed):
@@ -637,8 +645,7 @@ def _validation_curve(psi, y, method, length, folds, norms, seed):
         if method == "omp":
             order, _ = omp_path(psi, y, length, None, 0.0, norms, train)
         else:
-            order = lars_order(psi, y, min(length, len(train) - 2, psi.shape[1] - 1), norms,
-                               train)
+            order = lars_order(psi, y, min(length, len(train) - 2, psi.shape[1] - 1), train)
         cols = [0, *order]
         coefs = _prefix_coefficients(psi[np.ix_(train, cols)], y[train])     # (K+1, K+1)
         pred = psi[np.ix_(test, cols)] @ coefs                               # (n_test, K+1)
@@ -667,14 +674,14 @@ def _pick(cands, target) -> int | None:
 
 
 def _validated_length(psi, y, method, folds, norms, seed, patience, target, start=16):
-    """The k-fold validation curve of the path on ``psi`` (:func:`_validation_curve`), its
+    """The k-fold validation curve of the path on ``psi`` (:func:`validation_curve`), its
     length doubled from ``start`` while the smallest error lies within ``patience`` steps of the
     end (and the end is not the cap n_train - 2 or P - 1); returns (curve, se, best length)."""
     n = psi.shape[0]
     cap = min(psi.shape[1] - 1, n - -(-n // folds) - 2)
     length = min(cap, start)
     while True:
-        curve, se = _validation_curve(psi, y, method, length, folds, norms, seed)
+        curve, se = validation_curve(psi, y, method, length, folds, norms, seed)
         k = _best_length(curve, floor=target)
         if k <= length - patience or length >= cap or curve[k] <= target:
             return curve, se, k
@@ -691,7 +698,7 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
     1. **Basis**: the standard variables of ``inputs`` (``x`` physical inputs (n, d); None:
        ``x`` are already standard normal) and their families (:class:`ChaosInputs`).
     2. **Validation error of a basis**: ``folds``-fold cross validation of the whole solver
-       path (:func:`_validation_curve`: the path, ``omp`` or ``lars``, is re-run on every
+       path (:func:`validation_curve`: the path, ``omp`` or ``lars``, is re-run on every
        training part, so the choice of the terms is validated and not only their
        coefficients).  The number of terms is where the validation error is smallest; the path
        is extended while that minimum lies within ``patience`` steps of its end, so there is no
@@ -748,7 +755,7 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
                     raise ValueError(f"degree {p}, q-norm {q:g}: {alphas.shape[0]} terms, above "
                                      f"max_basis = {max_basis}")
                 psi = design_matrix(z, alphas, families)
-                norms = _column_norms(psi)
+                norms = column_norms(psi)
                 curve, se, k = _validated_length(psi, y, method, folds, norms, seed, patience,
                                                  target)
                 cands.append(dict(degree=p, q_norm=q, basis=alphas.shape[0], terms=k + 1,
@@ -763,7 +770,7 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
         pick = cands[i]
         alphas = multi_indices(d, pick["degree"], pick["q_norm"])
         psi = design_matrix(z, alphas, families)  # rebuilt: cheaper than keeping every one
-        norms = _column_norms(psi)
+        norms = column_norms(psi)
         order, loo = _solver_path(psi, y, method, max(k, 1), None, 0.0, norms)
         fit = _final_fit(psi, y, alphas, order, loo, pick["degree"], pick["q_norm"], families,
                          method, length=min(k, len(order)), validation=float(curve[k]))

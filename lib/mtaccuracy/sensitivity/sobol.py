@@ -22,6 +22,7 @@ from collections.abc import Callable
 
 import numpy as np
 from scipy import stats
+from scipy.special import ndtri
 from scipy.stats import qmc
 
 
@@ -54,8 +55,59 @@ def from_unit_uniform(u: np.ndarray, bounds: np.ndarray) -> np.ndarray:
 
 
 def from_unit_normal(u: np.ndarray, sd: np.ndarray, mean: np.ndarray | float = 0.0) -> np.ndarray:
-    """Map unit-cube samples to independent normals (inverse CDF), ``sd`` per column."""
-    return np.asarray(mean) + np.asarray(sd) * stats.norm.ppf(u)
+    """Map unit-cube samples to independent normals (inverse CDF), ``sd`` per column.
+
+    ``scipy.special.ndtri`` is the function ``scipy.stats.norm.ppf`` evaluates, called
+    without the distribution machinery (five times faster; the same numbers)."""
+    return np.asarray(mean) + np.asarray(sd) * ndtri(u)
+
+
+def _model_runs(model, n, d, chunk, progress):
+    """``run(x)``: ``model`` on the (m, D) array x as an (m, q) float array, ``chunk`` rows
+    per call, counting the runs against the N(D+2) of a Sobol design for ``progress``."""
+    total = n * (d + 2)
+    done = 0
+
+    def run(x):
+        nonlocal done
+        out = []
+        for s in range(0, x.shape[0], chunk):
+            y = np.asarray(model(x[s:s + chunk]), dtype=float)
+            out.append(y[:, None] if y.ndim == 1 else y)
+            done += out[-1].shape[0]
+            if progress:
+                progress(done, total)
+        return out[0] if len(out) == 1 else np.concatenate(out)
+    return run
+
+
+def _ab_blocks(a: np.ndarray, b: np.ndarray, chunk: int):
+    """Yields ``(i0, i1, x)``: x the rows of AB_i0 ... AB_i(1-1) stacked, ((i1 - i0) N, D).
+
+    As many AB blocks as fit in ``chunk`` rows go together (one block when N > chunk).  The
+    blocks live in one buffer filled with A once: each step puts back the A columns the
+    previous step replaced and takes the new ones from B, so a step writes 2 N values per
+    block instead of copying A (N D values).  The model must not keep or modify its input."""
+    n, d = a.shape
+    rows = max(1, min(d, chunk // n))
+    buf = np.repeat(a[None], rows, axis=0)                      # (rows, N, D)
+    prev = []
+    for i0 in range(0, d, rows):
+        i1 = min(i0 + rows, d)
+        for k, i in enumerate(prev):
+            buf[k, :, i] = a[:, i]
+        prev = list(range(i0, i1))
+        for k, i in enumerate(prev):
+            buf[k, :, i] = b[:, i]
+        yield i0, i1, buf[:i1 - i0].reshape(-1, d)
+
+
+def _check_ab(a, b):
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    if a.shape != b.shape or a.ndim != 2:
+        raise ValueError(f"A and B must be (N, D) arrays of one shape, got {a.shape}, {b.shape}")
+    return a, b
 
 
 def sobol_evaluate(model: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarray,
@@ -64,58 +116,48 @@ def sobol_evaluate(model: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: 
     """Run ``model`` on A, B and every AB_i; returns ``ya`` (N, q), ``yb`` (N, q), ``yab``
     (D, N, q).
 
-    ``model`` maps an (m, D) array to (m, q) (or (m,)) outputs.  Runs are batched ``chunk``
-    rows at a time: N(D+2) model runs in about N(D+2)/chunk calls.  ``progress(done, total)``
-    is called after each call with the number of runs done.
+    ``model`` maps an (m, D) array to (m, q) (or (m,)) outputs, and must not modify its
+    input.  Runs are batched ``chunk`` rows at a time: N(D+2) model runs in about
+    N(D+2)/chunk calls.  ``progress(done, total)`` is called after each call with the number
+    of runs done.  ``yab`` holds D N q floats: when only the indices are wanted,
+    :func:`sobol_indices` gives them without it.
     """
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    if a.shape != b.shape or a.ndim != 2:
-        raise ValueError(f"A and B must be (N, D) arrays of one shape, got {a.shape}, {b.shape}")
+    a, b = _check_ab(a, b)
     n, d = a.shape
-    total = n * (d + 2)
-    done = 0
-
-    def run(x):
-        nonlocal done
-        y = np.asarray(model(x), dtype=float)
-        y = y[:, None] if y.ndim == 1 else y
-        done += x.shape[0]
-        if progress:
-            progress(done, total)
-        return y
-
-    def run_rows(x):
-        return np.concatenate([run(x[s:s + chunk]) for s in range(0, x.shape[0], chunk)])
-
-    ya, yb = run_rows(a), run_rows(b)
+    run = _model_runs(model, n, d, chunk, progress)
+    ya, yb = run(a), run(b)
     yab = np.empty((d, n, ya.shape[1]))
-    rows = max(1, chunk // n) if n <= chunk else 1  # AB blocks per model call
-    for i0 in range(0, d, rows):
-        i1 = min(i0 + rows, d)
-        if n <= chunk:
-            block = np.repeat(a[None], i1 - i0, axis=0)
-            for k, i in enumerate(range(i0, i1)):
-                block[k, :, i] = b[:, i]
-            yab[i0:i1] = run(block.reshape(-1, d)).reshape(i1 - i0, n, -1)
-        else:
-            block = a.copy()
-            block[:, i0] = b[:, i0]
-            yab[i0] = run_rows(block)
+    for i0, i1, x in _ab_blocks(a, b, chunk):
+        yab[i0:i1] = run(x).reshape(i1 - i0, n, -1)
     return ya, yb, yab
+
+
+#: floats per temporary in :func:`sobol_estimate` (inputs are taken a few at a time)
+_ESTIMATE_BLOCK = 2**21
 
 
 def sobol_estimate(ya: np.ndarray, yb: np.ndarray, yab: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray]:
     """First-order (Saltelli 2010) and total (Jansen) indices, each (D, q), on outputs
     standardised over all runs as SALib does.  Works on leading bootstrap axes too: ``ya``
-    (..., N, q), ``yab`` (..., D, N, q)."""
-    mu = (ya.sum(-2) + yb.sum(-2) + yab.sum((-3, -2))) / (ya.shape[-2] * (yab.shape[-3] + 2))
-    var = np.var(np.concatenate([ya, yb], axis=-2), axis=-2)
-    diff = yab - ya[..., None, :, :]
-    s1 = np.mean((yb[..., None, :, :] - mu[..., None, None, :]) * diff, axis=-2) / var[..., None, :]
-    st = 0.5 * np.mean(diff**2, axis=-2) / var[..., None, :]
-    return s1, st
+    (..., N, q), ``yab`` (..., D, N, q).
+
+    The inputs are taken a few at a time, so the temporaries stay near ``_ESTIMATE_BLOCK``
+    floats whatever D and N (the estimate of every input is the same expression)."""
+    ya, yb, yab = (np.asarray(v, dtype=float) for v in (ya, yb, yab))
+    n, d = ya.shape[-2], yab.shape[-3]
+    mu = (ya.sum(-2) + yb.sum(-2) + yab.sum((-3, -2))) / (n * (d + 2))
+    var = np.var(np.concatenate([ya, yb], axis=-2), axis=-2)[..., None, :]
+    w = (yb - mu[..., None, :])[..., None, :, :]
+    s1 = np.empty(yab.shape[:-2] + ya.shape[-1:])
+    st = np.empty_like(s1)
+    step = max(1, _ESTIMATE_BLOCK // max(1, yab[..., :1, :, :].size))
+    for i0 in range(0, d, step):
+        diff = yab[..., i0:i0 + step, :, :] - ya[..., None, :, :]
+        s1[..., i0:i0 + step, :] = np.mean(w * diff, axis=-2)
+        np.square(diff, out=diff)
+        st[..., i0:i0 + step, :] = 0.5 * np.mean(diff, axis=-2)
+    return s1 / var, st / var
 
 
 def bootstrap_counts(n: int, n_boot: int, seed, chunk: int = 20, block: int = 2**21):
@@ -194,9 +236,40 @@ def sobol_bootstrap(ya, yb, yab, n_boot: int, seed, conf: float = 0.95, chunk: i
     return ci_half_width(s1s, conf), ci_half_width(sts, conf)
 
 
-def sobol_indices(model, a, b, chunk: int = 200_000, progress=None):
-    """Convenience: :func:`sobol_evaluate` then :func:`sobol_estimate`; returns (S1, ST)."""
-    return sobol_estimate(*sobol_evaluate(model, a, b, chunk=chunk, progress=progress))
+def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarray,
+                  chunk: int = 200_000, progress: Callable[[int, int], None] | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """S1 and ST (D, q) of ``model`` from the designs A and B, streaming: the numbers of
+    :func:`sobol_estimate` on :func:`sobol_evaluate` (equal within rounding; a test checks
+    1e-12) without ever holding ``yab`` (D N q floats: 200 MB for 41 inputs, N = 1e5, six
+    outputs).
+
+    Every term of the estimators is a sum over rows, so each AB_i block, once run, adds its
+    per-input sums of ``yab_i - ya``, ``(yb - c)(yab_i - ya)`` and ``(yab_i - ya)^2`` and
+    is dropped; ``c`` is the mean of ``ya`` and ``yb`` (the overall mean ``mu``, which needs
+    every run, enters at the end: ``mean((yb - mu) diff) = mean((yb - c) diff) - (mu - c)
+    mean(diff)``, with no cancellation because the outputs are centred).  Memory: A, B, one
+    batch of ``chunk`` runs, ``ya`` and ``yb``.  Arguments as :func:`sobol_evaluate`.
+    """
+    a, b = _check_ab(a, b)
+    n, d = a.shape
+    run = _model_runs(model, n, d, chunk, progress)
+    ya, yb = run(a), run(b)
+    q = ya.shape[1]
+    both = np.concatenate([ya, yb])
+    centre, var = both.mean(0), both.var(0)
+    ybc = yb - centre
+    total = both.sum(0)
+    sd_, sbd, sd2 = np.empty((d, q)), np.empty((d, q)), np.empty((d, q))
+    for i0, i1, x in _ab_blocks(a, b, chunk):
+        y = run(x).reshape(i1 - i0, n, q)
+        total += y.sum((0, 1))
+        diff = y - ya                   # a new array: y may be a view of the model's input
+        sd_[i0:i1] = diff.sum(1)
+        sbd[i0:i1] = np.einsum("inq,nq->iq", diff, ybc)
+        sd2[i0:i1] = np.einsum("inq,inq->iq", diff, diff)
+    mu_c = total / (n * (d + 2)) - centre
+    return (sbd - mu_c * sd_) / (n * var), 0.5 * sd2 / (n * var)
 
 
 def linear_indices(jacobian: np.ndarray, sd: np.ndarray) -> np.ndarray:
