@@ -1,0 +1,905 @@
+"""One kinematic chain for every machine: a topology string, an error placement, a pose error.
+
+A machine is a serial chain of linear (X, Y, Z) and rotary (A, B, C) axes between the
+workpiece and the tool, written in the spirit of ISO 10791-1 / ISO 230-1 as a string read from
+the workpiece to the tool, with ``b`` for the bed (the machine's base)::
+
+    "w C A b Y X Z t"     workpiece on C, C on A, A on the bed; bed carries Y, Y carries X,
+                          X carries Z, Z carries the spindle and the tool (Zheng et al. 2024)
+    "w Z b X Y t"         workpiece on the Z table; X column carrying the Y headstock (Rong)
+    "w b X Y Z t"         every axis on the tool side, composed X, Y, Z from the workpiece:
+                          the serial reading of Guo et al. 2016's Eq. 9
+    "w C b X Y Z B t"     a swivel-head mill on a rotary table (notebook 06)
+
+An optional ``s`` (spindle) before ``t`` is accepted and ignored.  Each axis ``K`` is the body
+that moves along (or about) the coordinate direction ``k`` of the frame it rides on.
+
+The chain
+---------
+With ``F_1 ... F_n`` the factors of the tool side (bed outwards) and ``G_1 ... G_m`` those of
+the workpiece side (bed outwards), the tool in the workpiece frame is
+
+    g_wt = (G_1 ... G_m)^-1 (F_1 ... F_n T(tool offsets))
+
+and each axis contributes, in this order, an optional *pre* location block (the location of
+its axis relative to the body it rides on, ISO 230-7: before the motion), its nominal motion
+(a translation ``s q d`` along its direction ``d``, which squareness errors may tilt, or a
+rotation by ``s theta`` about its direction through its pivot), its block of six error motions
+``D`` (ISO 230-1: EXK, EYK, EZK translations, EAK, EBK, ECK rotations, in the frame after the
+motion) and an optional *post* location block (the location of the next body, after the
+motion: the reading of Zheng et al.'s Eq. 9).  ``s`` is -1 for linear axes of the workpiece
+side (the table moves by -q so that the tool moves by +q relative to the part, ISO 841) and +1
+otherwise.
+
+A block of errors ``(d, w)`` (translations and rotation parameters) is the rigid motion of its
+``form``:
+
+* ``euler``: ``[Rx(w_x) Ry(w_y) Rz(w_z) | d]``, six unit-twist exponentials in a row
+  (Zheng et al.);
+* ``screw``: the exponential of the twist ``(w, d)``: ``[exp([w]x) | V d]`` (Rong et al.);
+* ``rodrigues``: ``[exp([w]x) | d]``;
+* ``first_order``: ``[I + [w]x | d]``, the small-angle matrix the papers print (not a
+  rotation: its inverse is taken exactly, ``(I - W + w w^T) / (1 + |w|^2)``).
+
+All four agree to first order in the errors.  A squareness (direction) error ``w`` tilts a
+linear axis' direction to ``exp([w]x) e_k`` (``tilt="exact"``) or ``e_k + w x e_k``
+(``tilt="first_order"``).
+
+Evaluation
+----------
+One batched path for every machine: the tool tip and the three tool-frame axes are carried as
+rows (structure of arrays) through the factors, innermost first, in chunks of samples, with
+every product written out in a fixed order (no BLAS call; the same rounding on every CPU).
+:meth:`ChainMachine.linear_jacobian` gives the exact first-order Jacobian at zero errors in
+closed form (each error is a small twist in its frame: ``R_A (w x p_B + v)``), batched over
+poses.
+
+The papers' machines are three descriptions (:func:`zheng_ac`, :func:`rong_horizontal`,
+:func:`guo_vertical`); ``tests/test_chain.py`` shows each reproduces today's hand-written
+machine to 1e-12.  :func:`iso_machine` builds any topology with the ISO 230-1 catalogue
+generated from it and the redundant location errors removed by a rank test
+(:func:`iso_catalogue`).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import errors as _errors
+from ._base import Machine
+
+LINEAR = "XYZ"
+ROTARY = "ABC"
+#: coordinate direction of each axis letter (A, B, C rotate about x, y, z)
+DIRECTION = {"X": 0, "Y": 1, "Z": 2, "A": 0, "B": 1, "C": 2}
+FORMS = ("euler", "screw", "rodrigues", "first_order")
+#: error components of a block: translations along x, y, z, rotations about x, y, z
+COMPONENTS = ("X", "Y", "Z", "A", "B", "C")
+SLOTS = ("motion", "pre", "post", "tilt")
+ORIENTATIONS = {"rotation_vector": ("Px", "Py", "Pz", "Rx", "Ry", "Rz"),
+                "tool_axis": ("Px", "Py", "Pz", "Vx", "Vy", "Vz")}
+
+
+# ------------------------------------------------------------------------------------------
+# Topology
+# ------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Topology:
+    """A parsed topology: ``work`` and ``tool`` axes, each listed from the bed outwards."""
+
+    text: str
+    work: tuple[str, ...]
+    tool: tuple[str, ...]
+
+    @property
+    def axes(self) -> tuple[str, ...]:
+        return self.work + self.tool
+
+    def side(self, axis: str) -> int:
+        """-1 for an axis of the workpiece side, +1 for one of the tool side."""
+        return -1 if axis in self.work else 1
+
+    def describe(self) -> str:
+        work = " <- ".join(["workpiece", *reversed(self.work), "bed"])
+        return f"{work} -> " + " -> ".join([*self.tool, "tool"])
+
+
+_GRAMMAR = ("a topology is read from the workpiece to the tool: 'w', the workpiece-side axes "
+            "(the one carrying the workpiece first), 'b' (the bed), the tool-side axes (from "
+            "the bed out), an optional 's' (spindle) and 't'; axes are X, Y, Z (linear) and "
+            "A, B, C (rotary, about x, y, z), each at most once; e.g. 'w C A b Y X Z t'")
+
+
+def parse_topology(text: str) -> Topology:
+    """Parse a topology string (see the module docstring); a clear ValueError otherwise."""
+    if not isinstance(text, str):
+        raise TypeError(f"topology must be a string, got {type(text).__name__}; {_GRAMMAR}")
+    tokens = text.split() if re.search(r"\s", text.strip()) else list(text.strip())
+    tokens = [t.rstrip("'") for t in tokens]
+    if not tokens:
+        raise ValueError(f"empty topology; {_GRAMMAR}")
+    bad = [t for t in tokens if t not in (*LINEAR, *ROTARY, "w", "b", "s", "t")]
+    if bad:
+        raise ValueError(f"unknown axis letter(s) {bad} in topology {text!r}; {_GRAMMAR}")
+    if tokens[0] != "w" or tokens[-1] != "t" or tokens.count("w") != 1 or tokens.count("t") != 1:
+        raise ValueError(f"topology {text!r} must start with 'w' and end with 't'; {_GRAMMAR}")
+    if tokens.count("b") != 1:
+        raise ValueError(f"topology {text!r} must contain the bed 'b' exactly once; {_GRAMMAR}")
+    if "s" in tokens and (tokens.count("s") != 1 or tokens[-2] != "s"):
+        raise ValueError(f"topology {text!r}: 's' (spindle) may only come just before 't'")
+    body = [t for t in tokens[1:-1] if t != "s"]
+    cut = body.index("b")
+    work, tool = tuple(reversed(body[:cut])), tuple(body[cut + 1:])
+    axes = work + tool
+    if not axes:
+        raise ValueError(f"topology {text!r} has no axis; {_GRAMMAR}")
+    dup = sorted({a for a in axes if axes.count(a) > 1})
+    if dup:
+        raise ValueError(f"axis {dup} appears more than once in topology {text!r}")
+    return Topology(text, work, tool)
+
+
+# ------------------------------------------------------------------------------------------
+# Where each error goes
+# ------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Placement:
+    """Where one error column enters: ``axis``, ``slot`` (``motion``: the axis' error-motion
+    block; ``pre``/``post``: its location block before/after the motion; ``tilt``: a rotation
+    of its direction of motion), ``component`` (0-2 translation along x, y, z; 3-5 rotation
+    about x, y, z) and ``sign`` (+1, or -1 where a paper defines the error the other way)."""
+
+    axis: str
+    slot: str
+    component: int
+    sign: float = 1.0
+
+
+@dataclass
+class _Block:
+    cols: list = field(default_factory=list)     # error columns
+    comps: list = field(default_factory=list)    # their components 0-5
+    signs: list = field(default_factory=list)
+
+
+def _check_placements(topology: Topology, catalogue, placements) -> list[Placement]:
+    syms = [e.symbol for e in catalogue]
+    missing = [s for s in syms if s not in placements]
+    if missing:
+        raise ValueError(f"no placement for error(s) {missing}")
+    extra = [s for s in placements if s not in syms]
+    if extra:
+        raise ValueError(f"placement for unknown error(s) {extra}; the catalogue has {syms}")
+    out, seen = [], {}
+    for s in syms:
+        p = placements[s]
+        if p.axis not in topology.axes:
+            raise ValueError(f"error {s} is placed on axis {p.axis!r}, which is not in the "
+                             f"topology {topology.text!r} (axes {', '.join(topology.axes)})")
+        if p.slot not in SLOTS:
+            raise ValueError(f"error {s}: unknown slot {p.slot!r}; allowed: {', '.join(SLOTS)}")
+        if not 0 <= p.component <= 5 or (p.slot == "tilt" and p.component < 3):
+            raise ValueError(f"error {s}: component {p.component} not allowed in slot "
+                             f"{p.slot!r} (0-5; a tilt is a rotation, 3-5)")
+        if p.slot == "tilt" and p.axis not in LINEAR:
+            raise ValueError(f"error {s}: only a linear axis has a direction to tilt, not "
+                             f"{p.axis}")
+        key = (p.axis, p.slot, p.component)
+        if key in seen:
+            raise ValueError(f"errors {seen[key]} and {s} both occupy component "
+                             f"{COMPONENTS[p.component]} of the {p.slot} slot of {p.axis}")
+        seen[key] = s
+        out.append(p)
+    return out
+
+
+# ------------------------------------------------------------------------------------------
+# Small numerical kernels on rows (structure of arrays): V is (m, 3, k), R is 3x3 of rows
+# ------------------------------------------------------------------------------------------
+
+def _cos_sin(x):
+    """cos and sin; below 1e-3 rad (every geometric error) by Taylor polynomials whose
+    truncation error is under half an ulp: to x^2 and x^3 below 1e-4 rad (errors < x^4/24 <
+    5e-18 and x^5/120 < 1e-22), to x^4 and x^5 below 1e-3 rad (< x^6/720 and x^7/5040): plain
+    arithmetic, so the same rounding on every CPU (unlike vectorised sin and cos), and several
+    times faster; numpy's above."""
+    x = np.asarray(x, dtype=float)
+    m = np.abs(x).max() if x.size else 0.0
+    if m >= 1e-3:
+        return np.cos(x), np.sin(x)
+    x2 = x * x
+    if m < 1e-4:
+        return 1.0 - 0.5 * x2, x * (1.0 - x2 / 6.0)
+    return 1.0 - 0.5 * x2 * (1.0 - x2 / 12.0), x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0))
+
+
+def _exp_coefficients(t2):
+    """``a = sin t / t``, ``b = (1 - cos t) / t^2``, ``c = (t - sin t) / t^3`` of ``t2 = t^2``:
+    series below t = 1e-3 (error < 1e-29), sin and cos above."""
+    t2 = np.asarray(t2, dtype=float)
+    a = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0))
+    b = 0.5 - t2 / 24.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0))
+    c = 1.0 / 6.0 - t2 / 120.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0))
+    large = t2 >= 1e-6
+    if np.any(large):
+        t = np.sqrt(t2[large])
+        s, co = np.sin(t), np.cos(t)
+        a[large], b[large], c[large] = s / t, (1.0 - co) / t2[large], (t - s) / (t2[large] * t)
+    return a, b, c
+
+
+def _rot_elem(axis: int, c, s):
+    """Rotation about coordinate ``axis`` as a 3x3 nested list of rows (or scalars)."""
+    one, zero = 1.0, 0.0
+    if axis == 0:
+        return [[one, zero, zero], [zero, c, -s], [zero, s, c]]
+    if axis == 1:
+        return [[c, zero, s], [zero, one, zero], [-s, zero, c]]
+    return [[c, -s, zero], [s, c, zero], [zero, zero, one]]
+
+
+def _matmul(r, q):
+    """Product of two 3x3 nested lists of rows/scalars, in a fixed order."""
+    return [[r[i][0] * q[0][j] + r[i][1] * q[1][j] + r[i][2] * q[2][j] for j in range(3)]
+            for i in range(3)]
+
+
+def _rotation(form: str, w):
+    """The 3x3 (nested list of rows) of a block's rotation parameters ``w`` (3 rows)."""
+    if form == "euler":
+        cs = [_cos_sin(v) for v in w]
+        return _matmul(_matmul(_rot_elem(0, *cs[0]), _rot_elem(1, *cs[1])), _rot_elem(2, *cs[2]))
+    wx, wy, wz = w
+    if form == "first_order":
+        return [[1.0, -wz, wy], [wz, 1.0, -wx], [-wy, wx, 1.0]]
+    t2 = wx * wx + wy * wy + wz * wz
+    a, b, _ = _exp_coefficients(t2)
+    ww = [[wx * wx, wx * wy, wx * wz], [wy * wx, wy * wy, wy * wz], [wz * wx, wz * wy, wz * wz]]
+    hat = [[0.0, -wz, wy], [wz, 0.0, -wx], [-wy, wx, 0.0]]
+    diag = 1.0 - b * t2
+    return [[(diag if i == j else 0.0) + a * hat[i][j] + b * ww[i][j] for j in range(3)]
+            for i in range(3)]
+
+
+def _cross(u, v):
+    return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+
+
+def _block_transform(form: str, d, w):
+    """(R, t) of a block with translations ``d`` and rotation parameters ``w`` (3 rows each)."""
+    r = _rotation(form, w)
+    if form != "screw":
+        return r, d
+    _, b, c = _exp_coefficients(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    wxd = _cross(w, d)
+    wwxd = _cross(w, wxd)
+    return r, [d[i] + b * wxd[i] + c * wwxd[i] for i in range(3)]
+
+
+def _inverse(form: str, r, t, w):
+    """Inverse (R', t') of the block (R, t): R^T for the rigid forms; for ``first_order``,
+    ``(I + W)^-1 = (I - W + w w^T) / (1 + |w|^2)`` exactly."""
+    if form == "first_order":
+        wx, wy, wz = w
+        den = 1.0 + wx * wx + wy * wy + wz * wz
+        ww = [[wx * wx, wx * wy, wx * wz], [wy * wx, wy * wy, wy * wz],
+              [wz * wx, wz * wy, wz * wz]]
+        minus_w = [[0.0, wz, -wy], [-wz, 0.0, wx], [wy, -wx, 0.0]]
+        ri = [[((1.0 if i == j else 0.0) + minus_w[i][j] + ww[i][j]) / den for j in range(3)]
+              for i in range(3)]
+    else:
+        ri = [[r[j][i] for j in range(3)] for i in range(3)]
+    ti = [-(ri[i][0] * t[0] + ri[i][1] * t[1] + ri[i][2] * t[2]) for i in range(3)]
+    return ri, ti
+
+
+def _apply(v, r, t):
+    """``v`` (m, 3, k) -> R v, with t added to the point row 0 (r: 3x3 of rows/scalars, t: 3
+    rows/scalars or None)."""
+    out = np.empty_like(v)
+    for i in range(3):
+        out[:, i] = r[i][0] * v[:, 0] + r[i][1] * v[:, 1] + r[i][2] * v[:, 2]
+        if t is not None:
+            out[0, i] += t[i]
+    return out
+
+
+# ------------------------------------------------------------------------------------------
+# The machine
+# ------------------------------------------------------------------------------------------
+
+class ChainMachine(Machine):
+    """A machine built from a topology and an error placement (see the module docstring).
+
+    ``topology``: a string (:func:`parse_topology`); ``catalogue``: the errors
+    (:class:`mtaccuracy.errors.ErrorSpec`, column order); ``placements``: symbol ->
+    :class:`Placement`; ``form``: the block form (:data:`FORMS`); ``tilt``: ``exact`` or
+    ``first_order`` tilt of a direction; ``tool_offsets``: pose names of the tool offset, one
+    (along the tool axis z) or three (x, y, z in the last tool-side frame); ``orientation``:
+    ``rotation_vector`` (Rx, Ry, Rz: ``vee(R_actual R_ideal^T)``) or ``tool_axis`` (Vx, Vy,
+    Vz: the change of the tool-axis direction, the third column of R); ``pivots``: rotary axis
+    -> a point (mm) its axis passes through, in the frame it rides on (default the origin);
+    ``travels``: axis -> (low, high) (mm or rad), for atlases and checks; ``chunk``: samples
+    per batch.
+    """
+
+    def __init__(self, topology: str, catalogue: Sequence, placements: Mapping[str, Placement],
+                 *, name: str = "chain", form: str = "euler", tilt: str = "exact",
+                 tool_offsets: Sequence[str] = ("L",), orientation: str = "rotation_vector",
+                 pivots: Mapping[str, Sequence[float]] | None = None,
+                 travels: Mapping[str, tuple[float, float]] | None = None, chunk: int = 4096):
+        self.topology = parse_topology(topology)
+        if form not in FORMS:
+            raise ValueError(f"unknown block form {form!r}; allowed: {', '.join(FORMS)}")
+        if tilt not in ("exact", "first_order"):
+            raise ValueError(f"unknown tilt {tilt!r}; allowed: exact, first_order")
+        if orientation not in ORIENTATIONS:
+            raise ValueError(f"unknown orientation {orientation!r}; allowed: "
+                             f"{', '.join(ORIENTATIONS)}")
+        tool_offsets = tuple(tool_offsets)
+        if len(tool_offsets) not in (0, 1, 3):
+            raise ValueError(f"tool_offsets must name 1 (along z) or 3 (x, y, z) pose values, "
+                             f"got {tool_offsets}")
+        self.name, self.form, self.tilt, self.orientation = name, form, tilt, orientation
+        self.components = ORIENTATIONS[orientation]
+        self.catalogue = tuple(catalogue)
+        self.axes = tuple(a.lower() if a in LINEAR else a for a in self.topology.axes)
+        self._axis_pose = dict(zip(self.topology.axes, self.axes, strict=True))
+        self.tool_offsets = tool_offsets
+        clash = set(tool_offsets) & set(self.axes)
+        if clash:
+            raise ValueError(f"tool offset name(s) {sorted(clash)} clash with axis names")
+        self.placements = _check_placements(self.topology, self.catalogue, placements)
+        pivots = dict(pivots or {})
+        for a, p in pivots.items():
+            if a not in self.topology.axes or a not in ROTARY:
+                raise ValueError(f"pivot given for {a!r}, not a rotary axis of the topology")
+            if np.shape(p) != (3,) or not np.all(np.isfinite(p)):
+                raise ValueError(f"pivot of {a} must be 3 finite numbers (mm), got {p!r}")
+        self.pivots = {a: np.asarray(p, dtype=float) for a, p in pivots.items()}
+        self.travels = dict(travels or {})
+        self.chunk = int(chunk)
+        self._blocks = {(a, s): _Block() for a in self.topology.axes for s in SLOTS}
+        for j, p in enumerate(self.placements):
+            b = self._blocks[(p.axis, p.slot)]
+            b.cols.append(j)
+            b.comps.append(p.component)
+            b.signs.append(float(p.sign))
+
+    # -- description -----------------------------------------------------------------------
+    def describe(self) -> str:
+        return f"{self.name}: {self.topology.describe()} ({self.n_errors} errors)"
+
+    def factors(self) -> list[tuple[int, str, str]]:
+        """The chain in output order as (side, axis, slot): the workpiece side inverted (its
+        factors outermost-last), then the tool side; slot ``move`` is the nominal motion."""
+        seq = []
+        for a in self.topology.axes:
+            steps = ["pre", "move", "motion", "post"]
+            seq.append([(self.topology.side(a), a, s) for s in steps])
+        work = [f for a, fs in zip(self.topology.axes, seq, strict=True)
+                if a in self.topology.work for f in fs]
+        tool = [f for a, fs in zip(self.topology.axes, seq, strict=True)
+                if a in self.topology.tool for f in fs]
+        return list(reversed(work)) + tool
+
+    # -- evaluation ------------------------------------------------------------------------
+    def _block_rows(self, e, axis, slot, k):
+        b = self._blocks[(axis, slot)]
+        if not b.cols:
+            return None
+        rows = [np.zeros(k) for _ in range(6)]
+        for j, c, s in zip(b.cols, b.comps, b.signs, strict=True):
+            rows[c] = e[j] if s == 1.0 else s * e[j]
+        return rows[:3], rows[3:]
+
+    def _direction(self, e, axis, k):
+        """The (possibly tilted) direction of a linear axis: 3 rows or scalars."""
+        unit = [0.0, 0.0, 0.0]
+        unit[DIRECTION[axis]] = 1.0
+        b = self._blocks[(axis, "tilt")]
+        if not b.cols:
+            return unit
+        w = [np.zeros(k) for _ in range(3)]
+        for j, c, s in zip(b.cols, b.comps, b.signs, strict=True):
+            w[c - 3] = e[j] if s == 1.0 else s * e[j]
+        wxe = _cross(w, unit)
+        if self.tilt == "first_order":
+            return [unit[i] + wxe[i] for i in range(3)]
+        a, bb, _ = _exp_coefficients(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+        wwxe = _cross(w, wxe)
+        return [unit[i] + a * wxe[i] + bb * wwxe[i] for i in range(3)]
+
+    def _factor(self, e, p, side, axis, slot, k):
+        """(R, t, w) of one factor (w: rotation parameters, for the first-order inverse)."""
+        if slot == "move":
+            q = p[self._axis_pose[axis]]
+            if axis in LINEAR:
+                sign = -1.0 if side < 0 else 1.0
+                d = self._direction(e, axis, k)
+                return None, [d[i] * (sign * q) for i in range(3)], None
+            c, s = _cos_sin(q)
+            r = _rot_elem(DIRECTION[axis], c, s)
+            piv = self.pivots.get(axis)
+            if piv is None:
+                return r, None, None
+            t = [piv[i] - (r[i][0] * piv[0] + r[i][1] * piv[1] + r[i][2] * piv[2])
+                 for i in range(3)]
+            return r, t, None
+        rows = self._block_rows(e, axis, slot, k)
+        if rows is None:
+            return None
+        d, w = rows
+        r, t = _block_transform(self.form, d, w)
+        return r, t, w
+
+    def _ops(self, e, p, side, axis, slot, k):
+        """The factor as operations on the carried rows, in the order they apply: ``("t",
+        [3 rows or None])`` adds to the point, ``("r", i, c, s)`` rotates about coordinate i,
+        ``("m", R)`` multiplies by a 3x3 of rows; inverted for the workpiece side."""
+        if slot == "move":
+            q = p[self._axis_pose[axis]]
+            if axis in LINEAR:
+                d = self._direction(e, axis, k)
+                sq = -q if side < 0 else q
+                t = [None if (np.ndim(di) == 0 and di == 0.0) else di * sq for di in d]
+                ops = [("t", t)]
+                return [("t", [None if ti is None else -ti for ti in t])] if side < 0 else ops
+            c, sn = _cos_sin(q)
+            piv = self.pivots.get(axis)
+            ops = [("r", DIRECTION[axis], c, -sn if side < 0 else sn)]
+            if piv is not None:
+                ops = [("t", [-piv[i] for i in range(3)]), *ops, ("t", [piv[i] for i in range(3)])]
+            return ops
+        b = self._blocks[(axis, slot)]
+        if not b.cols:
+            return []
+        d, w = [None] * 3, [None] * 3
+        for j, c, sg in zip(b.cols, b.comps, b.signs, strict=True):
+            val = e[j] if sg == 1.0 else sg * e[j]
+            if c < 3:
+                d[c] = val
+            else:
+                w[c - 3] = val
+        if self.form == "euler":      # [Rx Ry Rz | d]: Rz first, then Ry, Rx, then + d
+            rots = [("r", i, *_cos_sin(w[i])) for i in (2, 1, 0) if w[i] is not None]
+            if side > 0:
+                return [*rots, ("t", d)]
+            return [("t", [None if di is None else -di for di in d]),
+                    *[(o, i, c, -sn) for o, i, c, sn in reversed(rots)]]
+        zero = np.zeros(k)
+        dd = [zero if di is None else di for di in d]
+        ww = [zero if wi is None else wi for wi in w]
+        r, t = _block_transform(self.form, dd, ww)
+        if side > 0:
+            return [("m", r), ("t", t)]
+        ri, _ = _inverse(self.form, r, t, ww)
+        return [("t", [-ti for ti in t]), ("m", ri)]
+
+    @staticmethod
+    def _run(v, ops):
+        """Apply operations to ``v`` (m, 3, k) in place (the rows are rebound, not copied)."""
+        for op in ops:
+            if op[0] == "t":
+                for i, ti in enumerate(op[1]):
+                    if ti is not None:
+                        v[0, i] += ti
+            elif op[0] == "r":
+                _, ax, c, sn = op
+                i, j = (ax + 1) % 3, (ax + 2) % 3
+                vi, vj = v[:, i], v[:, j]
+                v[:, i], v[:, j] = c * vi - sn * vj, sn * vi + c * vj
+            else:
+                r = op[1]
+                v0, v1, v2 = v[:, 0].copy(), v[:, 1].copy(), v[:, 2].copy()
+                for i in range(3):
+                    v[:, i] = r[i][0] * v0 + r[i][1] * v1 + r[i][2] * v2
+        return v
+
+    def _propagate(self, e, p, vecs):
+        """Carry ``vecs`` (m, 3, k) (row 0 a point, the others directions) through g_wt;
+        ``e`` (k, n_errors) is read as contiguous rows, one per error."""
+        k = e.shape[0]
+        e = np.ascontiguousarray(e.T)
+        v = vecs.copy()
+        for side, axis, slot in reversed(self.factors()):
+            self._run(v, self._ops(e, p, side, axis, slot, k))
+        return v
+
+    def _start(self, p, k):
+        """Tool tip and tool-frame axes before the tool-side factors: (4, 3, k)."""
+        v = np.zeros((4, 3, k))
+        v[1, 0] = v[2, 1] = v[3, 2] = 1.0
+        if len(self.tool_offsets) == 1:
+            v[0, 2] = p[self.tool_offsets[0]]
+        elif len(self.tool_offsets) == 3:
+            for i, name in enumerate(self.tool_offsets):
+                v[0, i] = p[name]
+        return v
+
+    def relative(self, errors, pose: Mapping, with_errors: bool = True):
+        """Tool in the workpiece frame as (R (n, 3, 3), t (n, 3)); ``with_errors=False`` the
+        ideal chain."""
+        e = self.check_errors(errors)
+        n = e.shape[0]
+        p = self.check_pose(pose, n)
+        if not with_errors:
+            e = np.zeros_like(e)
+        r = np.empty((n, 3, 3))
+        t = np.empty((n, 3))
+        for s0 in range(0, n, self.chunk):
+            sl = slice(s0, s0 + self.chunk)
+            es = e[sl]
+            ps = {key: val[sl] for key, val in p.items()}
+            v = self._propagate(es, ps, self._start(ps, es.shape[0]))
+            t[sl] = v[0].T
+            r[sl] = np.moveaxis(v[1:], 2, 0).transpose(0, 2, 1)
+        return r, t
+
+    def pose_error(self, errors, pose: Mapping) -> np.ndarray:
+        """(n, 6): tool-tip position error (mm) in the workpiece frame, then the orientation
+        error: the rotation vector ``vee(R_actual R_ideal^T)`` (``rotation_vector``) or the
+        change of the tool-axis direction (``tool_axis``), rad."""
+        e = self.check_errors(errors)
+        n = e.shape[0]
+        p = self.check_pose(pose, n)
+        out = np.empty((n, 6))
+        want_frame = self.orientation == "rotation_vector"
+        for s0 in range(0, n, self.chunk):
+            sl = slice(s0, s0 + self.chunk)
+            es = e[sl]
+            k = es.shape[0]
+            ps = {key: val[sl] for key, val in p.items()}
+            start = self._start(ps, k)
+            if not want_frame:
+                start = start[[0, 3]]
+            act = self._propagate(es, ps, start)
+            if all(np.ndim(val) == 0 or (val == val[0]).all() for val in ps.values()):
+                one = {key: val[:1] for key, val in ps.items()}   # one pose: once
+                ide = self._propagate(np.zeros((1, es.shape[1])), one, start[..., :1])
+            else:
+                ide = self._propagate(np.zeros_like(es), ps, start)
+            out[sl, :3] = (act[0] - ide[0]).T
+            if want_frame:
+                # vee of the skew part of R_a R_i^T = sum_j a_j i_j^T (a_j, i_j the columns)
+                m = [[sum(act[1 + j, r_] * ide[1 + j, c_] for j in range(3)) for c_ in range(3)]
+                     for r_ in range(3)]
+                out[sl, 3] = 0.5 * (m[2][1] - m[1][2])
+                out[sl, 4] = 0.5 * (m[0][2] - m[2][0])
+                out[sl, 5] = 0.5 * (m[1][0] - m[0][1])
+            else:
+                out[sl, 3:] = (act[1] - ide[1]).T
+        return out
+
+    def transforms(self, errors, pose: Mapping):
+        from ..kinematics import homogeneous
+
+        return (homogeneous(*self.relative(errors, pose)),
+                homogeneous(*self.relative(errors, pose, with_errors=False)))
+
+    # -- first order ------------------------------------------------------------------------
+    def linear_jacobian(self, pose: Mapping) -> np.ndarray:
+        """The exact first-order Jacobian d(pose error)/d(errors) at zero errors, (P, 6, n)
+        for pose arrays of length P, in closed form: an error block is a small twist
+        ``(v, w)`` in its frame; with ``R_A`` the rotation of the factors before it (output
+        order) and ``p_B``, ``a_B`` the tool tip and tool axis carried through the factors
+        after it, it moves the tip by ``R_A (w x p_B + v)`` and turns the tool by ``R_A w``
+        (the tool axis by ``R_A (w x a_B)``), with the opposite sign on the workpiece side
+        (the inverse of I + xi is I - xi to first order).  A tilt ``w`` of a linear axis moved
+        by ``s q`` is the translation ``s q (w x e_k)``.  All forms agree to first order."""
+        vals = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
+        n = max((v.shape[0] for v in vals.values()), default=1)
+        p = self.check_pose(vals, n)
+        zero_e = np.zeros((self.n_errors, n))        # errors as rows, one per error
+        seq = self.factors()
+        # forward: rotation of everything before each factor (rows (3, 3, n))
+        before = []
+        rot = [[np.ones(n) if i == j else np.zeros(n) for j in range(3)] for i in range(3)]
+        for side, axis, slot in seq:
+            before.append(rot)
+            if slot == "move" and axis in ROTARY:
+                r, _, _ = self._factor(zero_e, p, side, axis, slot, n)
+                if side < 0:
+                    r = [[r[j][i] for j in range(3)] for i in range(3)]
+                rot = _matmul(rot, r)
+        # backward: tip and tool axis after each factor (in that factor's frame)
+        after = [None] * len(seq)
+        v = self._start(p, n)[[0, 3]]
+        for i in range(len(seq) - 1, -1, -1):
+            after[i] = v
+            side, axis, slot = seq[i]
+            f = self._factor(zero_e, p, side, axis, slot, n)
+            if slot != "move" or f is None:
+                continue
+            r, t, w = f
+            if side < 0:
+                if r is None:
+                    t = [-ti for ti in t]
+                else:
+                    r, t = _inverse("euler", r, t if t is not None else [0.0] * 3, w)
+            if r is None:
+                v = v.copy()
+                for j in range(3):
+                    v[0, j] += t[j]
+            else:
+                v = _apply(v, r, t)
+        jac = np.zeros((n, 6, self.n_errors))
+        axis_out = self.orientation == "tool_axis"
+        for i, (side, axis, slot) in enumerate(seq):
+            key = "tilt" if slot == "move" else slot
+            b = self._blocks[(axis, key)]
+            if not b.cols or (slot == "move") != (key == "tilt"):
+                continue
+            ra, (tip, ax) = before[i], after[i]
+            sgn = float(side)
+            for j, c, s in zip(b.cols, b.comps, b.signs, strict=True):
+                unit = np.zeros(3)
+                unit[c % 3] = 1.0
+                if key == "tilt":
+                    q = p[self._axis_pose[axis]] * (-1.0 if side < 0 else 1.0)
+                    ek = np.zeros(3)
+                    ek[DIRECTION[axis]] = 1.0
+                    mv = np.cross(unit, ek)[:, None] * q           # (3, n)
+                    dp, dr = [mv[r_] for r_ in range(3)], [0.0, 0.0, 0.0]
+                    da = [0.0, 0.0, 0.0]
+                elif c < 3:
+                    dp, dr, da = [unit[r_] for r_ in range(3)], [0.0] * 3, [0.0] * 3
+                else:
+                    dp = _cross(list(unit), [tip[r_] for r_ in range(3)])
+                    da = _cross(list(unit), [ax[r_] for r_ in range(3)])
+                    dr = [unit[r_] for r_ in range(3)]
+                scale = s * sgn
+                for r_ in range(3):
+                    jac[:, r_, j] = scale * (ra[r_][0] * dp[0] + ra[r_][1] * dp[1]
+                                             + ra[r_][2] * dp[2])
+                    src = da if axis_out else dr
+                    jac[:, 3 + r_, j] = scale * (ra[r_][0] * src[0] + ra[r_][1] * src[1]
+                                                 + ra[r_][2] * src[2])
+        return jac + 0.0
+
+
+# ------------------------------------------------------------------------------------------
+# ISO 230-1 catalogue from a topology
+# ------------------------------------------------------------------------------------------
+
+def _motion_specs(axis: str) -> list[tuple[_errors.ErrorSpec, Placement]]:
+    out = []
+    for c, comp in enumerate(COMPONENTS):
+        code = f"E{comp}{axis}"
+        translational = c < 3
+        if axis in LINEAR:
+            kind = ("positioning" if c == DIRECTION[axis] else "straightness") if c < 3 \
+                else "angular"
+        else:
+            kind = "error motion"
+        spec = _errors.ErrorSpec(code, code, kind, axis, "xyz"[c % 3], translational, True,
+                                 "um" if translational else "urad")
+        out.append((spec, Placement(axis, "motion", c)))
+    return out
+
+
+def iso_catalogue(topology: str):
+    """The ISO 230-1 / 230-7 errors of a topology, before redundancy is removed: per axis K
+    its six error motions EXK, EYK, EZK, EAK, EBK, ECK (block after the motion); for the
+    linear axes the squareness errors with the first of X, Y, Z present as reference (the
+    second tilted about the normal of their plane, e.g. EC0Y; the third about both others,
+    e.g. EA0Z, EB0Z); per rotary axis K its four location errors (ISO 230-7): the two
+    positions and two orientations of its axis line perpendicular to k (e.g. for C: EX0C,
+    EY0C, EA0C, EB0C), as a block before its motion.  Returns ``(catalogue, placements)``."""
+    topo = parse_topology(topology)
+    specs = []
+    for a in topo.axes:
+        specs += _motion_specs(a)
+    linear = [a for a in LINEAR if a in topo.axes]
+    for rank, a in enumerate(linear):
+        others = [b for b in linear[:rank]]
+        for b in others:
+            about = 3 - DIRECTION[a] - DIRECTION[b]            # the normal of the a-b plane
+            code = f"E{COMPONENTS[3 + about]}0{a}"
+            spec = _errors.ErrorSpec(code, code, "squareness", f"{b}{a}", "xyz"[about], False,
+                                     False, "urad")
+            specs.append((spec, Placement(a, "tilt", 3 + about)))
+    for a in topo.axes:
+        if a not in ROTARY:
+            continue
+        perp = [c for c in range(3) if c != DIRECTION[a]]
+        for c in perp:
+            code = f"E{COMPONENTS[c]}0{a}"
+            specs.append((_errors.ErrorSpec(code, code, "location", a, "xyz"[c], True, False,
+                                            "um"), Placement(a, "pre", c)))
+        for c in perp:
+            code = f"E{COMPONENTS[3 + c]}0{a}"
+            specs.append((_errors.ErrorSpec(code, code, "location", a, "xyz"[c], False, False,
+                                            "urad"), Placement(a, "pre", 3 + c)))
+    return tuple(s for s, _ in specs), {s.symbol: p for s, p in specs}
+
+
+def redundant_location_errors(machine: ChainMachine, n_poses: int = 64, seed=0,
+                              rtol: float = 1e-9) -> list[tuple[str, str]]:
+    """Location errors whose effect on the pose error, over random poses, is a combination of
+    the effects of the axes' zero positions (the columns of their own-direction error
+    motions, EXX, ..., ECC), of the workpiece and tool set-up (a constant
+    rigid shift of the workpiece, a constant offset of the tool) and of the location errors
+    before them: they cannot be told apart from those and are not separate errors.  Returns
+    (symbol, reason) pairs, in catalogue order.  The test is a rank test of the stacked
+    Jacobian columns (least-squares residual of the unit column below ``rtol``)."""
+    rng = np.random.default_rng(seed)
+    pose = {}
+    for a, name in zip(machine.topology.axes, machine.axes, strict=True):
+        lo, hi = machine.travels.get(a, (-300.0, 300.0) if a in LINEAR else (-np.pi, np.pi))
+        pose[name] = rng.uniform(lo, hi, n_poses)
+    for t in machine.tool_offsets:
+        pose[t] = rng.uniform(50.0, 150.0, n_poses)
+    jac = machine.linear_jacobian(pose)                      # (P, 6, n)
+    zero = np.zeros((n_poses, machine.n_errors))
+    rt, tt = machine.relative(zero, pose, with_errors=False)
+    axis_out = machine.orientation == "tool_axis"
+
+    def as_error(dt, dr):
+        """Pose-error columns of a first-order change: tip dt, rotation vector dr (n, 3)."""
+        col = np.zeros((n_poses, 6))
+        col[:, :3] = dt
+        col[:, 3:] = np.cross(dr, rt[:, :, 2]) if axis_out else dr
+        return col
+
+    # effects that are not errors: the zero of each axis, a rigid set-up error of the
+    # workpiece (6 dof, in the workpiece frame) and a tool offset error (along the tool
+    # frame's axes)
+    nuisance, labels = [], []
+    for j, pl in enumerate(machine.placements):   # an axis' zero: its own-direction error
+        own = DIRECTION[pl.axis] + (3 if pl.axis in ROTARY else 0)
+        if pl.slot == "motion" and pl.component == own:
+            nuisance.append(jac[:, :, j])
+            labels.append(f"the zero of {machine._axis_pose[pl.axis]}")
+    unit = np.eye(3)
+    for c in range(3):
+        nuisance.append(as_error(-np.broadcast_to(unit[c], tt.shape), np.zeros_like(tt)))
+        labels.append(f"the workpiece set-up along {'xyz'[c]}")
+    for c in range(3):
+        u = np.broadcast_to(unit[c], tt.shape)
+        nuisance.append(as_error(-np.cross(u, tt), -u))
+        labels.append(f"the workpiece set-up about {'xyz'[c]}")
+    for c in range(3):
+        nuisance.append(as_error(rt[:, :, c], np.zeros_like(tt)))
+        labels.append(f"the tool offset along {'xyz'[c]}")
+    basis, names_b = [], []
+    for col, lab in zip(nuisance, labels, strict=True):
+        vec = col.reshape(-1)
+        nrm = np.linalg.norm(vec)
+        if nrm > 0:
+            basis.append(vec / nrm)
+            names_b.append(lab)
+    out = []
+
+    def explain(vec):
+        """(residual, names of the basis columns the least-squares fit uses)."""
+        m = np.stack(basis, 1)
+        coef, *_ = np.linalg.lstsq(m, vec, rcond=None)
+        used = [names_b[i] for i in np.flatnonzero(np.abs(coef) > 1e-6)]
+        return np.linalg.norm(vec - m @ coef), used
+
+    for j, spec in enumerate(machine.catalogue):
+        if spec.position_dependent:
+            continue
+        vec = jac[:, :, j].reshape(-1)
+        norm = np.linalg.norm(vec)
+        if norm == 0.0:
+            out.append((spec.symbol, "no effect on the pose error"))
+            continue
+        res, used = explain(vec / norm)
+        if res < rtol:
+            out.append((spec.symbol, "same effect as " + " + ".join(used)))
+            continue
+        basis.append(vec / norm)
+        names_b.append(spec.symbol)
+    return out
+
+
+def iso_machine(topology: str, *, name: str = "iso_machine", keep_redundant: bool = False,
+                **options) -> ChainMachine:
+    """A machine of any topology with its ISO 230-1 catalogue (:func:`iso_catalogue`), the
+    redundant location errors removed (:func:`redundant_location_errors`; the removed ones
+    and why are in ``machine.removed``).  Location errors sit before their axis' motion
+    (ISO 230-7), squareness as tilts; ``options`` go to :class:`ChainMachine` (default
+    ``form="euler"``, ``orientation="tool_axis"`` when the topology has a rotary axis)."""
+    cat, placements = iso_catalogue(topology)
+    topo = parse_topology(topology)
+    options.setdefault("orientation", "tool_axis" if any(a in ROTARY for a in topo.axes)
+                       else "rotation_vector")
+    full = ChainMachine(topology, cat, placements, name=name, **options)
+    removed = [] if keep_redundant else redundant_location_errors(full)
+    drop = {s for s, _ in removed}
+    if drop:
+        cat = tuple(e for e in cat if e.symbol not in drop)
+        full = ChainMachine(topology, cat, {s: placements[s] for s in (e.symbol for e in cat)},
+                            name=name, **options)
+    full.removed = removed
+    return full
+
+
+# ------------------------------------------------------------------------------------------
+# The papers' machines as descriptions
+# ------------------------------------------------------------------------------------------
+
+def zheng_ac(convention: str = "moving") -> ChainMachine:
+    """Zheng et al. 2024's AC double turntable (41 errors, paper symbols and order): ``w C A
+    b Y X Z t``, euler blocks, tool length ``L`` along z, tool-axis output.  ``moving``: the
+    squareness and location errors as frame rotations/blocks after the motion of the axis
+    carrying the next body (the paper's Eq. 9 read literally); ``fixed``: location errors
+    before the motion, squareness as first-order tilts of Y and Z."""
+    from .ac_double_turntable import TRAVELS
+
+    if convention not in ("moving", "fixed"):
+        raise ValueError(f"unknown convention {convention!r}; allowed: moving, fixed")
+    cat = _errors.five_axis_ac_catalogue()
+    pl = {}
+    for a in "xyzac":
+        for c, d in enumerate("xyz"):
+            pl[f"d_{d}{a}"] = Placement(a.upper(), "motion", c)
+            pl[f"e_{d}{a}"] = Placement(a.upper(), "motion", 3 + c)
+    loc = "post" if convention == "moving" else "pre"
+    for c, s in enumerate(["d_xAM", "d_yAM", "d_zAM", "a_AM", "b_AM", "g_AM"]):
+        pl[s] = Placement("A", loc, c)
+    pl["d_yCA"] = Placement("C", loc, 1)
+    pl["b_CA"] = Placement("C", loc, 4)
+    if convention == "moving":   # X rides on Y: S_xy turns the X frame; Z on X: S_yz, S_xz
+        pl["S_xy"] = Placement("Y", "post", 5)
+        pl["S_yz"] = Placement("X", "post", 3)
+        pl["S_xz"] = Placement("X", "post", 4)
+        tilt = "exact"
+    else:
+        pl["S_xy"] = Placement("Y", "tilt", 5)
+        pl["S_yz"] = Placement("Z", "tilt", 3)
+        pl["S_xz"] = Placement("Z", "tilt", 4)
+        tilt = "first_order"
+    travels = {k.upper() if k in "xyz" else k: v for k, v in TRAVELS.items()}
+    return ChainMachine("w C A b Y X Z t", cat, pl, name="ac_double_turntable", form="euler",
+                        tilt=tilt, tool_offsets=("L",), orientation="tool_axis",
+                        travels=travels)
+
+
+def _three_axis_placements(s_xz_sign: float) -> dict[str, Placement]:
+    pl = {}
+    for a in "xyz":
+        for c, d in enumerate("xyz"):
+            pl[f"d{d}({a})"] = Placement(a.upper(), "motion", c)
+            pl[f"e{d}({a})"] = Placement(a.upper(), "motion", 3 + c)
+    pl["S_xy"] = Placement("Y", "tilt", 5)
+    pl["S_yz"] = Placement("Z", "tilt", 3)
+    pl["S_xz"] = Placement("Z", "tilt", 4, s_xz_sign)
+    return pl
+
+
+def rong_horizontal(layout: str = "z/xy", exact: bool = True) -> ChainMachine:
+    """Rong et al.'s horizontal machining centre (21 errors): layout ``W/T`` as in
+    :mod:`.horizontal_3axis` (``z/xy`` is ``w Z b X Y t``), screw-exponential error motions
+    (``exact=False``: first-order matrices), squareness as tilted directions (EC0Y, EA0Z,
+    EB0Z), tool offsets ``tool_x, tool_y, tool_z``, rotation-vector output."""
+    from .horizontal_3axis import parse_layout
+
+    work, tool = parse_layout(layout)
+    topo = "w " + " ".join(a.upper() for a in reversed(work)) + " b " + \
+        " ".join(a.upper() for a in tool) + " t"
+    return ChainMachine(topo, _errors.three_axis_catalogue(), _three_axis_placements(1.0),
+                        name="horizontal_3axis", form="screw" if exact else "first_order",
+                        tilt="exact" if exact else "first_order",
+                        tool_offsets=("tool_x", "tool_y", "tool_z"),
+                        orientation="rotation_vector")
+
+
+def guo_vertical(exact: bool = False) -> ChainMachine:
+    """Guo et al. 2016's XYFZ machine (21 errors) as the paper chains it (Eq. 9): every axis
+    composed from the workpiece, ``w b X Y Z t``, each motion followed by its error matrix
+    (first-order matrices; ``exact=True``: exact rotations), squareness entering the
+    translations linearly (first-order tilts; the paper's S_xz is -EB0Z), tool offsets
+    ``D1, D2, D3``, rotation-vector output."""
+    return ChainMachine("w b X Y Z t", _errors.three_axis_catalogue(),
+                        _three_axis_placements(-1.0), name="vertical_xyfz",
+                        form="rodrigues" if exact else "first_order", tilt="first_order",
+                        tool_offsets=("D1", "D2", "D3"), orientation="rotation_vector")
