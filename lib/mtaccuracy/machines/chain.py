@@ -219,6 +219,38 @@ def _cos_sin(x):
     return 1.0 - 0.5 * x2 * (1.0 - x2 / 12.0), x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0))
 
 
+def _cos_sin_into(x, c, s, x2):
+    """:func:`_cos_sin` of the rows ``x`` into the buffers ``c`` and ``s`` (``x2``: scratch
+    of x's shape), in place: no temporaries the size of the chunk (they would be allocated
+    and returned to the system for every chunk)."""
+    m = max(x.max(initial=0.0), -x.min(initial=0.0))
+    if m >= 1e-3:
+        np.cos(x, out=c)
+        np.sin(x, out=s)
+        return
+    np.multiply(x, x, out=x2)
+    if m < 1e-4:                       # c = 1 - x^2/2, s = x (1 - x^2/6)
+        np.multiply(x2, -0.5, out=c)
+        c += 1.0
+        np.multiply(x2, -1.0 / 6.0, out=s)
+        s += 1.0
+        s *= x
+        return
+    # c = 1 - (x^2/2)(1 - x^2/12), s = x (1 - (x^2/6)(1 - x^2/20))
+    np.divide(x2, 12.0, out=c)
+    np.subtract(1.0, c, out=c)
+    np.divide(x2, 20.0, out=s)
+    np.subtract(1.0, s, out=s)
+    np.multiply(x2, 0.5, out=x2)
+    c *= x2
+    np.subtract(1.0, c, out=c)
+    np.multiply(x, x, out=x2)
+    np.divide(x2, 6.0, out=x2)
+    s *= x2
+    np.subtract(1.0, s, out=s)
+    s *= x
+
+
 def _exp_coefficients(t2):
     """``a = sin t / t``, ``b = (1 - cos t) / t^2``, ``c = (t - sin t) / t^3`` of ``t2 = t^2``:
     series below t = 1e-3 (error < 1e-29), sin and cos above."""
@@ -326,14 +358,15 @@ class ChainMachine(Machine):
     Vz: the change of the tool-axis direction, the third column of R); ``pivots``: rotary axis
     -> a point (mm) its axis passes through, in the frame it rides on (default the origin);
     ``travels``: axis -> (low, high) (mm or rad), for atlases and checks; ``chunk``: samples
-    per batch.
+    per batch (8192: every row of a batch stays in cache; the batch buffers are allocated
+    once per call, so an instance is not to be shared between threads).
     """
 
     def __init__(self, topology: str, catalogue: Sequence, placements: Mapping[str, Placement],
                  *, name: str = "chain", form: str = "euler", tilt: str = "exact",
                  tool_offsets: Sequence[str] = ("L",), orientation: str = "rotation_vector",
                  pivots: Mapping[str, Sequence[float]] | None = None,
-                 travels: Mapping[str, tuple[float, float]] | None = None, chunk: int = 4096):
+                 travels: Mapping[str, tuple[float, float]] | None = None, chunk: int = 8192):
         self.topology = parse_topology(topology)
         if form not in FORMS:
             raise ValueError(f"unknown block form {form!r}; allowed: {', '.join(FORMS)}")
@@ -365,12 +398,17 @@ class ChainMachine(Machine):
         self.pivots = {a: np.asarray(p, dtype=float) for a, p in pivots.items()}
         self.travels = dict(travels or {})
         self.chunk = int(chunk)
+        self._trig = None
+        self._work = {}
         self._blocks = {(a, s): _Block() for a in self.topology.axes for s in SLOTS}
         for j, p in enumerate(self.placements):
             b = self._blocks[(p.axis, p.slot)]
             b.cols.append(j)
             b.comps.append(p.component)
             b.signs.append(float(p.sign))
+        self._euler_angles = sorted(
+            j for (_, slot), b in self._blocks.items() if form == "euler" and slot != "tilt"
+            for j, c in zip(b.cols, b.comps, strict=True) if c >= 3)
 
     # -- description -----------------------------------------------------------------------
     def describe(self) -> str:
@@ -468,7 +506,13 @@ class ChainMachine(Machine):
             else:
                 w[c - 3] = val
         if self.form == "euler":      # [Rx Ry Rz | d]: Rz first, then Ry, Rx, then + d
-            rots = [("r", i, *_cos_sin(w[i])) for i in (2, 1, 0) if w[i] is not None]
+            trig = self._trig if self._trig is not None else {}
+            rots = []
+            for j, c, sg in zip(b.cols, b.comps, b.signs, strict=True):
+                if c >= 3:
+                    cj, sj = trig[j] if j in trig else _cos_sin(e[j])
+                    rots.append((c - 3, ("r", c - 3, cj, sj if sg == 1.0 else -sj)))
+            rots = [op for _, op in sorted(rots, key=lambda t: -t[0])]
             if side > 0:
                 return [*rots, ("t", d)]
             return [("t", [None if di is None else -di for di in d]),
@@ -484,33 +528,48 @@ class ChainMachine(Machine):
 
     @staticmethod
     def _run(v, ops):
-        """Apply operations to ``v`` (m, 3, k) in place (the rows are rebound, not copied)."""
+        """Apply operations to ``v``, a list of the three coordinate rows (each (m, k): the
+        point and the directions), rebinding rows instead of copying them."""
         for op in ops:
             if op[0] == "t":
                 for i, ti in enumerate(op[1]):
                     if ti is not None:
-                        v[0, i] += ti
+                        v[i][0] += ti
             elif op[0] == "r":
                 _, ax, c, sn = op
                 i, j = (ax + 1) % 3, (ax + 2) % 3
-                vi, vj = v[:, i], v[:, j]
-                v[:, i], v[:, j] = c * vi - sn * vj, sn * vi + c * vj
+                vi, vj = v[i], v[j]
+                v[i], v[j] = c * vi - sn * vj, sn * vi + c * vj
             else:
                 r = op[1]
-                v0, v1, v2 = v[:, 0].copy(), v[:, 1].copy(), v[:, 2].copy()
-                for i in range(3):
-                    v[:, i] = r[i][0] * v0 + r[i][1] * v1 + r[i][2] * v2
+                v0, v1, v2 = v
+                v[:] = [r[i][0] * v0 + r[i][1] * v1 + r[i][2] * v2 for i in range(3)]
         return v
 
     def _propagate(self, e, p, vecs):
         """Carry ``vecs`` (m, 3, k) (row 0 a point, the others directions) through g_wt;
         ``e`` (k, n_errors) is read as contiguous rows, one per error."""
         k = e.shape[0]
-        e = np.ascontiguousarray(e.T)
-        v = vecs.copy()
+        cols = self._euler_angles
+        w = self._work.get(k)
+        if w is None:       # buffers for chunks of k samples, kept while pose_error runs
+            w = self._work[k] = (np.empty((k, self.n_errors)), np.empty((self.n_errors, k)),
+                                 *(np.empty((len(cols), k)) for _ in range(4)))
+        rows, e_t, ang, c_all, s_all, x2 = w
+        np.copyto(rows, e)
+        e_t[...] = rows.T
+        e = e_t
+        v = [np.ascontiguousarray(vecs[:, i]) for i in range(3)]
+        # cos and sin of every angle of an euler block at once (one call, not one per angle)
+        self._trig = None
+        if cols:
+            np.take(e, cols, axis=0, out=ang, mode="clip")
+            _cos_sin_into(ang, c_all, s_all, x2)
+            self._trig = {j: (c_all[i], s_all[i]) for i, j in enumerate(cols)}
         for side, axis, slot in reversed(self.factors()):
             self._run(v, self._ops(e, p, side, axis, slot, k))
-        return v
+        self._trig = None
+        return np.stack(v, axis=1)
 
     def _start(self, p, k):
         """Tool tip and tool-frame axes before the tool-side factors: (4, 3, k)."""
@@ -540,6 +599,7 @@ class ChainMachine(Machine):
             v = self._propagate(es, ps, self._start(ps, es.shape[0]))
             t[sl] = v[0].T
             r[sl] = np.moveaxis(v[1:], 2, 0).transpose(0, 2, 1)
+        self._work.clear()
         return r, t
 
     def pose_error(self, errors, pose: Mapping) -> np.ndarray:
@@ -551,19 +611,24 @@ class ChainMachine(Machine):
         p = self.check_pose(pose, n)
         out = np.empty((n, 6))
         want_frame = self.orientation == "rotation_vector"
+        # one pose for every sample: scalars (cheaper operations) and the ideal chain once
+        one = n > 0 and all(bool((val == val[0]).all()) for val in p.values())
+        if one:
+            p = {key: float(val[0]) for key, val in p.items()}
+            start = self._start(p, 1)
+            if not want_frame:
+                start = start[[0, 3]]
+            ide = self._propagate(np.zeros((1, e.shape[1])), p, start)
         for s0 in range(0, n, self.chunk):
             sl = slice(s0, s0 + self.chunk)
             es = e[sl]
             k = es.shape[0]
-            ps = {key: val[sl] for key, val in p.items()}
+            ps = p if one else {key: val[sl] for key, val in p.items()}
             start = self._start(ps, k)
             if not want_frame:
                 start = start[[0, 3]]
             act = self._propagate(es, ps, start)
-            if all(np.ndim(val) == 0 or (val == val[0]).all() for val in ps.values()):
-                one = {key: val[:1] for key, val in ps.items()}   # one pose: once
-                ide = self._propagate(np.zeros((1, es.shape[1])), one, start[..., :1])
-            else:
+            if not one:
                 ide = self._propagate(np.zeros_like(es), ps, start)
             out[sl, :3] = (act[0] - ide[0]).T
             if want_frame:
@@ -575,6 +640,7 @@ class ChainMachine(Machine):
                 out[sl, 5] = 0.5 * (m[1][0] - m[0][1])
             else:
                 out[sl, 3:] = (act[1] - ide[1]).T
+        self._work.clear()
         return out
 
     def transforms(self, errors, pose: Mapping):
