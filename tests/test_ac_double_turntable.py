@@ -1,4 +1,5 @@
-"""The AC double-turntable machine of Zheng et al. 2024: three formulations must agree."""
+"""The AC double-turntable machine of Zheng et al. 2024: three formulations must agree
+(the generic chain, 4x4 homogeneous transforms, the literal product of 41 exponentials)."""
 
 import numpy as np
 import pytest
@@ -95,42 +96,13 @@ def test_zero_errors_give_zero_at_any_pose():
 @pytest.mark.parametrize("scale", [1.0, 10.0, 300.0])  # the three branches of _cos_sin
 def test_three_formulations_agree(scale):
     e = RNG.standard_normal((5, 41)) * SD * scale
-    fast = M.pose_error(e, POSE)
-    ref = M.pose_error_reference(e, POSE)
+    ours = M.pose_error(e, POSE)                          # the generic chain, one pose
+    arr = M.pose_error(e, {k: np.full(5, v) for k, v in POSE.items()})   # pose arrays
     htm = np.array([htm_pose_error(row, POSE) for row in e])
     poe = np.array([poe_literal(row, POSE) for row in e])
-    assert np.allclose(fast, ref, rtol=0, atol=1e-12)
-    assert np.allclose(ref, htm, rtol=0, atol=1e-12)
-    assert np.allclose(ref, poe, rtol=0, atol=1e-12)
-
-
-def test_fast_path_handles_chunks_and_array_poses():
-    e = RNG.standard_normal((5000, 41)) * SD
-    from mtaccuracy.machines.ac_double_turntable import fast_pose_error
-    a = fast_pose_error(M, e, POSE, chunk=777)
-    assert np.allclose(a, M.pose_error_reference(e, POSE), atol=1e-13)
-    arr = {k: np.full(5000, v) for k, v in POSE.items()}
-    assert np.allclose(M.pose_error(e, arr), a, atol=1e-13)  # array pose -> reference path
-
-
-@pytest.mark.parametrize("bound", [5e-5, 5e-4, 0.3])
-def test_fast_cos_sin_branches_agree_with_numpy(bound):
-    from mtaccuracy.machines.ac_double_turntable import _cos_sin
-    x = np.random.default_rng(7).uniform(-bound, bound, (3, 4001))
-    c, s, x2 = np.empty_like(x), np.empty_like(x), np.empty_like(x)
-    _cos_sin(x, c, s, x2)
-    assert np.abs(c - np.cos(x)).max() <= 2.3e-16          # one ulp of 1
-    assert np.all(np.abs(s - np.sin(x)) <= 3e-16 * np.abs(x))
-
-
-def test_fast_path_output_buffer_and_workspace_reuse():
-    from mtaccuracy.machines.ac_double_turntable import fast_pose_error
-    e = RNG.standard_normal((1000, 41)) * SD
-    out = np.full((1000, 6), np.nan)
-    got = fast_pose_error(M, e, POSE, chunk=300, out=out)   # chunks 300, 300, 300, 100
-    assert got is out
-    for s0 in (0, 300, 900):   # every chunk equals the same rows run alone
-        assert np.array_equal(out[s0:s0 + 100], fast_pose_error(M, e[s0:s0 + 100], POSE))
+    assert np.allclose(ours, arr, rtol=0, atol=1e-12)
+    assert np.allclose(ours, htm, rtol=0, atol=1e-12)
+    assert np.allclose(ours, poe, rtol=0, atol=1e-12)
 
 
 def test_orientation_error_is_independent_of_translational_errors():

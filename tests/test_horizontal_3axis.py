@@ -274,11 +274,23 @@ def test_rotation_translation_path_equals_the_4x4_product(layout, exact):
     e = RNG.uniform(-1, 1, size=(n, 21)) * SCALE * 100
     pose = dict(x=RNG.uniform(0, 700, n), y=RNG.uniform(0, 600, n), z=RNG.uniform(0, 500, n),
                 tool_x=3.0, tool_z=RNG.uniform(-200, 0, n))
-    d = m._directions(e)
+    col = {sym: e[:, j] for j, sym in enumerate(m.error_names)}
+    zero = np.zeros(n)
+    # axis directions tilted by the squareness errors: Rz(S_xy) e_y, exp([S_yz, S_xz, 0]x) e_z
+    # (exact) or e + w x e (first order)
+    w_y = np.stack([zero, zero, col["S_xy"]], -1)
+    w_z = np.stack([col["S_yz"], col["S_xz"], zero], -1)
+    unit = np.eye(3)
+    tilt = ((lambda w, u: kinematics.rotation_exp(w) @ u) if exact
+            else (lambda w, u: u + np.cross(w, u)))
+    d = {"x": np.broadcast_to(unit[0], (n, 3)), "y": tilt(w_y, unit[1]),
+         "z": tilt(w_z, unit[2])}
 
     def carriage(a, sign):
+        eps = np.stack([col[f"e{c}({a})"] for c in "xyz"], -1)
+        delta = np.stack([col[f"d{c}({a})"] for c in "xyz"], -1)
         return [kinematics.translation(d[a] * (sign * pose[a])[:, None]),
-                h3.error_twist_exp(e[:, m._eps[a]], e[:, m._delta[a]], exact)]
+                h3.error_twist_exp(eps, delta, exact)]
 
     tool = [g for a in m.tool_axes for g in carriage(a, 1.0)]
     tip = np.stack([np.broadcast_to(pose.get(k, 0.0), n) for k in h3.TOOL_OFFSETS], axis=-1)
@@ -291,17 +303,6 @@ def test_rotation_translation_path_equals_the_4x4_product(layout, exact):
     actual, ideal4 = m.transforms(e, pose)
     assert np.allclose(actual, g, rtol=0, atol=1e-12)
     assert np.allclose(ideal4[:, :3, 3], ideal, rtol=0, atol=0)
-
-
-def test_exponential_coefficients_series_and_closed_form_agree():
-    t = np.array([0.0, 1e-6, 9.99e-4, 1e-3, 1.01e-3, 0.3, 2.0])
-    a, b, c = h3._exp_coefficients(t**2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ref = (np.sin(t) / t, (1 - np.cos(t)) / t**2, (t - np.sin(t)) / t**3)
-    for got, want, at0 in zip((a, b, c), ref, (1.0, 0.5, 1 / 6), strict=True):
-        assert got[0] == at0
-        assert np.allclose(got[3:], want[3:], rtol=1e-9, atol=0)  # closed form is exact there
-        assert np.allclose(got[1:3], [at0, want[2]], rtol=1e-6)
 
 
 def test_tool_length_sweep_is_batched_and_gives_the_last_tool_axis_an_arm():

@@ -20,11 +20,12 @@ squareness as tilted axis directions.
 
 Each D_j (and L_A) is a product of six unit-twist exponentials, translations along x, y, z
 then rotations about x, y, z through the frame origin; translations commute and rotations
-about one point compose, so the product equals ``[Rx Ry Rz | delta]`` exactly, which is how it
-is evaluated (tests compare it with the literal 41-exponential product and with an independent
-homogeneous-transform formulation).  Squareness (convention "moving"): S_xy rotates the X
-carriage frame about z on the Y carriage (X is then out of square with Y); S_yz and S_xz rotate
-the Z carriage frame about x and y on the X carriage.
+about one point compose, so the product equals ``[Rx Ry Rz | delta]`` exactly: the ``euler``
+block of the generic chain (:mod:`.chain`), which evaluates this machine from its topology
+``w C A b Y X Z t`` and :func:`placements` (tests compare it with the literal 41-exponential
+product and with an independent homogeneous-transform formulation).  Squareness (convention
+"moving"): S_xy rotates the X carriage frame about z on the Y carriage (X is then out of square
+with Y); S_yz and S_xz rotate the Z carriage frame about x and y on the X carriage.
 
 Pose error (the paper's Eqs. 11-12 are garbled; Eq. 12 repeats Eq. 11): ``Px, Py, Pz`` is the
 tool-tip position error in the workpiece frame (mm); ``Vx, Vy, Vz`` is the error of the
@@ -32,8 +33,7 @@ tool-axis direction (unit vector, so rad to first order) in the workpiece frame.
 along z, an angular error about x reaches Vz through sin A, which is how the paper's Vz key
 errors (e_xx, e_xy, e_xz, e_xa, a_AM) arise.
 
-Also here: the exact first-order Jacobian in closed form (:meth:`ACDoubleTurntable.
-linear_jacobian`), the 32-element symmetry group of the normalised linear indices
+Also here: the 32-element symmetry group of the normalised linear indices
 (:func:`pose_orbit`, :func:`canonical_pose`), and the search for the pose behind a table of
 published indices with its canonical ranking (:func:`fit_pose_to_indices`,
 :func:`rank_poses`), written by hand because the pose is what the paper omits.
@@ -46,8 +46,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .. import errors as _errors
-from ..kinematics import homogeneous
-from ._base import Machine
+from .chain import ChainMachine, Placement
 
 AXES = ("x", "y", "z", "A", "C")
 TOOL_OFFSETS = ("L",)
@@ -55,222 +54,60 @@ TRAVELS = {"x": (-400.0, 400.0), "y": (-425.0, 425.0), "z": (-275.0, 275.0),
            "A": (np.deg2rad(-130.0), np.deg2rad(130.0)), "C": (0.0, 2 * np.pi)}
 
 
-def _rot_xyz(a, b, c):
-    """Rx(a) Ry(b) Rz(c), batched over the shapes of a, b, c (broadcast), -> (..., 3, 3)."""
-    a, b, c = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (a, b, c)))
-    ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)
-    r = np.empty(a.shape + (3, 3))
-    r[..., 0, 0] = cb * cc
-    r[..., 0, 1] = -cb * sc
-    r[..., 0, 2] = sb
-    r[..., 1, 0] = ca * sc + sa * sb * cc
-    r[..., 1, 1] = ca * cc - sa * sb * sc
-    r[..., 1, 2] = -sa * cb
-    r[..., 2, 0] = sa * sc - ca * sb * cc
-    r[..., 2, 1] = sa * cc + ca * sb * sc
-    r[..., 2, 2] = ca * cb
-    return r
-
-
-def _compose(p, q):
-    """(R1, t1) . (R2, t2) for rigid transforms held as rotation and translation."""
-    r1, t1 = p
-    r2, t2 = q
-    return r1 @ r2, (r1 @ t2[..., None])[..., 0] + t1
-
-
-def _inverse(p):
-    r, t = p
-    rt = np.swapaxes(r, -1, -2)
-    return rt, -(rt @ t[..., None])[..., 0]
-
-
-def _translation(v):
-    v = np.asarray(v, dtype=float)
-    return np.broadcast_to(np.eye(3), v.shape[:-1] + (3, 3)), v
-
-
-class ACDoubleTurntable(Machine):
+class ACDoubleTurntable(ChainMachine):
     """Zheng et al. 2024's AC double-turntable machine; pose keys x, y, z (mm), A, C (rad),
-    optional tool length L (mm)."""
+    optional tool length L (mm).  A description for :class:`~mtaccuracy.machines.chain.
+    ChainMachine` (:data:`TOPOLOGY`, :func:`placements`): the generic chain evaluates it
+    (2 M samples/s and more) and gives its closed-form Jacobian (:meth:`linear_jacobian`)."""
 
-    name = "ac_double_turntable"
-    axes = AXES
-    tool_offsets = TOOL_OFFSETS
     travels = TRAVELS
 
     def __init__(self, convention: str = "moving"):
         if convention not in ("moving", "fixed"):
             raise ValueError(f"unknown convention {convention!r}; allowed: moving, fixed")
         self.convention = convention
-        self.catalogue = _errors.five_axis_ac_catalogue()
+        super().__init__(TOPOLOGY, _errors.five_axis_ac_catalogue(), placements(convention),
+                         name="ac_double_turntable", form="euler",
+                         tilt="exact" if convention == "moving" else "first_order",
+                         tool_offsets=TOOL_OFFSETS, orientation="tool_axis",
+                         travels=TRAVELS, axis_names=AXES)
         self._idx = {s: j for j, s in enumerate(self.error_names)}
-        self._jacobian_table = _jacobian_table(self._idx)
-
-    # -- building blocks -------------------------------------------------------------------
-    def _cols(self, e, names):
-        return [e[:, self._idx[s]] for s in names]
-
-    def _motion_error(self, e, axis):
-        a = axis.lower()
-        dx, dy, dz, ex, ey, ez = self._cols(
-            e, [f"d_x{a}", f"d_y{a}", f"d_z{a}", f"e_x{a}", f"e_y{a}", f"e_z{a}"])
-        return _rot_xyz(ex, ey, ez), np.stack([dx, dy, dz], axis=-1)
-
-    def _chains(self, e, p, with_errors=True):
-        """Tool chain g_bt and workpiece chain g_bw as (R, t); errors may be zero."""
-        n = e.shape[0]
-        zero = np.zeros(n)
-        ideal = {
-            "Y": _translation(np.stack([zero, p["y"], zero], -1)),
-            "X": _translation(np.stack([p["x"], zero, zero], -1)),
-            "Z": _translation(np.stack([zero, zero, p["z"]], -1)),
-            "A": (_rot_xyz(p["A"], zero, zero), np.zeros((n, 3))),
-            "C": (_rot_xyz(zero, zero, p["C"]), np.zeros((n, 3))),
-        }
-        tool0 = _translation(np.stack([zero, zero, p["L"]], -1))
-        if not with_errors:
-            g_bt = _compose(_compose(_compose(ideal["Y"], ideal["X"]), ideal["Z"]), tool0)
-            return g_bt, _compose(ideal["A"], ideal["C"])
-        c = self._cols
-        D = {ax: self._motion_error(e, ax) for ax in "XYZAC"}
-        dx, dy, dz, a, b, g = c(e, ["d_xAM", "d_yAM", "d_zAM", "a_AM", "b_AM", "g_AM"])
-        loc_a = (_rot_xyz(a, b, g), np.stack([dx, dy, dz], -1))
-        dyc, bca = c(e, ["d_yCA", "b_CA"])
-        loc_c = (_rot_xyz(zero, bca, zero), np.stack([zero, dyc, zero], -1))
-        s_xy, s_yz, s_xz = c(e, ["S_xy", "S_yz", "S_xz"])
-        if self.convention == "moving":
-            sq_y = (_rot_xyz(zero, zero, s_xy), np.zeros((n, 3)))
-            sq_x = (_rot_xyz(s_yz, s_xz, zero), np.zeros((n, 3)))
-            t_y = _compose(_compose(ideal["Y"], D["Y"]), sq_y)
-            t_x = _compose(_compose(ideal["X"], D["X"]), sq_x)
-            t_z = _compose(ideal["Z"], D["Z"])
-            t_a = _compose(_compose(ideal["A"], D["A"]), loc_a)
-            t_c = _compose(_compose(ideal["C"], D["C"]), loc_c)
-        else:  # fixed: locations before the motion, squareness as tilted axis directions
-            t_y = _compose(_translation(np.stack([-s_xy * p["y"], p["y"], zero], -1)), D["Y"])
-            t_x = _compose(ideal["X"], D["X"])
-            t_z = _compose(_translation(np.stack([s_xz * p["z"], -s_yz * p["z"], p["z"]], -1)),
-                           D["Z"])
-            t_a = _compose(_compose(loc_a, ideal["A"]), D["A"])
-            t_c = _compose(_compose(loc_c, ideal["C"]), D["C"])
-        g_bt = _compose(_compose(_compose(t_y, t_x), t_z), tool0)
-        return g_bt, _compose(t_a, t_c)
-
-    def relative(self, errors, pose: Mapping, with_errors: bool = True):
-        """Tool in the workpiece frame, g_wt = g_bw^-1 g_bt, as (R (n,3,3), t (n,3))."""
-        e = self.check_errors(errors)
-        p = self.check_pose(pose, e.shape[0])
-        g_bt, g_bw = self._chains(e, p, with_errors)
-        return _compose(_inverse(g_bw), g_bt)
-
-    def transforms(self, errors, pose: Mapping):
-        return (homogeneous(*self.relative(errors, pose)),
-                homogeneous(*self.relative(errors, pose, with_errors=False)))
-
-    def pose_error(self, errors, pose: Mapping) -> np.ndarray:
-        """(n, 6): tool-tip position error Px, Py, Pz (mm) and tool-axis direction error
-        Vx, Vy, Vz, both in the workpiece frame.  One pose (scalar values) and the "moving"
-        convention take the fast path (:func:`fast_pose_error`); anything else the reference
-        evaluation (:meth:`pose_error_reference`)."""
-        if self.convention == "moving" and all(np.ndim(v) == 0 for v in pose.values()):
-            return fast_pose_error(self, errors, pose)
-        return self.pose_error_reference(errors, pose)
-
-    def pose_error_reference(self, errors, pose: Mapping) -> np.ndarray:
-        """The same pose error from the straightforward (R, t) product, any pose arrays."""
-        ra, ta = self.relative(errors, pose)
-        ri, ti = self.relative(errors, pose, with_errors=False)
-        return np.concatenate([ta - ti, ra[..., :, 2] - ri[..., :, 2]], axis=-1)
-
-    def linear_jacobian(self, pose: Mapping) -> np.ndarray:
-        """The exact first-order Jacobian d(pose error)/d(errors) at zero errors, in closed
-        form: (P, 6, 41) for pose arrays of length P ((1, 6, 41) for a scalar pose).
-
-        Convention "moving" only (``convention="fixed"`` falls back to the central
-        differences of :meth:`Machine.jacobian`).  Each error block is a small twist
-        ``(d, w)`` in the frame after its axis' ideal motion.  A tool-chain block (ideal
-        rotation identity, origin ``o``) moves the tool tip by ``d + w x (p_t - o)`` and the
-        tool axis by ``w x e_z`` in the base frame, seen in the workpiece frame through
-        ``R_bw^T``; a workpiece-chain block, with ``W`` the rest of that chain after it
-        (``Rz(C)`` for the A blocks, identity for the C blocks), changes ``g_wt`` by
-        ``-W^-1 (d, w)^ W g_wt``.  Unlike differences of the full model (which subtract
-        poses of some 100 mm to get effects of some 1e-6 mm, so lose about eight digits on
-        the translational entries) every entry is exact to rounding; a test checks it
-        against :meth:`Machine.jacobian`.
-        """
-        if self.convention != "moving":
-            return self.jacobian(pose)
-        vals = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
-        n = max(v.shape[0] for v in vals.values())
-        p = self.check_pose(vals, n)
-        zero, one = np.zeros(n), np.ones(n)
-        ca, sa, cc, sc = np.cos(p["A"]), np.sin(p["A"]), np.cos(p["C"]), np.sin(p["C"])
-        r_a_t = np.stack([one, zero, zero, zero, ca, sa, zero, -sa, ca], -1).reshape(n, 3, 3)
-        r_c_t = np.stack([cc, sc, zero, -sc, cc, zero, zero, zero, one], -1).reshape(n, 3, 3)
-        r_bw_t = np.einsum("nij,njk->nik", r_c_t, r_a_t)              # base -> workpiece
-        # the five frames of _JACOBIAN_TABLE (Y, X, Z carriages, A cradle, C table): rotation
-        # into the workpiece frame, tool tip from the frame's origin and tool axis, both in
-        # the frame, and the sign (workpiece-chain errors act inversely)
-        to_w = np.empty((n, 5, 3, 3))
-        to_w[:, :3] = r_bw_t[:, None]
-        to_w[:, 3] = r_c_t
-        to_w[:, 4] = np.eye(3)
-        to_w[:, 3:] *= -1.0
-        vec = np.zeros((n, 5, 2, 3))                                   # arm and axis per frame
-        tip = np.stack([p["x"], p["y"], p["z"] + p["L"]], -1)          # tool tip, base frame
-        vec[:, 0, 0] = tip * [1.0, 0.0, 1.0]
-        vec[:, 1, 0, 2] = tip[:, 2]
-        vec[:, 2, 0, 2] = p["L"]
-        vec[:, :3, 1, 2] = 1.0
-        vec[:, 3, 0] = np.einsum("nij,nj->ni", r_a_t, tip)
-        vec[:, 3, 1] = r_a_t[:, :, 2]
-        vec[:, 4, 0] = np.einsum("nij,nj->ni", r_c_t, vec[:, 3, 0])
-        vec[:, 4, 1] = r_bw_t[:, :, 2]
-        cols, frame, moves, shift = self._jacobian_table
-        # a translation along u moves the tip by u; a rotation about u moves it by u x arm and
-        # the axis by u x axis (in the frame)
-        local = np.einsum("epqrk,nerk->nepq", moves, vec[:, frame]) + shift  # (n, 41, 2, 3)
-        jac = np.empty((n, 6, self.n_errors))
-        jac[:, :, cols] = np.einsum("neij,nepj->npie", to_w[:, frame], local).reshape(n, 6, -1)
-        return jac
 
 
-def _six(a, frame):
-    return [(f"d_{d}{a}", frame, "t", k) for k, d in enumerate("xyz")] + \
-        [(f"e_{d}{a}", frame, "r", k) for k, d in enumerate("xyz")]
+#: the machine read from the workpiece to the tool (see :mod:`.chain`)
+TOPOLOGY = "w C A b Y X Z t"
 
 
-def _jacobian_table(idx):
-    """For :meth:`ACDoubleTurntable.linear_jacobian`: per error of :data:`_JACOBIAN_TABLE`
-    its column, its frame, the linear map ``moves`` (41, 2, 3, 2, 3) from (arm, axis) in the
-    frame to the first-order motion of (tip, axis) (a rotation about u: u x arm, u x axis),
-    and the constant motion ``shift`` (41, 2, 3) (a translation along u: u, 0)."""
-    eps = np.zeros((3, 3, 3))                                          # Levi-Civita
-    eps[0, 1, 2] = eps[1, 2, 0] = eps[2, 0, 1] = 1.0
-    eps[0, 2, 1] = eps[2, 1, 0] = eps[1, 0, 2] = -1.0
-    m = len(_JACOBIAN_TABLE)
-    moves, shift = np.zeros((m, 2, 3, 2, 3)), np.zeros((m, 2, 3))
-    for e, (_, _, kind, d) in enumerate(_JACOBIAN_TABLE):
-        if kind == "r":
-            cross = eps[:, d, :]                                       # (u x a)_q = eps_qdk a_k
-            moves[e, 0, :, 0, :] = moves[e, 1, :, 1, :] = cross
-        else:
-            shift[e, 0, d] = 1.0
-    return (np.array([idx[t[0]] for t in _JACOBIAN_TABLE]),
-            np.array([t[1] for t in _JACOBIAN_TABLE]), moves, shift)
+def placements(convention: str = "moving") -> dict[str, Placement]:
+    """Where each of the 41 errors enters the chain :data:`TOPOLOGY`.
 
-
-#: Every error as (symbol, frame, translation "t" or rotation "r", direction 0-2): the frames
-#: are those after each axis' ideal motion, convention "moving" (0 Y, 1 X, 2 Z carriage of the
-#: tool chain, 3 A cradle with the A location errors, 4 C table with the C location errors).
-_JACOBIAN_TABLE = (_six("y", 0) + [("S_xy", 0, "r", 2)]
-                   + _six("x", 1) + [("S_yz", 1, "r", 0), ("S_xz", 1, "r", 1)]
-                   + _six("z", 2)
-                   + _six("a", 3) + [("d_xAM", 3, "t", 0), ("d_yAM", 3, "t", 1),
-                                     ("d_zAM", 3, "t", 2), ("a_AM", 3, "r", 0),
-                                     ("b_AM", 3, "r", 1), ("g_AM", 3, "r", 2)]
-                   + _six("c", 4) + [("d_yCA", 4, "t", 1), ("b_CA", 4, "r", 1)])
+    Error motions: the block after each axis' motion.  ``moving`` (the paper's Eq. 9 read
+    literally): the location errors of A (``d_xAM ... g_AM``) and of C (``d_yCA``, ``b_CA``)
+    are blocks after the motion of A and of C; S_xy turns the X carriage frame on the Y
+    carriage (a block after Y's motion), S_yz and S_xz the Z carriage frame on X.
+    ``fixed``: the location errors before the motion, the squareness errors as first-order
+    tilts of the directions of Y (S_xy) and Z (S_yz, S_xz)."""
+    if convention not in ("moving", "fixed"):
+        raise ValueError(f"unknown convention {convention!r}; allowed: moving, fixed")
+    pl = {}
+    for a in "xyzac":
+        for c, d in enumerate("xyz"):
+            pl[f"d_{d}{a}"] = Placement(a.upper(), "motion", c)
+            pl[f"e_{d}{a}"] = Placement(a.upper(), "motion", 3 + c)
+    loc = "post" if convention == "moving" else "pre"
+    for c, sym in enumerate(["d_xAM", "d_yAM", "d_zAM", "a_AM", "b_AM", "g_AM"]):
+        pl[sym] = Placement("A", loc, c)
+    pl["d_yCA"] = Placement("C", loc, 1)
+    pl["b_CA"] = Placement("C", loc, 4)
+    if convention == "moving":
+        pl["S_xy"] = Placement("Y", "post", 5)
+        pl["S_yz"] = Placement("X", "post", 3)
+        pl["S_xz"] = Placement("X", "post", 4)
+    else:
+        pl["S_xy"] = Placement("Y", "tilt", 5)
+        pl["S_yz"] = Placement("Z", "tilt", 3)
+        pl["S_xz"] = Placement("Z", "tilt", 4)
+    return pl
 
 
 def diagonal_test_points(n_per_diagonal: int = 5, rotary: str = "sweep") -> dict[str, np.ndarray]:
@@ -499,193 +336,6 @@ def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, star
         row["misfit"], row["status"] = misfit, status
         out.append({k: row[k] for k in (*AXES, "misfit", "status")})
     return pd.DataFrame(out)
-
-
-# --------------------------------------------------------------------------------------
-# Fast evaluation of the "moving" convention: the same product, applied to the two vectors
-# the pose error needs (the tool tip and the tool axis) instead of multiplying 4x4 matrices.
-# Every rotation is three elementary rotations of vectors held as structure of arrays (one
-# contiguous row per coordinate), so each step is a few elementwise numpy operations over a
-# chunk of samples: no stacked small matmul (which numpy hands to BLAS one 4x4 product at a
-# time: slow, and rounded differently by each BLAS kernel).  All operations write into one
-# workspace allocated per call (not per chunk), so a chunk allocates nothing.  The general
-# implementation above is the reference; the tests require both to agree to rounding.
-# --------------------------------------------------------------------------------------
-
-
-class _Workspace:
-    """Scratch rows for :func:`fast_pose_error` on chunks of ``k`` samples: the gathered
-    errors ``blk`` (41, k), cosines and sines ``c``, ``s`` (23, k; row 22 for the combined
-    C + g_AM rotation), the three coordinate rows ``v`` (each (2, k): tip and axis) and two
-    rows ``t`` for the rotations."""
-
-    def __init__(self, k: int):
-        self.k = k
-        self.rows = np.empty((k, 41))
-        self.blk = np.empty((41, k))
-        self.c, self.s, self.x2 = np.empty((23, k)), np.empty((23, k)), np.empty((22, k))
-        self.v = [np.empty((2, k)) for _ in range(3)]
-        self.t = [np.empty((2, k)) for _ in range(2)]
-
-
-def _rot(w, i, j, c, s, inverse=False):
-    """The plane rotation of coordinates i, j of ``w.v`` by the angle with cosine c and sine
-    s (rows (k,)), in place: v_i' = c v_i - s v_j, v_j' = s v_i + c v_j (``inverse``: the
-    transpose).  Rx is (1, 2), Ry (2, 0), Rz (0, 1).  The same products and sums as the
-    expressions written out, so the same rounding."""
-    vi, vj, t0, t1 = w.v[i], w.v[j], w.t[0], w.t[1]
-    np.multiply(vi, s, out=t0)
-    np.multiply(vj, s, out=t1)
-    vi *= c
-    vj *= c
-    if inverse:
-        vi += t1
-        vj -= t0
-    else:
-        vi -= t1
-        vj += t0
-
-
-def _rxyz(w, k):
-    """Rx Ry Rz v, angles k, k+1, k+2 of the workspace's (cos, sin) rows."""
-    c, s = w.c, w.s
-    _rot(w, 0, 1, c[k + 2], s[k + 2])
-    _rot(w, 2, 0, c[k + 1], s[k + 1])
-    _rot(w, 1, 2, c[k], s[k])
-
-
-def _rxyz_t(w, k, last=True):
-    """(Rx Ry Rz)^T v = Rz^T Ry^T Rx^T v; ``last=False`` leaves out Rz^T."""
-    c, s = w.c, w.s
-    _rot(w, 1, 2, c[k], s[k], True)
-    _rot(w, 2, 0, c[k + 1], s[k + 1], True)
-    if last:
-        _rot(w, 0, 1, c[k + 2], s[k + 2], True)
-
-
-#: angles of the fast path, in the order it reads them (three per rotation block)
-_ANGLES = ["e_xz", "e_yz", "e_zz", "S_yz", "S_xz", "S_xy", "e_xx", "e_yx", "e_zx",
-           "e_xy", "e_yy", "e_zy", "e_xa", "e_ya", "e_za", "a_AM", "b_AM", "g_AM",
-           "e_xc", "e_yc", "e_zc", "b_CA"]
-_SHIFTS = {"z": ["d_xz", "d_yz", "d_zz"], "x": ["d_xx", "d_yx", "d_zx"],
-           "y": ["d_xy", "d_yy", "d_zy"], "a": ["d_xa", "d_ya", "d_za"],
-           "am": ["d_xAM", "d_yAM", "d_zAM"], "c": ["d_xc", "d_yc", "d_zc"]}
-
-
-def fast_pose_error(machine: ACDoubleTurntable, errors: np.ndarray, pose: Mapping,
-                    chunk: int = 4096, out: np.ndarray | None = None) -> np.ndarray:
-    """``machine.pose_error`` for one pose (scalar pose values), convention "moving".
-
-    The tool tip (0, 0, L) and the tool axis e_z are carried together (rows of shape (2, k))
-    through the tool chain g_bt = I_Y E_Y Sq_Y I_X E_X Sq_X I_Z E_Z (innermost factor
-    first), then through the inverse of the workpiece chain g_bw = I_A E_A L_A I_C E_C L_C
-    (outermost first): each step a rotation of both, plus a shift of the tip; ``chunk``
-    samples at a time (small chunks keep every row in cache), in a workspace allocated once.
-    """
-    if machine.convention != "moving":
-        return machine.pose_error(errors, pose)
-    e = machine.check_errors(errors)
-    p = machine.check_pose(pose, 1)
-    p = {k: float(v[0]) for k, v in p.items()}
-    r_i, t_i = machine.relative(np.zeros((1, machine.n_errors)), p, False)
-    ideal_t, ideal_v = t_i[0], r_i[0, :, 2]
-    n = e.shape[0]
-    idx = machine._idx
-    shift = {k: [idx[s] for s in v] for k, v in _SHIFTS.items()}
-    rows = [idx[s] for s in _ANGLES] + [j for v in shift.values() for j in v] + [idx["d_yCA"]]
-    at = {k: 22 + 3 * i for i, k in enumerate(shift)}   # first row of each shift
-    ca, sa, cc, sc = np.cos(p["A"]), np.sin(p["A"]), np.cos(p["C"]), np.sin(p["C"])
-    res = np.empty((n, 6)) if out is None else out
-    work = {}
-    for s0 in range(0, n, chunk):
-        k = min(chunk, n - s0)
-        w = work.get(k) or work.setdefault(k, _Workspace(k))
-        blk, c, sn, v = w.blk, w.c, w.s, w.v
-        np.take(e[s0:s0 + k], rows, axis=1, out=w.rows, mode="clip")
-        blk[...] = w.rows.T                                 # (41, k): angles, then shifts
-        blk[11] += blk[5]  # Sq_Y = Rz(S_xy) is followed by Rz(e_zy) of E_Y: one rotation
-        _cos_sin(blk[:22], c[:22], sn[:22], w.x2)
-        # L_A^-1 ends with Rz(g_AM)^T, followed by I_C^-1 = Rz(C)^T: one rotation by C + g_AM
-        t = w.t[0][0]
-        np.multiply(c[17], cc, out=c[22])
-        np.multiply(sn[17], sc, out=t)
-        c[22] -= t
-        np.multiply(c[17], sc, out=sn[22])
-        np.multiply(sn[17], cc, out=t)
-        sn[22] += t
-
-        def shift_tip(key, sign=1, blk=blk, v=v):
-            for i in range(3):
-                if sign > 0:
-                    v[i][0] += blk[at[key] + i]
-                else:
-                    v[i][0] -= blk[at[key] + i]
-
-        # tool chain, innermost first: E_Z, I_Z, Sq_X, E_X, I_X, Sq_Y with E_Y, I_Y
-        v[0].fill(0.0)
-        v[1].fill(0.0)
-        v[2][0], v[2][1] = p["L"], 1.0
-        _rot(w, 2, 0, c[1], sn[1])  # Rz leaves (0, 0, a) alone
-        _rot(w, 1, 2, c[0], sn[0])
-        shift_tip("z")
-        v[2][0] += p["z"]
-        _rot(w, 2, 0, c[4], sn[4])
-        _rot(w, 1, 2, c[3], sn[3])
-        _rxyz(w, 6)
-        shift_tip("x")
-        v[0][0] += p["x"]
-        _rxyz(w, 9)
-        shift_tip("y")
-        v[1][0] += p["y"]
-        # inverse of the workpiece chain: I_A^-1, E_A^-1, L_A^-1, I_C^-1, E_C^-1, L_C^-1
-        _rot(w, 1, 2, ca, sa, True)
-        shift_tip("a", -1)
-        _rxyz_t(w, 12)
-        shift_tip("am", -1)
-        _rxyz_t(w, 15, last=False)
-        _rot(w, 0, 1, c[22], sn[22], True)
-        shift_tip("c", -1)
-        _rxyz_t(w, 18)
-        v[1][0] -= blk[40]
-        _rot(w, 2, 0, c[21], sn[21], True)
-        for i in range(3):
-            np.subtract(v[i][0], ideal_t[i], out=res[s0:s0 + k, i])
-            np.subtract(v[i][1], ideal_v[i], out=res[s0:s0 + k, 3 + i])
-    return res
-
-
-def _cos_sin(x, c, s, x2):
-    """cos and sin of x into c and s (x2: scratch of x's shape); for |x| < 1e-3 rad (all
-    geometric errors) a Taylor polynomial whose truncation error is far below double
-    precision, several times faster than numpy's cos and sin: to x^4 and x^5 below 1e-3 rad
-    (errors < x^6/720 and x^7/5040), to x^2 and x^3 below 1e-4 rad (errors < x^4/24 < 5e-18
-    and x^5/120 < 1e-22, under half an ulp of 1 and of x)."""
-    m = max(x.max(initial=0.0), -x.min(initial=0.0))
-    if m >= 1e-3:
-        np.cos(x, out=c)
-        np.sin(x, out=s)
-        return
-    np.multiply(x, x, out=x2)
-    if m < 1e-4:                       # c = 1 - x^2/2, s = x (1 - x^2/6)
-        np.multiply(x2, -0.5, out=c)
-        c += 1.0
-        np.multiply(x2, -1.0 / 6.0, out=s)
-        s += 1.0
-        s *= x
-        return
-    # c = 1 - (x^2/2)(1 - x^2/12), s = x (1 - (x^2/6)(1 - x^2/20))
-    np.divide(x2, 12.0, out=c)
-    np.subtract(1.0, c, out=c)
-    np.divide(x2, 20.0, out=s)
-    np.subtract(1.0, s, out=s)
-    np.multiply(x2, 0.5, out=x2)       # x^2/2 for the cosine
-    c *= x2
-    np.subtract(1.0, c, out=c)
-    np.multiply(x, x, out=x2)          # x^2 anew for the sine's x^2/6 (same rounding as
-    np.divide(x2, 6.0, out=x2)         # x * x / 6, not (x^2/2)/3)
-    s *= x2
-    np.subtract(1.0, s, out=s)
-    s *= x
 
 
 # --------------------------------------------------------------------------------------

@@ -54,11 +54,13 @@ every product written out in a fixed order (no BLAS call; the same rounding on e
 closed form (each error is a small twist in its frame: ``R_A (w x p_B + v)``), batched over
 poses.
 
-The papers' machines are three descriptions (:func:`zheng_ac`, :func:`rong_horizontal`,
-:func:`guo_vertical`); ``tests/test_chain.py`` shows each reproduces today's hand-written
-machine to 1e-12.  :func:`iso_machine` builds any topology with the ISO 230-1 catalogue
-generated from it and the redundant location errors removed by a rank test
-(:func:`iso_catalogue`).
+The papers' machines are three descriptions in their modules (``ac_double_turntable``,
+``horizontal_3axis``, ``vertical_xyfz``: a topology and a placement each); they reproduced the
+hand-written chains they replace to 1e-12 (5e-13 measured) and the tests hold them to
+independent formulations (4x4 products, the literal product of exponentials, sympy).
+:func:`iso_machine` builds any topology with the ISO 230-1 catalogue generated from it and the
+redundant location errors removed by a rank test (:func:`iso_catalogue`,
+:func:`redundant_location_errors`).
 """
 
 from __future__ import annotations
@@ -357,7 +359,9 @@ class ChainMachine(Machine):
     ``rotation_vector`` (Rx, Ry, Rz: ``vee(R_actual R_ideal^T)``) or ``tool_axis`` (Vx, Vy,
     Vz: the change of the tool-axis direction, the third column of R); ``pivots``: rotary axis
     -> a point (mm) its axis passes through, in the frame it rides on (default the origin);
-    ``travels``: axis -> (low, high) (mm or rad), for atlases and checks; ``chunk``: samples
+    ``travels``: pose name (x, y, z lower case, A, B, C) -> (low, high) (mm or rad), for
+    atlases and checks; ``axis_names``: the order of the axes' pose names (messages, tables;
+    default the topology's); ``chunk``: samples
     per batch (8192: every row of a batch stays in cache; the batch buffers are allocated
     once per call, so an instance is not to be shared between threads).
     """
@@ -366,7 +370,8 @@ class ChainMachine(Machine):
                  *, name: str = "chain", form: str = "euler", tilt: str = "exact",
                  tool_offsets: Sequence[str] = ("L",), orientation: str = "rotation_vector",
                  pivots: Mapping[str, Sequence[float]] | None = None,
-                 travels: Mapping[str, tuple[float, float]] | None = None, chunk: int = 8192):
+                 travels: Mapping[str, tuple[float, float]] | None = None, chunk: int = 8192,
+                 axis_names: Sequence[str] | None = None):
         self.topology = parse_topology(topology)
         if form not in FORMS:
             raise ValueError(f"unknown block form {form!r}; allowed: {', '.join(FORMS)}")
@@ -382,8 +387,14 @@ class ChainMachine(Machine):
         self.name, self.form, self.tilt, self.orientation = name, form, tilt, orientation
         self.components = ORIENTATIONS[orientation]
         self.catalogue = tuple(catalogue)
-        self.axes = tuple(a.lower() if a in LINEAR else a for a in self.topology.axes)
-        self._axis_pose = dict(zip(self.topology.axes, self.axes, strict=True))
+        names = tuple(a.lower() if a in LINEAR else a for a in self.topology.axes)
+        self._axis_pose = dict(zip(self.topology.axes, names, strict=True))
+        if axis_names is not None:
+            if sorted(axis_names) != sorted(names):
+                raise ValueError(f"axis_names {tuple(axis_names)} must order the pose names "
+                                 f"{names} of the topology")
+            names = tuple(axis_names)
+        self.axes = names
         self.tool_offsets = tool_offsets
         clash = set(tool_offsets) & set(self.axes)
         if clash:
@@ -397,6 +408,10 @@ class ChainMachine(Machine):
                 raise ValueError(f"pivot of {a} must be 3 finite numbers (mm), got {p!r}")
         self.pivots = {a: np.asarray(p, dtype=float) for a, p in pivots.items()}
         self.travels = dict(travels or {})
+        unknown = [k for k in self.travels if k not in self.axes]
+        if unknown:
+            raise ValueError(f"travels given for {unknown}, not pose names of the axes "
+                             f"({', '.join(self.axes)})")
         self.chunk = int(chunk)
         self._trig = None
         self._work = {}
@@ -797,8 +812,8 @@ def redundant_location_errors(machine: ChainMachine, n_poses: int = 64, seed=0,
     Jacobian columns (least-squares residual of the unit column below ``rtol``)."""
     rng = np.random.default_rng(seed)
     pose = {}
-    for a, name in zip(machine.topology.axes, machine.axes, strict=True):
-        lo, hi = machine.travels.get(a, (-300.0, 300.0) if a in LINEAR else (-np.pi, np.pi))
+    for a, name in machine._axis_pose.items():
+        lo, hi = machine.travels.get(name, (-300.0, 300.0) if a in LINEAR else (-np.pi, np.pi))
         pose[name] = rng.uniform(lo, hi, n_poses)
     for t in machine.tool_offsets:
         pose[t] = rng.uniform(50.0, 150.0, n_poses)
@@ -887,85 +902,3 @@ def iso_machine(topology: str, *, name: str = "iso_machine", keep_redundant: boo
                             name=name, **options)
     full.removed = removed
     return full
-
-
-# ------------------------------------------------------------------------------------------
-# The papers' machines as descriptions
-# ------------------------------------------------------------------------------------------
-
-def zheng_ac(convention: str = "moving") -> ChainMachine:
-    """Zheng et al. 2024's AC double turntable (41 errors, paper symbols and order): ``w C A
-    b Y X Z t``, euler blocks, tool length ``L`` along z, tool-axis output.  ``moving``: the
-    squareness and location errors as frame rotations/blocks after the motion of the axis
-    carrying the next body (the paper's Eq. 9 read literally); ``fixed``: location errors
-    before the motion, squareness as first-order tilts of Y and Z."""
-    from .ac_double_turntable import TRAVELS
-
-    if convention not in ("moving", "fixed"):
-        raise ValueError(f"unknown convention {convention!r}; allowed: moving, fixed")
-    cat = _errors.five_axis_ac_catalogue()
-    pl = {}
-    for a in "xyzac":
-        for c, d in enumerate("xyz"):
-            pl[f"d_{d}{a}"] = Placement(a.upper(), "motion", c)
-            pl[f"e_{d}{a}"] = Placement(a.upper(), "motion", 3 + c)
-    loc = "post" if convention == "moving" else "pre"
-    for c, s in enumerate(["d_xAM", "d_yAM", "d_zAM", "a_AM", "b_AM", "g_AM"]):
-        pl[s] = Placement("A", loc, c)
-    pl["d_yCA"] = Placement("C", loc, 1)
-    pl["b_CA"] = Placement("C", loc, 4)
-    if convention == "moving":   # X rides on Y: S_xy turns the X frame; Z on X: S_yz, S_xz
-        pl["S_xy"] = Placement("Y", "post", 5)
-        pl["S_yz"] = Placement("X", "post", 3)
-        pl["S_xz"] = Placement("X", "post", 4)
-        tilt = "exact"
-    else:
-        pl["S_xy"] = Placement("Y", "tilt", 5)
-        pl["S_yz"] = Placement("Z", "tilt", 3)
-        pl["S_xz"] = Placement("Z", "tilt", 4)
-        tilt = "first_order"
-    travels = {k.upper() if k in "xyz" else k: v for k, v in TRAVELS.items()}
-    return ChainMachine("w C A b Y X Z t", cat, pl, name="ac_double_turntable", form="euler",
-                        tilt=tilt, tool_offsets=("L",), orientation="tool_axis",
-                        travels=travels)
-
-
-def _three_axis_placements(s_xz_sign: float) -> dict[str, Placement]:
-    pl = {}
-    for a in "xyz":
-        for c, d in enumerate("xyz"):
-            pl[f"d{d}({a})"] = Placement(a.upper(), "motion", c)
-            pl[f"e{d}({a})"] = Placement(a.upper(), "motion", 3 + c)
-    pl["S_xy"] = Placement("Y", "tilt", 5)
-    pl["S_yz"] = Placement("Z", "tilt", 3)
-    pl["S_xz"] = Placement("Z", "tilt", 4, s_xz_sign)
-    return pl
-
-
-def rong_horizontal(layout: str = "z/xy", exact: bool = True) -> ChainMachine:
-    """Rong et al.'s horizontal machining centre (21 errors): layout ``W/T`` as in
-    :mod:`.horizontal_3axis` (``z/xy`` is ``w Z b X Y t``), screw-exponential error motions
-    (``exact=False``: first-order matrices), squareness as tilted directions (EC0Y, EA0Z,
-    EB0Z), tool offsets ``tool_x, tool_y, tool_z``, rotation-vector output."""
-    from .horizontal_3axis import parse_layout
-
-    work, tool = parse_layout(layout)
-    topo = "w " + " ".join(a.upper() for a in reversed(work)) + " b " + \
-        " ".join(a.upper() for a in tool) + " t"
-    return ChainMachine(topo, _errors.three_axis_catalogue(), _three_axis_placements(1.0),
-                        name="horizontal_3axis", form="screw" if exact else "first_order",
-                        tilt="exact" if exact else "first_order",
-                        tool_offsets=("tool_x", "tool_y", "tool_z"),
-                        orientation="rotation_vector")
-
-
-def guo_vertical(exact: bool = False) -> ChainMachine:
-    """Guo et al. 2016's XYFZ machine (21 errors) as the paper chains it (Eq. 9): every axis
-    composed from the workpiece, ``w b X Y Z t``, each motion followed by its error matrix
-    (first-order matrices; ``exact=True``: exact rotations), squareness entering the
-    translations linearly (first-order tilts; the paper's S_xz is -EB0Z), tool offsets
-    ``D1, D2, D3``, rotation-vector output."""
-    return ChainMachine("w b X Y Z t", _errors.three_axis_catalogue(),
-                        _three_axis_placements(-1.0), name="vertical_xyfz",
-                        form="rodrigues" if exact else "first_order", tilt="first_order",
-                        tool_offsets=("D1", "D2", "D3"), orientation="rotation_vector")

@@ -12,8 +12,9 @@ are the commanded *relative* tool-to-workpiece coordinates and every error enter
 sign the paper prints; the squareness errors enter the translations of Y and Z as
 ``dx(y) - y S_xy``, ``dx(z) - z S_xz``, ``dy(z) - z S_yz`` (Eqs. 7-8).
 
-The library evaluates the full product of the paper's small-angle matrices (no truncation);
-``exact=True`` uses exact rotations instead.  :func:`printed_closed_form` transcribes the
+The library evaluates the full product of the paper's small-angle matrices (no truncation)
+with the generic chain (:mod:`.chain`, topology ``w b X Y Z t``); ``exact=True`` uses exact
+rotations instead.  :func:`printed_closed_form` transcribes the
 paper's second-order Eqs. 11-13 as printed, typos included, and :func:`second_order` derives
 the correct second-order expansion with sympy, so the two can be compared term by term
 (:func:`closed_form_typos`).  This module is hand-written because the error model is the
@@ -24,77 +25,48 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-import numpy as np
-
 from .. import errors as _errors
-from ..kinematics import hat, homogeneous, matmul3, matvec3, rotation_exp, translation, vee
-from ._base import Machine
+from .chain import ChainMachine, Placement
 
 AXES = ("x", "y", "z")
 TOOL_OFFSETS = ("D1", "D2", "D3")
 
 
-class VerticalXYFZ(Machine):
-    """Guo et al. 2016's XYFZ vertical machine; ``exact=True`` for exact rotation matrices."""
+class VerticalXYFZ(ChainMachine):
+    """Guo et al. 2016's XYFZ vertical machine; ``exact=True`` for exact rotation matrices.
 
-    name = "vertical_xyfz"
-    axes = AXES
-    tool_offsets = TOOL_OFFSETS
+    A description for :class:`~mtaccuracy.machines.chain.ChainMachine`: the paper's serial
+    reading ``w b X Y Z t`` (Eq. 9 composes X, Y, Z from the workpiece, each motion followed
+    by its error matrix), first-order error matrices (``exact=True``: exact rotations, form
+    ``rodrigues``), squareness entering the translations linearly (first-order tilts of the
+    Y and Z directions; the paper's S_xz is -EB0Z: ``dx(z) - z S_xz``), tool offsets
+    ``D1, D2, D3``, rotation-vector output."""
 
     def __init__(self, exact: bool = False):
-        self.catalogue = _errors.three_axis_catalogue()
         self.exact = bool(exact)
-        idx = {s: j for j, s in enumerate(self.error_names)}
-        self._delta = {a: [idx[f"d{d}({a})"] for d in AXES] for a in AXES}
-        self._eps = {a: [idx[f"e{d}({a})"] for d in AXES] for a in AXES}
-        self._sq = {s: idx[s] for s in ("S_xy", "S_yz", "S_xz")}
+        super().__init__(TOPOLOGY, _errors.three_axis_catalogue(), placements(),
+                         name="vertical_xyfz", form="rodrigues" if self.exact else "first_order",
+                         tilt="first_order", tool_offsets=TOOL_OFFSETS,
+                         orientation="rotation_vector", axis_names=AXES)
 
-    def _actual(self, e: np.ndarray, p: Mapping[str, np.ndarray]
-                ) -> tuple[np.ndarray, np.ndarray]:
-        """Rotation (n, 3, 3) and translation (n, 3) of the actual chain, composed as
-        rotation-translation pairs (a product with a pure translation is a vector sum; the
-        3x3 products are written out in a fixed order, no BLAS call, so the rounding is the
-        same on every machine)."""
-        n = e.shape[0]
-        zero = np.zeros(n)
-        x, y, z = p["x"], p["y"], p["z"]
-        d = {a: e[:, self._delta[a]].copy() for a in AXES}
-        d["y"][:, 0] -= y * e[:, self._sq["S_xy"]]
-        d["z"][:, 0] -= z * e[:, self._sq["S_xz"]]
-        d["z"][:, 1] -= z * e[:, self._sq["S_yz"]]
-        eps = {a: e[:, self._eps[a]] for a in AXES}
-        rot = {a: rotation_exp(eps[a]) if self.exact else np.eye(3) + hat(eps[a]) for a in AXES}
-        # T(x) E_X: (R_X, (x, 0, 0) + d_X)
-        r, t = rot["x"], np.stack([x, zero, zero], axis=-1) + d["x"]
-        # . T(y) E_Y
-        t = t + r[:, :, 1] * y[:, None] + matvec3(r, d["y"])
-        r = matmul3(r, rot["y"])
-        # . T(z) E_Z
-        t = t + r[:, :, 2] * z[:, None] + matvec3(r, d["z"])
-        r = matmul3(r, rot["z"])
-        # . T(D1, D2, D3)
-        t = t + matvec3(r, np.stack([p["D1"], p["D2"], p["D3"]], axis=-1))
-        return r, t
 
-    @staticmethod
-    def _ideal_position(p: Mapping[str, np.ndarray]) -> np.ndarray:
-        """The ideal chain T(x) T(y) T(z) T(D) is the translation (x + D1, y + D2, z + D3)."""
-        return np.stack([p["x"] + p["D1"], p["y"] + p["D2"], p["z"] + p["D3"]], axis=-1)
+#: the paper's chain read from the workpiece to the tool (see :mod:`.chain`)
+TOPOLOGY = "w b X Y Z t"
 
-    def transforms(self, errors, pose: Mapping) -> tuple[np.ndarray, np.ndarray]:
-        e = self.check_errors(errors)
-        p = self.check_pose(pose, e.shape[0])
-        r, t = self._actual(e, p)
-        return homogeneous(r, t), translation(self._ideal_position(p))
 
-    def pose_error(self, errors, pose: Mapping) -> np.ndarray:
-        """(n, 6) pose error ``Px, Py, Pz`` (mm), ``Vx, Vy, Vz`` (rad) of the tool in the
-        workpiece frame, actual minus ideal, from the full (untruncated) matrix product (the
-        ideal frame is a pure translation, so the rotation part is ``vee(R)``)."""
-        e = self.check_errors(errors)
-        p = self.check_pose(pose, e.shape[0])
-        r, t = self._actual(e, p)
-        return np.concatenate([t - self._ideal_position(p), vee(r)], axis=-1)
+def placements(s_xz_sign: float = -1.0) -> dict[str, Placement]:
+    """Where the 21 errors enter a three-axis chain: each axis' six error motions in the block
+    after its motion; S_xy tilts Y about z (EC0Y), S_yz tilts Z about x (EA0Z) and S_xz tilts
+    Z about y with ``s_xz_sign`` (Guo et al.: -1, their S_xz is -EB0Z; Rong et al.: +1)."""
+    pl = {}
+    for a in AXES:
+        for c, d in enumerate(AXES):
+            pl[f"d{d}({a})"] = Placement(a.upper(), "motion", c)
+            pl[f"e{d}({a})"] = Placement(a.upper(), "motion", 3 + c)
+    pl["S_xy"] = Placement("Y", "tilt", 5)
+    pl["S_yz"] = Placement("Z", "tilt", 3)
+    pl["S_xz"] = Placement("Z", "tilt", 4, s_xz_sign)
+    return pl
 
 
 # --------------------------------------------------------------------------------------
