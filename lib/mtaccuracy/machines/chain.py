@@ -72,6 +72,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import errors as _errors
+from ..kinematics import matmul3
 from ._base import Machine
 
 LINEAR = "XYZ"
@@ -331,6 +332,12 @@ def _inverse(form: str, r, t, w):
         ri = [[r[j][i] for j in range(3)] for i in range(3)]
     ti = [-(ri[i][0] * t[0] + ri[i][1] * t[1] + ri[i][2] * t[2]) for i in range(3)]
     return ri, ti
+
+
+def _cross_axis1(u, v):
+    """Cross products along axis 1 of (E, 3, ...) arrays (broadcast), written out."""
+    return np.stack([u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1], u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+                     u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]], axis=1)
 
 
 def _apply(v, r, t):
@@ -665,6 +672,35 @@ class ChainMachine(Machine):
                 homogeneous(*self.relative(errors, pose, with_errors=False)))
 
     # -- first order ------------------------------------------------------------------------
+    def _jacobian_plan(self):
+        """Per error, for :meth:`linear_jacobian`: the position of its factor in
+        :meth:`factors`, its kind (0 translation, 1 rotation, 2 tilt), the unit vector of its
+        component, the direction of its axis (tilts), sign x side, and the axis (tilts)."""
+        if getattr(self, "_plan", None) is not None:
+            return self._plan
+        seq = self.factors()
+        where = {}
+        for i, (side, axis, slot) in enumerate(seq):
+            where[(axis, "tilt" if slot == "move" else slot)] = (i, side)
+        m = self.n_errors
+        pos, kind = np.zeros(m, dtype=int), np.zeros(m, dtype=int)
+        unit, ek, scale = np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m)
+        tilt_axis = [""] * m
+        for j, pl in enumerate(self.placements):
+            i, side = where[(pl.axis, pl.slot)]
+            pos[j] = i
+            unit[j, pl.component % 3] = 1.0
+            scale[j] = pl.sign * side
+            if pl.slot == "tilt":
+                kind[j] = 2
+                ek[j, DIRECTION[pl.axis]] = 1.0
+                tilt_axis[j] = pl.axis
+                scale[j] = pl.sign * side * side    # the move is by s q, s = side for linear
+            else:
+                kind[j] = 0 if pl.component < 3 else 1
+        self._plan = (pos, kind, unit, ek, scale, tilt_axis)
+        return self._plan
+
     def linear_jacobian(self, pose: Mapping) -> np.ndarray:
         """The exact first-order Jacobian d(pose error)/d(errors) at zero errors, (P, 6, n)
         for pose arrays of length P, in closed form: an error block is a small twist
@@ -679,26 +715,28 @@ class ChainMachine(Machine):
         p = self.check_pose(vals, n)
         zero_e = np.zeros((self.n_errors, n))        # errors as rows, one per error
         seq = self.factors()
-        # forward: rotation of everything before each factor (rows (3, 3, n))
+        # forward: rotation of everything before each factor, (n, 3, 3); only the rotary
+        # motions turn (every other factor is a translation or, at zero errors, identity)
         before = []
-        rot = [[np.ones(n) if i == j else np.zeros(n) for j in range(3)] for i in range(3)]
+        rot = np.broadcast_to(np.eye(3), (n, 3, 3))
         for side, axis, slot in seq:
             before.append(rot)
             if slot == "move" and axis in ROTARY:
                 r, _, _ = self._factor(zero_e, p, side, axis, slot, n)
-                if side < 0:
-                    r = [[r[j][i] for j in range(3)] for i in range(3)]
-                rot = _matmul(rot, r)
+                m3 = np.empty((n, 3, 3))
+                for i in range(3):
+                    for j in range(3):
+                        m3[:, i, j] = r[j][i] if side < 0 else r[i][j]
+                rot = matmul3(rot, m3)
         # backward: tip and tool axis after each factor (in that factor's frame)
         after = [None] * len(seq)
         v = self._start(p, n)[[0, 3]]
         for i in range(len(seq) - 1, -1, -1):
             after[i] = v
             side, axis, slot = seq[i]
-            f = self._factor(zero_e, p, side, axis, slot, n)
-            if slot != "move" or f is None:
+            if slot != "move":
                 continue
-            r, t, w = f
+            r, t, w = self._factor(zero_e, p, side, axis, slot, n)
             if side < 0:
                 if r is None:
                     t = [-ti for ti in t]
@@ -710,38 +748,24 @@ class ChainMachine(Machine):
                     v[0, j] += t[j]
             else:
                 v = _apply(v, r, t)
-        jac = np.zeros((n, 6, self.n_errors))
-        axis_out = self.orientation == "tool_axis"
-        for i, (side, axis, slot) in enumerate(seq):
-            key = "tilt" if slot == "move" else slot
-            b = self._blocks[(axis, key)]
-            if not b.cols or (slot == "move") != (key == "tilt"):
-                continue
-            ra, (tip, ax) = before[i], after[i]
-            sgn = float(side)
-            for j, c, s in zip(b.cols, b.comps, b.signs, strict=True):
-                unit = np.zeros(3)
-                unit[c % 3] = 1.0
-                if key == "tilt":
-                    q = p[self._axis_pose[axis]] * (-1.0 if side < 0 else 1.0)
-                    ek = np.zeros(3)
-                    ek[DIRECTION[axis]] = 1.0
-                    mv = np.cross(unit, ek)[:, None] * q           # (3, n)
-                    dp, dr = [mv[r_] for r_ in range(3)], [0.0, 0.0, 0.0]
-                    da = [0.0, 0.0, 0.0]
-                elif c < 3:
-                    dp, dr, da = [unit[r_] for r_ in range(3)], [0.0] * 3, [0.0] * 3
-                else:
-                    dp = _cross(list(unit), [tip[r_] for r_ in range(3)])
-                    da = _cross(list(unit), [ax[r_] for r_ in range(3)])
-                    dr = [unit[r_] for r_ in range(3)]
-                scale = s * sgn
-                for r_ in range(3):
-                    jac[:, r_, j] = scale * (ra[r_][0] * dp[0] + ra[r_][1] * dp[1]
-                                             + ra[r_][2] * dp[2])
-                    src = da if axis_out else dr
-                    jac[:, 3 + r_, j] = scale * (ra[r_][0] * src[0] + ra[r_][1] * src[1]
-                                                 + ra[r_][2] * src[2])
+        pos, kind, unit, ek, scale, tilt_axis = self._jacobian_plan()
+        ra = np.stack(before)                                     # (F, n, 3, 3)
+        aft = np.stack(after)                                     # (F, 2, 3, n)
+        tip, ax = aft[pos, 0], aft[pos, 1]                        # (E, 3, n)
+        u = unit[:, :, None]                                      # (E, 3, 1)
+        dp = np.where(kind[:, None, None] == 0, u, 0.0)           # translations
+        rotn = kind[:, None, None] == 1
+        dp = np.where(rotn, _cross_axis1(u, tip), dp)
+        q = np.stack([p[self._axis_pose[a_]] if a_ else np.zeros(n) for a_ in tilt_axis])
+        dp = np.where(kind[:, None, None] == 2, _cross_axis1(u, ek[:, :, None])
+                      * q[:, None, :], dp)
+        dr = (_cross_axis1(u, ax) if self.orientation == "tool_axis"
+              else np.broadcast_to(u, dp.shape))
+        dr = np.where(rotn, dr, 0.0)
+        r_e = ra[pos]                                             # (E, n, 3, 3)
+        jac = np.empty((n, 6, self.n_errors))
+        jac[:, :3] = np.einsum("enij,ejn->nie", r_e, dp) * scale
+        jac[:, 3:] = np.einsum("enij,ejn->nie", r_e, dr) * scale
         return jac + 0.0
 
 
