@@ -4,7 +4,11 @@
 ``.catalogue`` (:class:`mtaccuracy.errors.ErrorSpec` per error), ``.axes``, ``.tool_offsets``
 and ``.pose_error(errors, pose)``: an ``(n, n_errors)`` array (mm, rad) and a pose mapping
 (axis and tool-offset names to mm or rad, scalars or ``(n,)`` arrays) to an ``(n, 6)`` array
-``Px, Py, Pz`` (mm) and ``Vx, Vy, Vz`` (rad).
+``Px, Py, Pz`` (mm) and the orientation error (rad), named by ``machine.components``: a rotation
+vector ``Rx, Ry, Rz`` (the three-axis machines) or the change of the tool-axis direction
+``Vx, Vy, Vz`` (the five-axis machine).  Every machine is a :class:`.chain.ChainMachine`: a
+topology and an error placement (see :mod:`.chain`; :func:`.chain.iso_machine` builds any
+other topology with its ISO 230-1 catalogue).
 
 One module per machine; the registry imports it on first use.
 """

@@ -9,7 +9,10 @@ import numpy as np
 from .. import errors as _errors
 from ..kinematics import pose_difference
 
-POSE_COMPONENTS = ("Px", "Py", "Pz", "Vx", "Vy", "Vz")
+#: the columns of a pose error with a rotation-vector orientation part (Rx, Ry, Rz: rad);
+#: a machine whose orientation output is the change of the tool-axis direction names them
+#: Vx, Vy, Vz instead (``machine.components``)
+POSE_COMPONENTS = ("Px", "Py", "Pz", "Rx", "Ry", "Rz")
 
 
 class Machine:
@@ -21,6 +24,7 @@ class Machine:
     axes: tuple[str, ...] = ()
     tool_offsets: tuple[str, ...] = ()
     catalogue: tuple[_errors.ErrorSpec, ...] = ()
+    components: tuple[str, ...] = POSE_COMPONENTS
 
     @property
     def error_names(self) -> list[str]:
@@ -64,8 +68,9 @@ class Machine:
         raise NotImplementedError
 
     def pose_error(self, errors, pose: Mapping) -> np.ndarray:
-        """(n, 6) pose error ``Px, Py, Pz`` (mm), ``Vx, Vy, Vz`` (rad) of the tool in the
-        workpiece frame, actual minus ideal, from the full (untruncated) matrix product."""
+        """(n, 6) pose error ``Px, Py, Pz`` (mm), ``Rx, Ry, Rz`` (rad: the rotation vector
+        ``vee(R_actual R_ideal^T)``) of the tool in the workpiece frame, actual minus ideal,
+        from the full (untruncated) matrix product."""
         actual, ideal = self.transforms(errors, pose)
         return pose_difference(actual, ideal)
 

@@ -369,7 +369,7 @@ class ChainMachine(Machine):
     ``travels``: pose name (x, y, z lower case, A, B, C) -> (low, high) (mm or rad), for
     atlases and checks; ``axis_names``: the order of the axes' pose names (messages, tables;
     default the topology's); ``chunk``: samples
-    per batch (8192: every row of a batch stays in cache; the batch buffers are allocated
+    per batch (4096: every row of a batch stays in cache; the batch buffers are allocated
     once per call, so an instance is not to be shared between threads).
     """
 
@@ -377,7 +377,7 @@ class ChainMachine(Machine):
                  *, name: str = "chain", form: str = "euler", tilt: str = "exact",
                  tool_offsets: Sequence[str] = ("L",), orientation: str = "rotation_vector",
                  pivots: Mapping[str, Sequence[float]] | None = None,
-                 travels: Mapping[str, tuple[float, float]] | None = None, chunk: int = 8192,
+                 travels: Mapping[str, tuple[float, float]] | None = None, chunk: int = 4096,
                  axis_names: Sequence[str] | None = None):
         self.topology = parse_topology(topology)
         if form not in FORMS:
@@ -439,6 +439,11 @@ class ChainMachine(Machine):
     def factors(self) -> list[tuple[int, str, str]]:
         """The chain in output order as (side, axis, slot): the workpiece side inverted (its
         factors outermost-last), then the tool side; slot ``move`` is the nominal motion."""
+        if getattr(self, "_factors", None) is None:
+            self._factors = self._build_factors()
+        return list(self._factors)
+
+    def _build_factors(self):
         seq = []
         for a in self.topology.axes:
             steps = ["pre", "move", "motion", "post"]
@@ -549,19 +554,25 @@ class ChainMachine(Machine):
         return [("t", [-ti for ti in t]), ("m", ri)]
 
     @staticmethod
-    def _run(v, ops):
+    def _run(v, ops, scratch):
         """Apply operations to ``v``, a list of the three coordinate rows (each (m, k): the
-        point and the directions), rebinding rows instead of copying them."""
+        point and the directions), in place where the operation allows (``scratch``: two
+        arrays of the rows' shape)."""
         for op in ops:
             if op[0] == "t":
                 for i, ti in enumerate(op[1]):
                     if ti is not None:
                         v[i][0] += ti
-            elif op[0] == "r":
+            elif op[0] == "r":             # in place, with two scratch rows: no allocation
                 _, ax, c, sn = op
-                i, j = (ax + 1) % 3, (ax + 2) % 3
-                vi, vj = v[i], v[j]
-                v[i], v[j] = c * vi - sn * vj, sn * vi + c * vj
+                vi, vj = v[(ax + 1) % 3], v[(ax + 2) % 3]
+                t0, t1 = scratch
+                np.multiply(vi, sn, out=t0)
+                np.multiply(vj, sn, out=t1)
+                vi *= c
+                vj *= c
+                vi -= t1                   # c vi - s vj
+                vj += t0                   # s vi + c vj
             else:
                 r = op[1]
                 v0, v1, v2 = v
@@ -575,13 +586,15 @@ class ChainMachine(Machine):
         cols = self._euler_angles
         w = self._work.get(k)
         if w is None:       # buffers for chunks of k samples, kept while pose_error runs
-            w = self._work[k] = (np.empty((k, self.n_errors)), np.empty((self.n_errors, k)),
+            w = self._work[k] = (None, np.empty((self.n_errors, k)),
                                  *(np.empty((len(cols), k)) for _ in range(4)))
         rows, e_t, ang, c_all, s_all, x2 = w
-        np.copyto(rows, e)
-        e_t[...] = rows.T
+        e_t[...] = e.T
         e = e_t
         v = [np.ascontiguousarray(vecs[:, i]) for i in range(3)]
+        if v[0].shape[-1] != k:
+            v = [np.ascontiguousarray(np.broadcast_to(r, (r.shape[0], k))) for r in v]
+        scratch = (np.empty_like(v[0]), np.empty_like(v[0]))
         # cos and sin of every angle of an euler block at once (one call, not one per angle)
         self._trig = None
         if cols:
@@ -589,7 +602,7 @@ class ChainMachine(Machine):
             _cos_sin_into(ang, c_all, s_all, x2)
             self._trig = {j: (c_all[i], s_all[i]) for i, j in enumerate(cols)}
         for side, axis, slot in reversed(self.factors()):
-            self._run(v, self._ops(e, p, side, axis, slot, k))
+            self._run(v, self._ops(e, p, side, axis, slot, k), scratch)
         self._trig = None
         return np.stack(v, axis=1)
 
@@ -926,3 +939,133 @@ def iso_machine(topology: str, *, name: str = "iso_machine", keep_redundant: boo
                             name=name, **options)
     full.removed = removed
     return full
+
+
+# ------------------------------------------------------------------------------------------
+# A reader's machine from files: the axis table and the error ranges, checked before any work
+# ------------------------------------------------------------------------------------------
+
+AXIS_TABLE_COLUMNS = ("axis", "low", "high", "unit", "pivot_x_mm", "pivot_y_mm", "pivot_z_mm")
+RANGE_COLUMNS = ("symbol", "low", "high", "unit")
+
+
+def _read_csv(path, columns, what):
+    import pandas as pd
+
+    path = str(path)
+    try:
+        table = pd.read_csv(path, dtype={columns[0]: str}, comment="#", skipinitialspace=True)
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{what} {path!r} not found") from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{what} {path!r} is not a readable CSV: {exc}") from None
+    missing = [c for c in columns if c not in table.columns]
+    if missing:
+        raise ValueError(f"{what} {path!r} lacks column(s) {missing}; it needs "
+                         f"{', '.join(columns)}")
+    return table
+
+
+def read_axis_table(path, topology: str) -> tuple[dict, dict]:
+    """The travels and pivots of a topology's axes from a CSV with the columns
+    :data:`AXIS_TABLE_COLUMNS`: one row per axis of the topology (``axis`` the letter, X ...
+    C), its travel ``low``, ``high`` in ``unit`` (``mm`` for linear axes, ``deg`` for rotary
+    ones), and for a rotary axis the point its axis line passes through (``pivot_*_mm``, in the
+    frame of the body it rides on; empty means the origin; must be empty for a linear axis).
+    Returns ``(travels, pivots)``: pose name -> (low, high) in mm or rad, rotary axis -> point.
+    Every inconsistency is a ValueError naming the file and the row."""
+    topo = parse_topology(topology)
+    table = _read_csv(path, AXIS_TABLE_COLUMNS, "axis table")
+    where = f"axis table {str(path)!r}"
+    letters = [str(a).strip() for a in table["axis"]]
+    unknown = [a for a in letters if a not in topo.axes]
+    if unknown:
+        raise ValueError(f"{where}: axis/axes {unknown} not in the topology {topology!r} "
+                         f"(its axes: {', '.join(topo.axes)})")
+    dup = sorted({a for a in letters if letters.count(a) > 1})
+    if dup:
+        raise ValueError(f"{where}: axis/axes {dup} given more than once")
+    missing = [a for a in topo.axes if a not in letters]
+    if missing:
+        raise ValueError(f"{where}: no row for axis/axes {missing} of the topology {topology!r}")
+    travels, pivots = {}, {}
+    for i, (a, row) in enumerate(zip(letters, table.itertuples(index=False), strict=True)):
+        line = f"{where}, row {i + 2} ({a})"
+        unit = str(row.unit).strip()
+        want = "mm" if a in LINEAR else "deg"
+        if unit != want:
+            kind = "linear" if a in LINEAR else "rotary"
+            raise ValueError(f"{line}: unit must be {want!r} for a {kind} axis, got {unit!r}")
+        try:
+            lo, hi = float(row.low), float(row.high)
+        except (TypeError, ValueError):
+            raise ValueError(f"{line}: low and high must be numbers, got {row.low!r}, "
+                             f"{row.high!r}") from None
+        if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
+            raise ValueError(f"{line}: the travel must be finite with high > low, got "
+                             f"({lo}, {hi})")
+        scale = 1.0 if a in LINEAR else np.pi / 180.0
+        name = a.lower() if a in LINEAR else a
+        travels[name] = (lo * scale, hi * scale)
+        piv = [row.pivot_x_mm, row.pivot_y_mm, row.pivot_z_mm]
+        given = [not (isinstance(v, float) and np.isnan(v)) and str(v).strip() != ""
+                 for v in piv]
+        if a in LINEAR:
+            if any(given):
+                raise ValueError(f"{line}: a linear axis has no pivot; leave pivot_*_mm empty")
+            continue
+        if any(given) and not all(given):
+            raise ValueError(f"{line}: give all three pivot_*_mm or none")
+        if all(given):
+            try:
+                point = np.array([float(v) for v in piv])
+            except (TypeError, ValueError):
+                raise ValueError(f"{line}: pivot_*_mm must be numbers, got {piv}") from None
+            if not np.all(np.isfinite(point)):
+                raise ValueError(f"{line}: pivot_*_mm must be finite, got {piv}")
+            pivots[a] = point
+    return travels, pivots
+
+
+def read_ranges(path, machine: ChainMachine) -> np.ndarray:
+    """Bounds (2, n_errors) in mm and rad of independent uniform errors from a CSV with the
+    columns :data:`RANGE_COLUMNS`: one row per error of ``machine``'s catalogue (``symbol``),
+    ``low`` < ``high`` in ``unit`` (um, mm, urad, rad, arcsec, um/m).  A row for an error the
+    catalogue lacks (e.g. a redundant location error, ``machine.removed``), a missing or a
+    repeated error, an unknown unit or a bad range is a ValueError naming the file and row."""
+    table = _read_csv(path, RANGE_COLUMNS, "range file")
+    where = f"range file {str(path)!r}"
+    names = machine.error_names
+    syms = [str(s).strip() for s in table["symbol"]]
+    removed = dict(getattr(machine, "removed", []))
+    unknown = [s for s in syms if s not in names]
+    if unknown:
+        why = [f"{s} (removed: {removed[s]})" for s in unknown if s in removed]
+        raise ValueError(f"{where}: error(s) {unknown} not in the catalogue of {machine.name}"
+                         + (f"; {'; '.join(why)}" if why else "")
+                         + f"; its errors: {', '.join(names)}")
+    dup = sorted({s for s in syms if syms.count(s) > 1})
+    if dup:
+        raise ValueError(f"{where}: error(s) {dup} given more than once")
+    missing = [s for s in names if s not in syms]
+    if missing:
+        raise ValueError(f"{where}: no range for error(s) {missing}")
+    bounds = np.empty((2, len(names)))
+    for i, (s, row) in enumerate(zip(syms, table.itertuples(index=False), strict=True)):
+        line = f"{where}, row {i + 2} ({s})"
+        unit = str(row.unit).strip()
+        if unit not in _errors.UNIT_SCALE:
+            raise ValueError(f"{line}: unknown unit {unit!r}; allowed: "
+                             f"{', '.join(_errors.UNIT_SCALE)}")
+        spec = machine.catalogue[names.index(s)]
+        if spec.translational != (unit in ("um", "mm")):
+            what = "a translation" if spec.translational else "an angle"
+            raise ValueError(f"{line}: {s} is {what}, unit {unit!r} is not")
+        try:
+            lo, hi = float(row.low), float(row.high)
+        except (TypeError, ValueError):
+            raise ValueError(f"{line}: low and high must be numbers") from None
+        if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
+            raise ValueError(f"{line}: the range must be finite with high > low, got ({lo}, {hi})")
+        bounds[:, names.index(s)] = lo * _errors.UNIT_SCALE[unit], hi * _errors.UNIT_SCALE[unit]
+    return bounds

@@ -7,6 +7,8 @@ One submodule per method; everything is re-exported here, so notebooks write
 | --- | --- |
 | ``spearman`` | Latin hypercube sampling (scipy.qmc), Spearman ranking (Guo et al. 2016) |
 | ``sobol`` | Sobol first-order and total indices (Saltelli/Jansen), chunked model evaluation |
+| ``linear`` | closed-form Sobol indices of the first-order model J(pose) e: at poses, pose uniform
+  in a box (Gauss-Legendre), and the size of the nonlinear remainder it misses |
 | ``pce`` | sparse polynomial chaos (OMP/LARS, bases by input law, validated basis adaptivity) and
   Sobol indices from its coefficients (Zheng et al.) |
 | ``benchmarks`` | Ishigami, G function, interaction polynomial: exact indices for tests and bench |
@@ -14,6 +16,7 @@ One submodule per method; everything is re-exported here, so notebooks write
 """
 
 from . import benchmarks  # noqa: F401
+from .linear import *  # noqa: F403
 from .pce import *  # noqa: F403
 from .screening import *  # noqa: F403
 from .sobol import *  # noqa: F403

@@ -25,6 +25,8 @@ from scipy import stats
 from scipy.special import ndtri
 from scipy.stats import qmc
 
+from .linear import linear_indices  # it lives in .linear; kept here for old callers
+
 
 def base_samples(n: int, d: int, method: str, seed) -> tuple[np.ndarray, np.ndarray]:
     """Two independent (n, d) designs on the unit hypercube: the A and B matrices.
@@ -270,17 +272,6 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: n
         sd2[i0:i1] = np.einsum("inq,inq->iq", diff, diff)
     mu_c = total / (n * (d + 2)) - centre
     return (sbd - mu_c * sd_) / (n * var), 0.5 * sd2 / (n * var)
-
-
-def linear_indices(jacobian: np.ndarray, sd: np.ndarray) -> np.ndarray:
-    """Sobol indices of a linear model with independent inputs: for output k and input i,
-    ``J_ki^2 sd_i^2 / sum_j J_kj^2 sd_j^2`` (first-order = total; any distribution).
-
-    ``jacobian`` (..., q, d), ``sd`` (d,).  An output with zero variance gets zeros.
-    """
-    v = (np.asarray(jacobian, dtype=float) * np.asarray(sd, dtype=float)) ** 2
-    tot = v.sum(axis=-1, keepdims=True)
-    return np.divide(v, tot, out=np.zeros_like(v), where=tot > 0)
 
 
 # --------------------------------------------------------------------------------------------
