@@ -179,3 +179,73 @@ def test_bad_machine_descriptions_are_refused():
         m.pose_error(np.zeros((2, 12)), dict(x=0.0, y=0.0))
     with pytest.raises(ValueError, match=r"lacks axis value\(s\) \['y'\]"):
         m.pose_error(np.zeros((2, 13)), dict(x=0.0))
+
+
+AXIS_TABLE = """axis,low,high,unit,pivot_x_mm,pivot_y_mm,pivot_z_mm
+X,-400,400,mm,,,
+Y,-300,300,mm,,,
+Z,-250,250,mm,,,
+B,-110,110,deg,0,0,150
+C,0,360,deg,,,
+"""
+
+
+def test_axis_table_gives_travels_and_pivots(tmp_path):
+    f = tmp_path / "axes.csv"
+    f.write_text(AXIS_TABLE)
+    travels, pivots = C.read_axis_table(f, "w C b X Y Z B t")
+    assert travels["x"] == (-400.0, 400.0) and np.allclose(travels["B"], np.deg2rad([-110, 110]))
+    assert set(pivots) == {"B"} and np.array_equal(pivots["B"], [0.0, 0.0, 150.0])
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace("C,0,360,deg,,,\n", ""), r"no row for axis/axes \['C'\]"),
+    (lambda t: t + "A,0,90,deg,,,\n", r"axis/axes \['A'\] not in the topology"),
+    (lambda t: t + "X,0,90,mm,,,\n", r"axis/axes \['X'\] given more than once"),
+    (lambda t: t.replace("X,-400,400,mm,,,", "X,-400,400,mm,1,2,3"), "a linear axis has no pivot"),
+    (lambda t: t.replace("0,0,150", "0,,150"), "give all three pivot_\\*_mm or none"),
+    (lambda t: t.replace("-250,250,mm", "250,-250,mm"), "high > low"),
+    (lambda t: t.replace("-110,110,deg", "-110,110,rad"), "unit must be 'deg' for a rotary axis"),
+    (lambda t: t.replace("pivot_z_mm", "pivot_z"), r"lacks column\(s\) \['pivot_z_mm'\]"),
+])
+def test_an_inconsistent_axis_table_is_refused(tmp_path, edit, message):
+    f = tmp_path / "axes.csv"
+    f.write_text(edit(AXIS_TABLE))
+    with pytest.raises(ValueError, match=message):
+        C.read_axis_table(f, "w C b X Y Z B t")
+
+
+def _range_file(m, tmp_path, rows=None):
+    rows = rows if rows is not None else [
+        (e.symbol, -5, 5, "um" if e.translational else "urad") for e in m.catalogue]
+    f = tmp_path / "ranges.csv"
+    f.write_text("symbol,low,high,unit\n"
+                 + "".join(f"{s},{lo},{hi},{u}\n" for s, lo, hi, u in rows))
+    return f
+
+
+def test_range_file_gives_bounds_in_library_units(tmp_path):
+    m = C.iso_machine("w C A b Y X Z t")
+    b = C.read_ranges(_range_file(m, tmp_path), m)
+    tr = np.array([e.translational for e in m.catalogue])
+    assert np.allclose(b[1, tr], 5e-3) and np.allclose(b[1, ~tr], 5e-6) and b.shape == (2, 37)
+
+
+def test_a_range_file_that_does_not_match_the_catalogue_is_refused(tmp_path):
+    m = C.iso_machine("w C A b Y X Z t")
+    good = [(e.symbol, -5, 5, "um" if e.translational else "urad") for e in m.catalogue]
+    with pytest.raises(ValueError, match=r"EY0A.*removed: same effect as the zero of y"):
+        C.read_ranges(_range_file(m, tmp_path, good + [("EY0A", -1, 1, "um")]), m)
+    with pytest.raises(ValueError, match=r"no range for error\(s\) \['EXX'\]"):
+        C.read_ranges(_range_file(m, tmp_path, [r for r in good if r[0] != "EXX"]), m)
+    with pytest.raises(ValueError, match=rf"error\(s\) \['{good[0][0]}'\] given more than once"):
+        C.read_ranges(_range_file(m, tmp_path, good + [good[0]]), m)
+    good = sorted(good, key=lambda r: r[0] != "EXX")                 # EXX first: row 2
+    bad = [("EXX", -5, 5, "urad"), *good[1:]]
+    with pytest.raises(ValueError, match="EXX is a translation, unit 'urad' is not"):
+        C.read_ranges(_range_file(m, tmp_path, bad), m)
+    bad = [("EXX", 5, -5, "um"), *good[1:]]
+    with pytest.raises(ValueError, match=r"row 2 \(EXX\): the range must be finite with high"):
+        C.read_ranges(_range_file(m, tmp_path, bad), m)
+    with pytest.raises(FileNotFoundError, match="range file"):
+        C.read_ranges(tmp_path / "nothing.csv", m)
