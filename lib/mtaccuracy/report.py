@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import fnmatch
 import html
+import json
 import os
 import re
 import sys
@@ -222,6 +223,18 @@ def export_notebook(nb: Path, out: Path) -> Path:
     return out
 
 
+def _title(nb: Path) -> str:
+    """The first heading of a notebook's first cell ("" when there is none)."""
+    try:
+        first = json.loads(nb.read_text(encoding="utf-8"))["cells"][0]
+    except (OSError, ValueError, KeyError, IndexError):
+        return ""
+    for line in "".join(first.get("source", [])).splitlines():
+        if line.startswith("# "):
+            return line[2:].strip()
+    return ""
+
+
 def build(figures=None, notebooks=None, broken: list | None = None, export: bool = True) -> Path:
     """Write ``<figures>/index.html`` and (with ``export``) ``<figures>/html/<stem>.html``;
     returns the index.  Figures that cannot be shown (:func:`figure_problem`) are marked in the
@@ -235,7 +248,11 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
     summary = reproduction.summary(cards)
     runs = runner.last_runs() if figures == paths.FIGURES else {}
     runtimes = {k: v.get("seconds") for k, v in runs.items() if isinstance(v, dict)}
-    stems = sorted(set(cards["notebook"]))
+    # the papers' notebooks (a scorecard each), then any other notebook with outputs (a method
+    # for the reader's own machine: figures and tables, nothing to score)
+    others = {p.parent.name for p in figures.glob("*/provenance.json")
+              if (notebooks / f"{p.parent.name}.ipynb").exists()}
+    stems = sorted(set(cards["notebook"]) | others)
 
     out = ['<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">',
            "<title>mtaccuracy: reproduction report</title>",
@@ -285,16 +302,20 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
         indep = int(((card["verdict"] == "reproduced")
                      & (card["basis"] == "independent")).sum())
         out += [f'<section class="paper" id="{_e(stem)}">',
-                f"<h2>{_e(meta.get('paper', stem))}</h2>",
+                f"<h2>{_e(meta.get('paper', _title(nb) or stem))}</h2>",
                 f'<p class="citation">{_e(meta.get("citation", ""))}</p>',
-                f'<p class="links">{" ".join(links)}</p>',
-                f'<details class="scorecard"{"" if n_rows > COLLAPSE_ROWS else " open"}>'
-                f"<summary><strong>Scorecard</strong>: {n_rows} rows ({_e(counts)}); "
-                f"{indep} reproduced independently</summary>",
-                _crosstab_html(reproduction.crosstab(card)),
-                "<table><tr><th>item</th><th>quantity</th><th>published</th>"
-                "<th>reproduced</th><th>unit</th><th>tolerance</th><th>verdict</th>"
-                "<th>basis</th><th>note</th></tr>"]
+                f'<p class="links">{" ".join(links)}</p>']
+        if not n_rows:
+            out.append("<p>No paper: no published value to score. The notebook's own checks are "
+                       "its tables above.</p><h3>Figures</h3>")
+        else:
+            out += [f'<details class="scorecard"{"" if n_rows > COLLAPSE_ROWS else " open"}>'
+                    f"<summary><strong>Scorecard</strong>: {n_rows} rows ({_e(counts)}); "
+                    f"{indep} reproduced independently</summary>",
+                    _crosstab_html(reproduction.crosstab(card)),
+                    "<table><tr><th>item</th><th>quantity</th><th>published</th>"
+                    "<th>reproduced</th><th>unit</th><th>tolerance</th><th>verdict</th>"
+                    "<th>basis</th><th>note</th></tr>"]
         rows = [("score-row", r) for _, r in card.iterrows()]
         rows += [("measured-row", r) for _, r in measured[measured["notebook"] == stem].iterrows()]
         for cls, r in rows:
@@ -308,7 +329,8 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
                        + (" <em>(measured on the machine that ran it: changes from run to "
                           "run; not counted in the summary)</em>" if cls == "measured-row" else "")
                        + "</td></tr>")
-        out.append("</table></details><h3>Figures</h3>")
+        if n_rows:
+            out.append("</table></details><h3>Figures</h3>")
         side = provenance.read(folder)
         for fig in sorted([*folder.glob("*.png"), *folder.glob("*.svg")]):
             why = figure_problem(fig, side)
