@@ -433,3 +433,67 @@ def test_coincidence_ratio_separates_scatter_from_a_systematic_difference():
     assert hand[0, 1] == pytest.approx(np.sqrt(2))
     with pytest.raises(ValueError, match="measurements >= 2"):
         S.coincidence_ratio(np.zeros((3, 1, 5)))
+
+
+# --- least squares over all probes (the multi-probe estimator) ---------------------------------
+
+@pytest.mark.parametrize("trial", range(3))
+def test_least_squares_separation_is_exact_and_equals_the_weighted_one_without_noise(trial):
+    rng = np.random.default_rng(300 + trial)
+    p, phi, w = _layout(rng)
+    r = rng.standard_normal((2, N))
+    dxy = np.array([_motion_without_fundamental(rng) for _ in range(2)])
+    y = S.probe_signals(r, dxy[:, 0], dxy[:, 1], p)
+    ls = S.separate_least_squares(y, phi)
+    weighted = S.separate_details(y, phi, w)
+    for got in (ls, weighted):
+        assert np.abs(got.profile - r).max() < 1e-10 * np.abs(r).max()
+        assert np.abs(got.dx - dxy[:, 0]).max() < 1e-10 * np.abs(r).max()
+    assert list(ls.cancelled) == [1]
+
+
+def test_least_squares_transfer_predicts_its_noise_and_never_exceeds_the_weighted_one():
+    rng = np.random.default_rng(12)
+    phi = S.probe_angles(POS, N)
+    w = S.full_weights(phi, 1.953)
+    sigma, m = 0.3, 4000
+    s = S.separate_least_squares(rng.standard_normal((m, 4, N)) * sigma, phi)
+    ks = np.array([2, 5, 20, 40])
+    a_k, b_k = S.harmonic_coefficients(s.profile_no_first, ks)
+    pred = 2 * S.least_squares_transfer(phi[1:], ks) * sigma ** 2 / N
+    assert np.allclose(a_k.var(axis=0), pred, rtol=0.1)
+    assert np.allclose(b_k.var(axis=0), pred, rtol=0.1)
+    # Gauss-Markov: least squares is the best linear unbiased estimator, for every layout and
+    # every weights that cancel the motion
+    ks = np.arange(2, N // 2)
+    for trial in range(20):
+        _, ph, wt = _layout(np.random.default_rng(700 + trial))
+        assert np.all(S.least_squares_transfer(ph[1:], ks) <= S.transfer(ph, wt, ks) * (1 + 1e-9))
+    # the paper's layout and weights, harmonics 2..20 (the figures quoted in the docstring)
+    assert S.transfer(phi, w, np.arange(2, 21)).max() == pytest.approx(112.85, abs=0.01)
+    ls_worst = S.least_squares_transfer(phi[1:], np.arange(2, 21)).max()
+    assert ls_worst == pytest.approx(6.40, abs=0.01)
+    assert np.isinf(S.least_squares_transfer(phi[1:], [1])[0])
+
+
+def test_least_squares_with_more_probes_and_a_layout_it_cannot_use():
+    rng = np.random.default_rng(31)
+    pos = [0, 9, 40, 77, 101]                                   # five probes
+    phi = S.probe_angles(pos, N)
+    r = rng.standard_normal(N)
+    dx, dy = _motion_without_fundamental(rng)
+    t = 2 * np.pi * np.arange(N) / N
+    y = np.stack([r[(np.arange(N) + q) % N] + dx * np.cos(f) + dy * np.sin(f)
+                  for q, f in zip(pos, phi, strict=True)])
+    s = S.separate_least_squares(y, phi)
+    assert np.abs(s.profile - r).max() < 1e-10 and np.abs(s.dy - dy).max() < 1e-10
+    assert np.all(S.least_squares_transfer(phi, np.arange(2, 64)) < np.inf)
+    # probes 0 and 180 degrees and 90 and 270: every odd harmonic reads as a motion would
+    half = [0, 32, 64, 96]
+    y4 = S.probe_signals(r, 0 * t, 0 * t, half)
+    with pytest.raises(ValueError, match=r"cannot separate harmonic\(s\) 3, 5, 7"):
+        S.separate_least_squares(y4, S.probe_angles(half, N))
+    with pytest.raises(ValueError, match="L >= 3 probes"):
+        S.separate_least_squares(y4[:2], S.probe_angles(half, N)[:2])
+    with pytest.raises(ValueError, match="integer p"):
+        S.separate_least_squares(y4, S.probe_angles(half, N) + 0.01)

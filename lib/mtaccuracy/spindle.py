@@ -88,7 +88,8 @@ __all__ = [
     "PAPER_BOX", "FULL_BOX", "PC_MAX", "PC_MIN", "PM_MAX", "PM_MIN",
     "Separation", "GAResult", "CancelledHarmonicsWarning",
     "probe_angles", "weights", "full_weights", "eigenvalues", "transfer", "circulant_matrix",
-    "probe_signals", "separate", "separate_details", "rotation_error", "motion_from_scalar",
+    "probe_signals", "separate", "separate_details", "separate_least_squares",
+    "least_squares_transfer", "rotation_error", "motion_from_scalar",
     "MAPPINGS", "objective_H", "objective_worst", "fitness", "optimal_a3", "genes_to_layout",
     "lower_bound_H", "weights_bound_H", "bound_layout", "worst_case_bound",
     "adaptive_probabilities", "run_ga", "run_de", "convergence_generation", "reference_optimum",
@@ -335,7 +336,6 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
             or not 1 <= max_harmonic <= n // 2:
         raise ValueError(f"max_harmonic must be an integer in 1..N/2 = {n // 2}, "
                          f"got {max_harmonic!r}")
-    theta = TWO_PI * np.arange(n) / n
 
     # Profile without the cancelled harmonics: pseudo-inverse of the circulant matrix by FFT.
     big_y = np.einsum("l,...ln->...n", w, y)
@@ -359,6 +359,19 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
         warnings.warn(msg + " (allow_cancelled=True: proceeding without them)",
                       CancelledHarmonicsWarning, stacklevel=3)
 
+    profile, z, cd, residual_rms = _motion_and_first_harmonic(y, r0, phi4, p, first_harmonic)
+    return Separation(profile=profile, dx=z.real, dy=z.imag, profile_no_first=r0,
+                      first_harmonic=cd, cancelled=cancelled,
+                      rank=int(keep.sum()), residual_rms=residual_rms,
+                      convention=first_harmonic, eigen=lam)
+
+
+def _motion_and_first_harmonic(y, r0, phi4, p, first_harmonic):
+    """Given the profile without its first harmonic ``r0`` (..., N): the error motion by least
+    squares over the probes at each sample, then the first harmonic by the convention.  Returns
+    ``(profile, dx + i dy, (C, D), residual_rms)``."""
+    n = y.shape[-1]
+    theta = TWO_PI * np.arange(n) / n
     # Error motion (plus what the profile's first harmonic looks like) by least squares per sample.
     idx = (np.arange(n)[None, :] + p[:, None]) % n
     resid = y - r0[..., idx]                                            # (..., 4, N)
@@ -379,10 +392,116 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
     cc, dd = c.real, c.imag
     z = z - c[..., None] * np.exp(-1j * theta)
     profile = r0 + cc[..., None] * np.cos(theta) + dd[..., None] * np.sin(theta)
+    return profile, z, np.stack([cc, dd], axis=-1), residual_rms
+
+
+# ------------------------------------------------ least squares over all probes (multi-probe)
+
+def _ls_design(phi4, harmonics):
+    """``A_k`` (K, L, 3): probe l's reading of harmonic k of the profile (``exp(i k phi_l)``,
+    numpy's FFT convention) and of the motion (``cos phi_l``, ``sin phi_l``)."""
+    k = np.asarray(harmonics, dtype=float)[:, None]
+    a = np.empty(k.shape[:1] + phi4.shape[-1:] + (3,), dtype=complex)
+    a[..., 0] = np.exp(1j * k * phi4)
+    a[..., 1] = np.cos(phi4)
+    a[..., 2] = np.sin(phi4)
+    return a
+
+
+def least_squares_transfer(phi, harmonics) -> np.ndarray:
+    """Noise amplification of the least-squares multi-probe estimator, per harmonic: the variance
+    of the estimated profile harmonic ``R_k`` in units of one probe's noise variance at that
+    harmonic, ``[(A_k^H A_k)^-1]_00`` with ``A_k`` (probes x 3) the readings of the profile
+    harmonic and of the two motion components (:func:`separate_least_squares`).
+
+    The counterpart of :func:`transfer` (``q_k^2`` of the weighted four-point method, in the same
+    units).  By the Gauss-Markov theorem it is never larger than ``q_k^2`` of any weights that
+    cancel the motion (a test checks it).  ``inf`` where the layout cannot separate the harmonic
+    (always k = 1: ``exp(i phi)`` is ``cos phi + i sin phi``).  ``phi``: probe angles (last axis
+    3, with phi_0 = 0, or the full list of L >= 3 angles)."""
+    phi = np.asarray(phi, dtype=float)
+    if phi.ndim != 1 or phi.shape[0] < 3 or not np.all(np.isfinite(phi)):
+        raise ValueError(f"phi must be the finite angles of at least 3 probes, got {phi!r}")
+    phi4 = np.concatenate([[0.0], phi]) if phi.shape[0] == 3 else phi
+    a = _ls_design(phi4, harmonics)
+    sv = np.linalg.svd(a, compute_uv=False)                              # (K, 3)
+    ok = sv[:, -1] > 1e-9 * sv[:, 0]
+    gram = np.einsum("klr,kls->krs", a.conj(), a)
+    out = np.full(a.shape[0], np.inf)
+    out[ok] = np.linalg.inv(gram[ok])[:, 0, 0].real
+    return out
+
+
+def separate_least_squares(signals, phi, *, first_harmonic: str = "eccentricity",
+                           rcond: float = 1e-9, allow_cancelled: bool = False,
+                           max_harmonic: int | None = None) -> Separation:
+    """Profile and radial error motion from multi-probe signals by least squares, harmonic by
+    harmonic, over all probes: for each DFT bin k the probes read ``Y_l(k) = R_k exp(i k phi_l)
+    + X_k cos(phi_l) + Y_k sin(phi_l)``; the three unknowns are fitted to the L >= 3 readings
+    (``numpy.linalg.lstsq`` per bin, batched by the pseudo-inverse).  The first harmonic, which
+    no probe layout separates, is set by ``first_harmonic`` exactly as in :func:`separate`.
+
+    This is the estimator of the public multi-probe roundness tools, written beside the paper's
+    weighted four-point method (:func:`separate_details`): it needs no weights, uses every probe
+    at every harmonic, and its noise amplification (:func:`least_squares_transfer`) is the
+    smallest of any linear unbiased estimator (Gauss-Markov), e.g. a worst case over harmonics
+    2..20 of 6.4 on Yang et al.'s layout against 112.9 for their weights.  Same arguments and
+    result as :func:`separate_details` (``eigen`` holds the smallest singular value of each
+    bin's design, ``rank`` the number of bins solved in full); ``signals`` may have any number
+    L >= 3 of probes, ``phi`` their L angles (or L - 1 with phi_0 = 0)."""
+    if first_harmonic not in ("eccentricity", "radial"):
+        raise ValueError(f"first_harmonic must be 'eccentricity' or 'radial', "
+                         f"got {first_harmonic!r}")
+    if not (0 < rcond < 1):
+        raise ValueError(f"rcond must be in (0, 1), got {rcond!r}")
+    y = np.asarray(signals, dtype=float)
+    if y.ndim < 2 or y.shape[-2] < 3:
+        raise ValueError(f"signals must have shape (..., L, N) with L >= 3 probes, got {y.shape}")
+    n = _check_n(y.shape[-1])
+    if not np.all(np.isfinite(y)):
+        raise ValueError("signals contain NaN or inf")
+    phi = np.asarray(phi, dtype=float)
+    n_probes = y.shape[-2]
+    if phi.shape == (n_probes - 1,):
+        phi = np.concatenate([[0.0], phi])
+    if phi.shape != (n_probes,) or not np.all(np.isfinite(phi)):
+        raise ValueError(f"phi must hold the {n_probes} probe angles (or the {n_probes - 1} after "
+                         f"phi_0 = 0), got shape {phi.shape}")
+    pos = phi * n / TWO_PI
+    if np.any(np.abs(pos - np.round(pos)) > 1e-6):
+        raise ValueError("every probe angle must be 2 pi p / N with integer p (N = "
+                         f"{n}); the nearest positions are {np.round(pos).astype(int).tolist()}")
+    p = np.round(pos).astype(int) % n
+    if max_harmonic is None:
+        max_harmonic = n // 2
+    if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
+            or not 1 <= max_harmonic <= n // 2:
+        raise ValueError(f"max_harmonic must be an integer in 1..N/2 = {n // 2}, "
+                         f"got {max_harmonic!r}")
+    a = _ls_design(phi, np.arange(n))                                    # (N, L, 3)
+    sv = np.linalg.svd(a, compute_uv=False)
+    keep = sv[:, -1] > rcond * sv[:, 0]
+    keep[[1, n - 1]] = False                             # the first harmonic: never separable
+    harm = np.arange(n // 2 + 1)
+    cancelled = harm[~keep[: n // 2 + 1]]
+    extra = cancelled[(cancelled != 1) & (cancelled <= max_harmonic)]
+    if extra.size:
+        msg = (f"the layout (probe positions {p.tolist()} of N = {n}) cannot separate "
+               f"harmonic(s) {_harmonic_list(extra)} besides the first (the profile harmonic "
+               f"reads on the probes as a motion would): the separated profile would lack them")
+        if not allow_cancelled:
+            raise ValueError(msg + "; move a probe, or pass allow_cancelled=True")
+        warnings.warn(msg + " (allow_cancelled=True: proceeding without them)",
+                      CancelledHarmonicsWarning, stacklevel=2)
+    pinv = np.zeros((n, 3, n_probes), dtype=complex)
+    pinv[keep] = np.linalg.pinv(a[keep])
+    spec = np.fft.fft(y, axis=-1)                                        # (..., L, N)
+    r_k = np.einsum("kl,...lk->...k", pinv[:, 0, :], spec)               # profile harmonics
+    r0 = np.fft.ifft(r_k, axis=-1).real
+    profile, z, cd, residual_rms = _motion_and_first_harmonic(y, r0, phi, p, first_harmonic)
     return Separation(profile=profile, dx=z.real, dy=z.imag, profile_no_first=r0,
-                      first_harmonic=np.stack([cc, dd], axis=-1), cancelled=cancelled,
-                      rank=int(keep.sum()), residual_rms=residual_rms,
-                      convention=first_harmonic, eigen=lam)
+                      first_harmonic=cd, cancelled=cancelled, rank=int(keep.sum()),
+                      residual_rms=residual_rms, convention=first_harmonic, eigen=sv[:, -1])
 
 
 def separate(signals, phi, w, *, first_harmonic: str = "eccentricity", rcond: float = 1e-9,
