@@ -1,0 +1,439 @@
+"""The optimisers of Yang et al. 2021, Section 2.2: a genetic algorithm (binary or real coded)
+with fixed rates, the same algorithm with the adaptive rates of Eqs. 22-23, and differential
+evolution as the baseline, all batched over independent runs and population (arrays of shape
+``(runs, population, 4)``; the only Python loop is over generations); the optimisers' own ties
+(equal ``H`` in a population) go to the lowest index.
+
+The baseline differential evolution follows the scheme of ``scipy.optimize.differential_evolution``
+but is written out batched over runs (:func:`_differential_evolution`): scipy runs one
+optimisation at a time, looping over the population in Python, and hundreds of runs are needed.
+"""
+
+from __future__ import annotations
+
+__all__ = ["PC_MAX", "PC_MIN", "PM_MAX", "PM_MIN", "GAResult", "adaptive_probabilities", "run_ga",
+           "run_de", "convergence_generation", "reference_optimum", "reference_optima"]
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize
+
+from .design import PAPER_BOX, _box, fitness, objective_H, objective_worst, optimal_a3, select_best
+
+#: Probabilities of the improved GA (Section 2.2): crossover Pc max/min, mutation Pm max/min.
+PC_MAX, PC_MIN, PM_MAX, PM_MIN = 0.99, 0.4, 0.09, 0.005
+
+
+#: The reference optimum (:func:`reference_optima`) excludes layouts with |sin(phi_2 - phi_1)|
+#: below this (weights above 1e4, closed-form H inaccurate).
+_NEAR_DEGENERATE = 1e-4
+
+
+def adaptive_probabilities(f, f_mean, generation, max_generation, *, pc_max=PC_MAX,
+                           pc_min=PC_MIN, pm_max=PM_MAX, pm_min=PM_MIN,
+                           eq23: str = "corrected"):
+    """Crossover and mutation probabilities of the improved GA (Eqs. 22-23).
+
+    ``Pc = Pc_max`` if ``F < F_mean``, else ``Pc_max - (Pc_max - Pc_min) alpha / alpha_max``;
+    ``Pm = Pm_min`` if ``F < F_mean``, else, as printed (``eq23="printed"``),
+    ``Pm_min - (Pm_max - Pm_min) alpha / alpha_max``, which falls from ``Pm_min`` and is negative
+    once ``alpha / alpha_max > Pm_min / (Pm_max - Pm_min)`` (after 6 % of the run with the paper's
+    values); corrected (default), ``Pm_min + (Pm_max - Pm_min) alpha / alpha_max``, rising from
+    0.005 to 0.09 as the text describes.  ``alpha`` = ``generation``, ``alpha_max`` =
+    ``max_generation``.
+    Returns the raw values (the printed Eq. 23 is not clipped here; :func:`run_ga` clips to [0, 1]).
+    """
+    if eq23 not in ("corrected", "printed"):
+        raise ValueError(f"eq23 must be 'corrected' or 'printed', got {eq23!r}")
+    if not 0 <= generation <= max_generation or max_generation < 1:
+        raise ValueError(f"need 0 <= generation <= max_generation (>= 1), got {generation!r}, "
+                         f"{max_generation!r}")
+    if not (0 <= pc_min <= pc_max <= 1 and 0 <= pm_min <= pm_max <= 1):
+        raise ValueError("need 0 <= pc_min <= pc_max <= 1 and 0 <= pm_min <= pm_max <= 1")
+    f = np.asarray(f, dtype=float)
+    above = f >= np.asarray(f_mean, dtype=float)
+    frac = generation / max_generation
+    pc = np.where(above, pc_max - (pc_max - pc_min) * frac, pc_max)
+    sign = 1.0 if eq23 == "corrected" else -1.0
+    pm = np.where(above, pm_min + sign * (pm_max - pm_min) * frac, pm_min)
+    return pc, pm
+
+
+@dataclass
+class GAResult:
+    """Runs of a genetic algorithm (or of differential evolution), batched over runs."""
+
+    best_x: np.ndarray      # (runs, 4) best genes found
+    best_h: np.ndarray      # (runs,) best objective
+    history: np.ndarray     # (generations + 1, runs) best-so-far objective; row 0 = initial pop.
+    pc: np.ndarray          # (generations + 1,) mean crossover probability used
+    pm: np.ndarray          # (generations + 1,) mean mutation probability used
+    evaluations_per_generation: int
+    label: str = ""
+
+
+def _reflect(x, lo, hi):
+    w = hi - lo
+    y = np.mod(x - lo, 2 * w)
+    return lo + np.where(y > w, 2 * w - y, y)
+
+
+def _make_objective(k, harmonics, n_runs):
+    """``objective(x, runs=all)``: H of genes ``x`` (len(runs), pop, 4) for those runs."""
+    if (k is None) == (harmonics is None):
+        raise ValueError("give either k (one harmonic, Eq. 20) or harmonics (worst case)")
+    if harmonics is not None:
+        hs = np.asarray(harmonics)
+        objective_worst(np.zeros(4) + 1.0, hs)  # validates
+        return lambda x, runs=None: objective_worst(x, hs)
+    ks = np.broadcast_to(np.asarray(k), (n_runs,)).astype(float)
+    objective_H(np.array([0.3, 2.0, 5.0, 1.0]), ks)  # validates k
+
+    def objective(x, runs=None):
+        return objective_H(x, (ks if runs is None else ks[runs])[:, None])
+    return objective
+
+
+def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_size: int = 50,
+           generations: int = 200, seed=0, adaptive: bool = True, pc: float = 0.8,
+           pm: float = 0.05, eq23: str = "corrected", encoding: str = "real",
+           mutation_scale: float = 0.1, bits: int = 16,
+           pc_max=PC_MAX, pc_min=PC_MIN, pm_max=PM_MAX, pm_min=PM_MIN) -> GAResult:
+    """Genetic algorithm minimising ``H`` (fitness ``1/H``, Eq. 21), ``n_runs`` runs at once.
+
+    Hand-written because the adaptive crossover and mutation rates (Eqs. 22-23) are the paper's
+    contribution.  The paper gives neither the encoding nor the operators; ours, stated here:
+    genes ``(phi_1, phi_2, phi_3, a_3)`` in ``bounds``; uniform initial population;
+    roulette-wheel (fitness-proportional) selection; consecutive selected parents paired and
+    crossed with probability ``Pc`` per pair; elitism (the best so far replaces the worst child).
+
+    ``encoding="real"``: arithmetic crossover (child = ``b x1 + (1 - b) x2``, ``b ~ U(0, 1)`` per
+    gene); each gene mutated with probability ``Pm`` by a Gaussian step of ``mutation_scale`` x
+    its range, reflected into the box.  ``encoding="binary"``: each gene a ``bits``-bit integer
+    over its range (the classic GA of the toolboxes of the time); single-point crossover; each bit
+    flipped with probability ``Pm``.
+
+    ``adaptive=False``: the traditional GA, fixed ``pc`` and ``pm``.  ``adaptive=True``: Eq. 22 for
+    ``Pc`` with ``F`` the fitness of the fitter parent of the pair, Eq. 23 for ``Pm`` with ``F`` the
+    fitness of the child's own parent; ``F_mean`` the mean fitness of the current population;
+    ``eq23`` picks the printed or the corrected sign (:func:`adaptive_probabilities`).
+
+    ``k`` (scalar, or one per run) optimises Eq. 20 at that harmonic; ``harmonics`` optimises the
+    worst case over them.  Everything is an array over (runs, population); the only loop is over
+    generations.  ``seed`` seeds one ``numpy.random.Generator`` (or pass a Generator).
+    """
+    for name, v, low in (("n_runs", n_runs, 1), ("pop_size", pop_size, 4),
+                         ("generations", generations, 1), ("bits", bits, 2)):
+        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
+            raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
+    if pop_size % 2:
+        raise ValueError(f"pop_size must be even (parents are paired), got {pop_size}")
+    if not (0 <= pc <= 1 and 0 <= pm <= 1):
+        raise ValueError(f"pc and pm must be probabilities in [0, 1], got {pc!r}, {pm!r}")
+    if not mutation_scale > 0:
+        raise ValueError(f"mutation_scale must be > 0, got {mutation_scale!r}")
+    if encoding not in ("real", "binary"):
+        raise ValueError(f"encoding must be 'real' or 'binary', got {encoding!r}")
+    if bits > 30:
+        raise ValueError(f"bits must be <= 30, got {bits}")
+    lo, hi = _box(bounds)
+    objective = _make_objective(k, harmonics, n_runs)
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    s, p, d = n_runs, pop_size, 4
+    if adaptive:  # validates the probabilities and eq23 once
+        adaptive_probabilities(1.0, 1.0, 0, 1, pc_max=pc_max, pc_min=pc_min, pm_max=pm_max,
+                               pm_min=pm_min, eq23=eq23)
+    binary = encoding == "binary"
+    if binary:
+        # Genes are stored as integers (runs, pop, 4), bit j of gene i being bit j of the
+        # string of 4 * bits (most significant first); random bits are drawn as that string
+        # and packed exactly (sums of powers of two below 2**53).
+        pow2 = 2.0 ** np.arange(bits - 1, -1, -1)
+        gene_no = np.arange(d)
+
+        def pack(bitstring):
+            return (bitstring.reshape(bitstring.shape[:-1] + (d, bits)) @ pow2).astype(np.int64)
+
+        def decode(gen):
+            return lo + (hi - lo) * gen / (2.0 ** bits - 1)
+
+        geno = pack(rng.random((s, p, d * bits)) < 0.5)
+    else:
+        def decode(gen):
+            return gen
+
+        geno = lo + rng.random((s, p, d)) * (hi - lo)
+    h = objective(decode(geno))
+    ar = np.arange(s)
+    ib = np.argmin(h, axis=1)
+    best_g = geno[ar, ib]
+    best_h = h[ar, ib]
+    hist = [best_h.copy()]
+    pcs, pms = [pc if not adaptive else pc_max], [pm if not adaptive else pm_min]
+    rows = ar[:, None]
+    n_search = int(np.ceil(np.log2(p))) + 1
+    for g in range(1, generations + 1):
+        f = fitness(h)
+        total = f.sum(axis=1, keepdims=True)
+        prob = np.where(total > 0, f / np.where(total > 0, total, 1), 1.0 / p)
+        cum = np.cumsum(prob, axis=1)
+        u = rng.random((s, p))
+        # roulette wheel: index = number of cumulative probabilities below u (cum is sorted),
+        # found by a batched binary search over the population axis
+        low_i = np.zeros((s, p), dtype=np.int64)
+        high_i = np.full((s, p), p, dtype=np.int64)
+        for _ in range(n_search):
+            mid = (low_i + high_i) // 2
+            below = cum[rows, np.minimum(mid, p - 1)] < u
+            active = low_i < high_i
+            low_i = np.where(active & below, mid + 1, low_i)
+            high_i = np.where(active & ~below, mid, high_i)
+        idx = np.minimum(low_i, p - 1)
+        par = geno[rows, idx]
+        fpar = f[rows, idx]
+        a, b = par[:, 0::2], par[:, 1::2]                    # (s, p/2, genes)
+        fa, fb = fpar[:, 0::2], fpar[:, 1::2]
+        if adaptive:
+            fmean = f.mean(axis=1, keepdims=True)
+            pc_pair, _ = adaptive_probabilities(np.maximum(fa, fb), fmean, g, generations,
+                                                pc_max=pc_max, pc_min=pc_min, pm_max=pm_max,
+                                                pm_min=pm_min, eq23=eq23)
+            _, pm_ind = adaptive_probabilities(np.concatenate([fa, fb], 1), fmean, g,
+                                               generations, pc_max=pc_max, pc_min=pc_min,
+                                               pm_max=pm_max, pm_min=pm_min, eq23=eq23)
+            pm_ind = np.clip(pm_ind, 0.0, 1.0)
+        else:
+            pc_pair = np.full((s, p // 2), pc)
+            pm_ind = np.full((s, p), pm)
+        cross = (rng.random((s, p // 2)) < pc_pair)[..., None]
+        if binary:
+            cut = rng.integers(1, d * bits, size=(s, p // 2, 1))
+            # single-point crossover at bit `cut` of the string: the tail of gene i is its
+            # last bits - clip(cut - i * bits, 0, bits) bits
+            tail_bits = bits - np.clip(cut - gene_no * bits, 0, bits)
+            swap = np.where(cross, (np.int64(1) << tail_bits) - 1, 0)
+            c1 = (a & ~swap) | (b & swap)
+            c2 = (b & ~swap) | (a & swap)
+        else:
+            beta = rng.random((s, p // 2, d))
+            c1 = np.where(cross, beta * a + (1 - beta) * b, a)
+            c2 = np.where(cross, (1 - beta) * a + beta * b, b)
+        child = np.concatenate([c1, c2], axis=1)             # pm_ind is ordered alike
+        if binary:
+            geno = child ^ pack(rng.random((s, p, d * bits)) < pm_ind[..., None])
+        else:
+            mut = rng.random(child.shape) < pm_ind[..., None]
+            step = rng.normal(size=child.shape) * mutation_scale * (hi - lo)
+            geno = _reflect(np.where(mut, child + step, child), lo, hi)
+        h = objective(decode(geno))
+        # elitism: the best so far replaces the worst child; ties (equal H, e.g. several
+        # degenerate layouts with H = inf) go to the lowest population index (argmax/argmin
+        # return the first), so a run is a function of its random numbers only
+        iw = np.argmax(h, axis=1)
+        geno[ar, iw] = best_g
+        h[ar, iw] = best_h
+        ib = np.argmin(h, axis=1)
+        better = h[ar, ib] < best_h
+        best_g = np.where(better[:, None], geno[ar, ib], best_g)
+        best_h = np.where(better, h[ar, ib], best_h)
+        hist.append(best_h.copy())
+        pcs.append(float(pc_pair.mean()))
+        pms.append(float(pm_ind.mean()))
+    label = ("improved GA (Eqs. 22-23" + (", printed Eq. 23)" if eq23 == "printed" else ")")
+             if adaptive else f"traditional GA (Pc={pc:g}, Pm={pm:g})")
+    return GAResult(best_x=decode(best_g), best_h=best_h, history=np.array(hist),
+                    pc=np.array(pcs), pm=np.array(pms), evaluations_per_generation=p,
+                    label=f"{label}, {encoding}")
+
+
+def _differential_evolution(objective, lo, hi, n_runs: int, n_pop: int, generations: int, rng,
+                            *, tol: float = 0.0, mutation=(0.5, 1.0),
+                            recombination: float = 0.7):
+    """Differential evolution, scipy's default scheme, ``n_runs`` independent runs at once.
+
+    The scheme of ``scipy.optimize.differential_evolution`` with ``strategy="best1bin"``,
+    ``mutation=(0.5, 1)`` (dithered: a new factor per run and generation),
+    ``recombination=0.7``, ``init="latinhypercube"``, ``updating="deferred"`` and ``tol``
+    (a run stops when the standard deviation of its population's energies is at most ``tol``
+    times their mean): the trial of member ``i`` is ``best + F (x_r0 - x_r1)`` with ``r0, r1, i``
+    distinct, crossed binomially with member ``i`` (one gene always from the trial); genes that
+    leave the box are redrawn uniformly in it; a trial replaces its member when not worse.
+    Hand-written because scipy runs one optimisation at a time with a Python loop over the
+    population every generation, and the compendium needs hundreds of runs: here every step is
+    an array over (runs, population, genes) and the only loop is over generations.
+
+    ``objective(x, runs)``: energies ``(len(runs), n_pop)`` of genes ``x`` ``(len(runs), n_pop,
+    d)`` for the runs with indices ``runs``.  Returns ``(population, energies, history,
+    generations_run)``: the final population ``(n_runs, n_pop, d)`` and its energies, the best
+    energy after each generation ``(generations + 1, n_runs)`` (row 0: the initial population;
+    a stopped run keeps its value), and the number of generations each run made.
+    """
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    s, p, d = n_runs, n_pop, lo.size
+    if p < 4:
+        raise ValueError(f"differential evolution needs at least 4 members, got {p}")
+    every = np.arange(s)
+
+    def energy(unit, runs):
+        with np.errstate(over="ignore", invalid="ignore"):
+            e = np.asarray(objective(lo + unit * (hi - lo), runs), dtype=float)
+        return np.where(np.isfinite(e), np.minimum(e, 1e300), 1e300)
+
+    # Latin hypercube: one point in each of n_pop slices of every gene, slices shuffled per gene
+    unit = (rng.random((s, p, d)) + np.arange(p)[:, None]) / p
+    unit = np.take_along_axis(unit, np.argsort(rng.random((s, p, d)), axis=1), axis=1)
+    e = energy(unit, every)
+    hist = np.empty((generations + 1, s))
+    hist[0] = e.min(axis=1)
+    done = np.zeros(s, dtype=bool)
+    made = np.zeros(s, dtype=np.int64)
+    member = np.arange(p)
+    for g in range(1, generations + 1):
+        runs = np.flatnonzero(~done)
+        if runs.size:
+            m = runs.size
+            pop, en = unit[runs], e[runs]
+            rows = np.arange(m)[:, None]
+            best = pop[np.arange(m), np.argmin(en, axis=1)]          # first index on ties
+            f = rng.uniform(mutation[0], mutation[1], size=(m, 1, 1))
+            r0 = rng.integers(0, p - 1, size=(m, p))
+            r0 = r0 + (r0 >= member)                                  # r0 != i
+            r1 = rng.integers(0, p - 2, size=(m, p))
+            first, second = np.minimum(member, r0), np.maximum(member, r0)
+            r1 = r1 + (r1 >= first)
+            r1 = r1 + (r1 >= second)                                  # r1 != i, r0
+            mutant = best[:, None, :] + f * (pop[rows, r0] - pop[rows, r1])
+            cross = rng.random((m, p, d)) < recombination
+            cross[rows, member, rng.integers(0, d, size=(m, p))] = True
+            trial = np.where(cross, mutant, pop)
+            outside = (trial < 0) | (trial > 1)
+            trial = np.where(outside, rng.random((m, p, d)), trial)
+            et = energy(trial, runs)
+            take = et <= en
+            unit[runs] = np.where(take[..., None], trial, pop)
+            e[runs] = np.where(take, et, en)
+            made[runs] += 1
+            if tol > 0:
+                with np.errstate(over="ignore", invalid="ignore"):
+                    spread = e[runs].std(axis=1) <= tol * np.abs(e[runs].mean(axis=1))
+                done[runs] = spread
+        hist[g] = e.min(axis=1)
+    return lo + unit * (hi - lo), e, hist, made
+
+
+def _polish(fun, x0, lo, hi):
+    """L-BFGS-B from ``x0`` within the box (what scipy's ``polish=True`` does); returns
+    ``(x, f)`` of the better of the start and the end point."""
+    f0 = float(fun(x0))
+    res = minimize(fun, x0, method="L-BFGS-B", bounds=list(zip(lo, hi, strict=True)))
+    if res.fun < f0:
+        return np.clip(res.x, lo, hi), float(res.fun)
+    return np.asarray(x0, dtype=float), f0
+
+
+def run_de(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, popsize: int = 13,
+           generations: int = 200, seed: int = 0, polish: bool = False) -> GAResult:
+    """Baseline: differential evolution (scipy's default scheme, :func:`_differential_evolution`)
+    on the same genes and objective, ``n_runs`` runs at once.
+
+    ``popsize * 4`` members, no early stop, so every run lasts ``generations``; ``polish``
+    refines each run's best with L-BFGS-B as scipy's ``polish=True`` does.  ``seed`` seeds one
+    ``numpy.random.Generator`` for all runs (or pass a Generator).
+    """
+    for name, v, low in (("n_runs", n_runs, 1), ("popsize", popsize, 1),
+                         ("generations", generations, 1)):
+        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
+            raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
+    if k is not None and np.ndim(k) != 0:
+        raise ValueError("run_de takes one harmonic order k")
+    lo, hi = _box(bounds)
+    objective = _make_objective(k, harmonics, n_runs)
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    pop, e, hist, _ = _differential_evolution(lambda x, runs: objective(x, runs), lo, hi,
+                                              n_runs, popsize * 4, generations, rng)
+    ib = np.argmin(e, axis=1)
+    best_x = pop[np.arange(n_runs), ib]
+    best_h = e[np.arange(n_runs), ib]
+    if polish:
+        for r in range(n_runs):
+            def fun(x, r=r):
+                return float(np.minimum(objective(np.asarray(x)[None, None], np.array([r]))
+                                        [0, 0], 1e300))
+            best_x[r], best_h[r] = _polish(fun, best_x[r], lo, hi)
+    best_h = np.asarray(objective(best_x[:, None], np.arange(n_runs))[:, 0], dtype=float)
+    return GAResult(best_x=best_x, best_h=best_h, history=hist,
+                    pc=np.full(generations + 1, np.nan), pm=np.full(generations + 1, np.nan),
+                    evaluations_per_generation=popsize * 4,
+                    label="differential evolution (best1bin" + (", polished)" if polish else ")"))
+
+
+def convergence_generation(history, target, rel_tol: float = 0.01) -> np.ndarray:
+    """First generation at which the best-so-far objective is within ``rel_tol`` of ``target``
+    (``history``: (generations + 1, runs); ``target``: scalar or per run).  ``-1`` if never."""
+    hist = np.asarray(history, dtype=float)
+    if hist.ndim != 2:
+        raise ValueError("history must be (generations + 1, runs)")
+    if not rel_tol >= 0:
+        raise ValueError(f"rel_tol must be >= 0, got {rel_tol!r}")
+    ok = hist <= np.asarray(target, dtype=float) * (1 + rel_tol)
+    return np.where(ok.any(axis=0), ok.argmax(axis=0), -1)
+
+
+def reference_optima(ks, bounds=PAPER_BOX, n_starts: int = 2, seed: int = 0,
+                     maxiter: int = 400, popsize: int = 30, rel_tol: float = 1e-9):
+    """Best known ``H`` at every harmonic of ``ks`` within ``bounds``: differential evolution
+    over the three angles with the optimal ``a_3`` in closed form (:func:`optimal_a3`),
+    ``n_starts`` runs per harmonic (all harmonics and starts in one batch, each run stopping
+    when its population's energies agree to ``1e-12``), each polished with L-BFGS-B; the
+    result's ``H`` is Eq. 20 evaluated at the genes found.  Layouts with
+    ``|sin(phi_2 - phi_1)| < 1e-4`` are excluded: Eq. 15 would need weights above ``1e4``
+    there, and the closed form of :func:`optimal_a3` loses its accuracy (it can even return
+    values below the bound 1/4).
+
+    Returns ``(H, genes)`` of shapes ``(K,)`` and ``(K, 4)``.  The best start is chosen by
+    :func:`select_best` (starts whose ``H`` agree within ``rel_tol`` are ties, broken by the
+    canonical layout), and the genes are the canonical member of the layout's symmetry class
+    (:func:`canonical_genes`).  A numerical reference, not a proof.
+    """
+    ks = np.atleast_1d(np.asarray(ks))
+    if ks.ndim != 1 or ks.size == 0:
+        raise ValueError("ks must be a non-empty list of harmonic orders")
+    objective_H(np.array([0.3, 2.0, 5.0, 1.0]), ks)  # validates the orders
+    if isinstance(n_starts, bool) or not isinstance(n_starts, int | np.integer) or n_starts < 1:
+        raise ValueError(f"n_starts must be an integer >= 1, got {n_starts!r}")
+    lo, hi = _box(bounds)
+    a3b = (lo[3], hi[3])
+    k_run = np.repeat(ks.astype(float), n_starts)
+
+    def objective(x3, runs):
+        h = optimal_a3(x3, k_run[runs, None], a3b)[1]
+        return np.where(np.abs(np.sin(x3[..., 1] - x3[..., 0])) < _NEAR_DEGENERATE, np.inf, h)
+
+    rng = np.random.default_rng(seed)
+    pop, e, _, _ = _differential_evolution(objective, lo[:3], hi[:3], k_run.size, popsize * 3,
+                                           maxiter, rng, tol=1e-12)
+    n = k_run.size
+    x3 = pop[np.arange(n), np.argmin(e, axis=1)]
+    h = np.empty(n)
+    for r in range(n):
+        def fun(v, r=r):
+            return float(np.minimum(objective(np.asarray(v)[None, None], np.array([r]))[0, 0],
+                                    1e300))
+        x3[r], _ = _polish(fun, x3[r], lo[:3], hi[:3])
+    a3 = optimal_a3(x3, k_run, a3b)[0]
+    genes = np.concatenate([x3, a3[:, None]], axis=1)
+    h = np.where(np.abs(np.sin(x3[:, 1] - x3[:, 0])) < _NEAR_DEGENERATE, np.inf,
+                 objective_H(genes, k_run))                     # Eq. 20 itself, as the GAs
+    genes = genes.reshape(ks.size, n_starts, 4)
+    h = h.reshape(ks.size, n_starts)
+    best, genes_best = select_best(h, genes, bounds, rel_tol=rel_tol)
+    return h[np.arange(ks.size), best], genes_best
+
+
+def reference_optimum(k: int, bounds=PAPER_BOX, n_starts: int = 4, seed: int = 0,
+                      maxiter: int = 400):
+    """Best known ``H`` at harmonic ``k`` in ``bounds`` (:func:`reference_optima` for one
+    harmonic).  Returns ``(H, genes)``, the genes canonical (:func:`canonical_genes`)."""
+    h, g = reference_optima([k], bounds, n_starts=n_starts, seed=seed, maxiter=maxiter)
+    return float(h[0]), g[0]

@@ -1,0 +1,107 @@
+"""Simulated four-probe measurements (Yang et al. 2021, Section 3 simulated): random profiles,
+probe signals with asynchronous error motion and noise sampled over several revolutions
+(multi-turn coincidence sampling, Eqs. 1-2), and the coincidence ratio of repeated curves.
+"""
+
+from __future__ import annotations
+
+__all__ = ["random_profile", "simulate_measurements", "coincidence_ratio"]
+
+import numpy as np
+
+from ..roundness import _profile, mz_roundness
+from .separation import TWO_PI, _check_n, probe_angles, probe_signals
+
+
+def random_profile(n_samples: int, harmonics, rng, decay: float = 1.0,
+                   roundness: float | None = None) -> np.ndarray:
+    """A random profile with the given harmonics, amplitudes ``~ k^-decay`` and random phases;
+    scaled so that its minimum-zone roundness equals ``roundness`` when given."""
+    n = _check_n(n_samples)
+    ks = np.asarray(harmonics)
+    if ks.ndim != 1 or ks.size == 0 or np.any(ks < 0) or np.any(ks >= n / 2):
+        raise ValueError(f"harmonics must be orders in 0..N/2-1 = {n // 2 - 1}")
+    t = TWO_PI * np.arange(n) / n
+    amp = rng.standard_normal(len(ks)) * np.maximum(ks, 1) ** (-float(decay))
+    ph = rng.uniform(0, TWO_PI, len(ks))
+    r = (amp[:, None] * np.cos(ks[:, None] * t + ph[:, None])).sum(0)
+    if roundness is not None:
+        if not roundness > 0:
+            raise ValueError(f"roundness must be > 0, got {roundness!r}")
+        r = r * roundness / mz_roundness(r)[0]
+    return r
+
+
+def simulate_measurements(profile, dx, dy, positions, *, n_rev: int, interleave: int,
+                          async_sd: float, noise_sd: float, n_measurements: int, rng,
+                          async_harmonics=(2, 30)) -> np.ndarray:
+    """Averaged four-probe signals of repeated measurements (a simulation of Section 3).
+
+    Each measurement lasts ``n_rev`` revolutions.  Multi-turn coincidence sampling (Eqs. 1-2):
+    revolution ``j`` samples only the angles ``n`` with ``n = j mod interleave``, so one full set
+    of ``N`` angles takes ``interleave`` revolutions and the ``n_rev // interleave`` sets are
+    averaged angle by angle.  The synchronous motion ``dx, dy`` repeats every revolution; the
+    asynchronous motion is new every revolution (random harmonics in ``async_harmonics``, rms
+    ``async_sd`` per axis); each probe adds white noise ``noise_sd``.  Returns ``(M, 4, N)``.
+    """
+    r = _profile(profile)
+    n = r.shape[-1]
+    for name, v in (("n_rev", n_rev), ("interleave", interleave),
+                    ("n_measurements", n_measurements)):
+        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 1:
+            raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+    if n % interleave:
+        raise ValueError(f"interleave ({interleave}) must divide N ({n})")
+    if n_rev < interleave:
+        raise ValueError(f"n_rev ({n_rev}) must be at least interleave ({interleave})")
+    if async_sd < 0 or noise_sd < 0:
+        raise ValueError("async_sd and noise_sd must be >= 0")
+    sets = n_rev // interleave
+    m = n_measurements
+    clean = probe_signals(r, dx, dy, positions)                       # (4, N)
+    phi = probe_angles(positions, n)
+    t = TWO_PI * np.arange(n) / n
+    # every sample n of set s was taken in revolution s*interleave + (n mod interleave); the
+    # asynchronous motion of that revolution at angle n is what it saw.
+    k0, k1 = async_harmonics
+    ks = np.arange(k0, k1 + 1)
+    shape = (m, sets, interleave, 2, len(ks))
+    coef = rng.standard_normal(shape + (2,)) * async_sd / np.sqrt(len(ks))
+    basis = np.stack([np.cos(ks[:, None] * t), np.sin(ks[:, None] * t)], axis=-1)  # (K, N, 2)
+    motion = np.einsum("msiaKc,Knc->msian", coef, basis)            # (m, sets, il, 2, N)
+    which = np.arange(n) % interleave                                # revolution within a set
+    motion = motion[:, :, which, :, np.arange(n)]                   # (N, m, sets, 2)
+    motion = np.moveaxis(motion, 0, -1)                              # (m, sets, 2, N)
+    proj = motion[:, :, 0, None, :] * np.cos(phi)[:, None] + motion[:, :, 1, None, :] \
+        * np.sin(phi)[:, None]                                       # (m, sets, 4, N)
+    noise = rng.standard_normal((m, sets, 4, n)) * noise_sd
+    return clean + (proj + noise).mean(axis=1)
+
+
+def coincidence_ratio(curves, k: float = 2.0) -> np.ndarray:
+    """How far apart the mean curves of groups of repeated measurements are, in units of ``k``
+    standard errors of their difference: ``(G, G)`` matrix, 0 on the diagonal.
+
+    ``curves``: ``(G, M, P)``, ``G`` groups (e.g. spindle speeds), ``M >= 2`` repeated
+    measurements of a curve of ``P`` points each.  For groups ``a, b`` with means ``m_a, m_b`` and
+    pointwise sample variances ``v_a, v_b`` (``ddof = 1``):
+
+        ratio_ab = rms_P(m_a - m_b) / (k * sqrt(mean_P(v_a + v_b) / M)).
+
+    If both groups measure the same curve with independent scatter, ``E[rms^2] =
+    mean_P(v_a + v_b) / M``, so the ratio is about ``1 / k``; a ratio at most 1 means the groups'
+    curves coincide within ``k`` standard errors of the measurement scatter (the ``k = 2`` of the
+    compendium's tolerance policy), a ratio above 1 a systematic difference between groups.
+    """
+    c = np.asarray(curves, dtype=float)
+    if c.ndim != 3 or c.shape[1] < 2 or c.shape[2] < 1:
+        raise ValueError(f"curves must be (groups, measurements >= 2, points), got {c.shape}")
+    if not np.all(np.isfinite(c)) or not (np.isfinite(k) and k > 0):
+        raise ValueError("curves must be finite and k > 0")
+    m = c.mean(axis=1)                                               # (G, P)
+    v = c.var(axis=1, ddof=1)                                        # (G, P)
+    rms = np.sqrt(((m[:, None] - m[None]) ** 2).mean(axis=-1))       # (G, G)
+    se = np.sqrt((v[:, None] + v[None]).mean(axis=-1) / c.shape[1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.where(se > 0, rms / (k * se), np.where(rms > 0, np.inf, 0.0))
+    return out
