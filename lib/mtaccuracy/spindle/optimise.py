@@ -14,11 +14,11 @@ from __future__ import annotations
 __all__ = ["PC_MAX", "PC_MIN", "PM_MAX", "PM_MIN", "GAResult", "adaptive_probabilities", "run_ga",
            "run_de", "convergence_generation", "reference_optimum", "reference_optima"]
 
-from dataclasses import dataclass
-
 import numpy as np
 from scipy.optimize import minimize
 
+from ..optimise.ga import BinaryEncoding, GAResult, RealEncoding, adaptive_rates
+from ..optimise.ga import run_ga as generic_ga
 from .design import PAPER_BOX, _box, fitness, objective_H, objective_worst, optimal_a3, select_best
 
 #: Probabilities of the improved GA (Section 2.2): crossover Pc max/min, mutation Pm max/min.
@@ -33,50 +33,17 @@ _NEAR_DEGENERATE = 1e-4
 def adaptive_probabilities(f, f_mean, generation, max_generation, *, pc_max=PC_MAX,
                            pc_min=PC_MIN, pm_max=PM_MAX, pm_min=PM_MIN,
                            eq23: str = "corrected"):
-    """Crossover and mutation probabilities of the improved GA (Eqs. 22-23).
+    """Crossover and mutation probabilities of the improved GA (Eqs. 22-23) with the paper's
+    bounds as defaults: :func:`mtaccuracy.optimise.ga.adaptive_rates`.
 
     ``Pc = Pc_max`` if ``F < F_mean``, else ``Pc_max - (Pc_max - Pc_min) alpha / alpha_max``;
     ``Pm = Pm_min`` if ``F < F_mean``, else, as printed (``eq23="printed"``),
     ``Pm_min - (Pm_max - Pm_min) alpha / alpha_max``, which falls from ``Pm_min`` and is negative
     once ``alpha / alpha_max > Pm_min / (Pm_max - Pm_min)`` (after 6 % of the run with the paper's
     values); corrected (default), ``Pm_min + (Pm_max - Pm_min) alpha / alpha_max``, rising from
-    0.005 to 0.09 as the text describes.  ``alpha`` = ``generation``, ``alpha_max`` =
-    ``max_generation``.
-    Returns the raw values (the printed Eq. 23 is not clipped here; :func:`run_ga` clips to [0, 1]).
-    """
-    if eq23 not in ("corrected", "printed"):
-        raise ValueError(f"eq23 must be 'corrected' or 'printed', got {eq23!r}")
-    if not 0 <= generation <= max_generation or max_generation < 1:
-        raise ValueError(f"need 0 <= generation <= max_generation (>= 1), got {generation!r}, "
-                         f"{max_generation!r}")
-    if not (0 <= pc_min <= pc_max <= 1 and 0 <= pm_min <= pm_max <= 1):
-        raise ValueError("need 0 <= pc_min <= pc_max <= 1 and 0 <= pm_min <= pm_max <= 1")
-    f = np.asarray(f, dtype=float)
-    above = f >= np.asarray(f_mean, dtype=float)
-    frac = generation / max_generation
-    pc = np.where(above, pc_max - (pc_max - pc_min) * frac, pc_max)
-    sign = 1.0 if eq23 == "corrected" else -1.0
-    pm = np.where(above, pm_min + sign * (pm_max - pm_min) * frac, pm_min)
-    return pc, pm
-
-
-@dataclass
-class GAResult:
-    """Runs of a genetic algorithm (or of differential evolution), batched over runs."""
-
-    best_x: np.ndarray      # (runs, 4) best genes found
-    best_h: np.ndarray      # (runs,) best objective
-    history: np.ndarray     # (generations + 1, runs) best-so-far objective; row 0 = initial pop.
-    pc: np.ndarray          # (generations + 1,) mean crossover probability used
-    pm: np.ndarray          # (generations + 1,) mean mutation probability used
-    evaluations_per_generation: int
-    label: str = ""
-
-
-def _reflect(x, lo, hi):
-    w = hi - lo
-    y = np.mod(x - lo, 2 * w)
-    return lo + np.where(y > w, 2 * w - y, y)
+    0.005 to 0.09 as the text describes.  Returns the raw values (not clipped)."""
+    return adaptive_rates(f, f_mean, generation, max_generation, pc_max=pc_max, pc_min=pc_min,
+                          pm_max=pm_max, pm_min=pm_min, eq23=eq23)
 
 
 def _make_objective(k, harmonics, n_runs):
@@ -100,151 +67,38 @@ def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_si
            pm: float = 0.05, eq23: str = "corrected", encoding: str = "real",
            mutation_scale: float = 0.1, bits: int = 16,
            pc_max=PC_MAX, pc_min=PC_MIN, pm_max=PM_MAX, pm_min=PM_MIN) -> GAResult:
-    """Genetic algorithm minimising ``H`` (fitness ``1/H``, Eq. 21), ``n_runs`` runs at once.
+    """Genetic algorithm minimising ``H`` (fitness ``1/H``, Eq. 21), ``n_runs`` runs at once:
+    the generic :func:`mtaccuracy.optimise.ga.run_ga` on the layout objective.
 
-    Hand-written because the adaptive crossover and mutation rates (Eqs. 22-23) are the paper's
-    contribution.  The paper gives neither the encoding nor the operators; ours, stated here:
-    genes ``(phi_1, phi_2, phi_3, a_3)`` in ``bounds``; uniform initial population;
-    roulette-wheel (fitness-proportional) selection; consecutive selected parents paired and
-    crossed with probability ``Pc`` per pair; elitism (the best so far replaces the worst child).
+    The paper gives neither the encoding nor the operators; ours, stated there: genes
+    ``(phi_1, phi_2, phi_3, a_3)`` in ``bounds``; uniform initial population; roulette-wheel
+    selection; consecutive parents paired and crossed with probability ``Pc``; elitism.
+    ``encoding="real"`` (:class:`~mtaccuracy.optimise.ga.RealEncoding`: arithmetic crossover,
+    Gaussian mutation of ``mutation_scale`` x the range, reflected) or ``"binary"``
+    (:class:`~mtaccuracy.optimise.ga.BinaryEncoding`: ``bits`` bits per gene, single-point
+    crossover, bit flips).
 
-    ``encoding="real"``: arithmetic crossover (child = ``b x1 + (1 - b) x2``, ``b ~ U(0, 1)`` per
-    gene); each gene mutated with probability ``Pm`` by a Gaussian step of ``mutation_scale`` x
-    its range, reflected into the box.  ``encoding="binary"``: each gene a ``bits``-bit integer
-    over its range (the classic GA of the toolboxes of the time); single-point crossover; each bit
-    flipped with probability ``Pm``.
-
-    ``adaptive=False``: the traditional GA, fixed ``pc`` and ``pm``.  ``adaptive=True``: Eq. 22 for
-    ``Pc`` with ``F`` the fitness of the fitter parent of the pair, Eq. 23 for ``Pm`` with ``F`` the
-    fitness of the child's own parent; ``F_mean`` the mean fitness of the current population;
-    ``eq23`` picks the printed or the corrected sign (:func:`adaptive_probabilities`).
+    ``adaptive=False``: the traditional GA, fixed ``pc`` and ``pm``.  ``adaptive=True``: Eq. 22
+    for ``Pc`` with ``F`` the fitness of the fitter parent of the pair, Eq. 23 for ``Pm`` with
+    ``F`` the fitness of the child's own parent; ``eq23`` picks the printed or the corrected sign
+    (:func:`adaptive_probabilities`).
 
     ``k`` (scalar, or one per run) optimises Eq. 20 at that harmonic; ``harmonics`` optimises the
-    worst case over them.  Everything is an array over (runs, population); the only loop is over
-    generations.  ``seed`` seeds one ``numpy.random.Generator`` (or pass a Generator).
+    worst case over them.  ``seed`` seeds one ``numpy.random.Generator`` (or pass a Generator).
     """
-    for name, v, low in (("n_runs", n_runs, 1), ("pop_size", pop_size, 4),
-                         ("generations", generations, 1), ("bits", bits, 2)):
-        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
-            raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
-    if pop_size % 2:
-        raise ValueError(f"pop_size must be even (parents are paired), got {pop_size}")
-    if not (0 <= pc <= 1 and 0 <= pm <= 1):
-        raise ValueError(f"pc and pm must be probabilities in [0, 1], got {pc!r}, {pm!r}")
-    if not mutation_scale > 0:
-        raise ValueError(f"mutation_scale must be > 0, got {mutation_scale!r}")
     if encoding not in ("real", "binary"):
         raise ValueError(f"encoding must be 'real' or 'binary', got {encoding!r}")
-    if bits > 30:
-        raise ValueError(f"bits must be <= 30, got {bits}")
     lo, hi = _box(bounds)
     objective = _make_objective(k, harmonics, n_runs)
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    s, p, d = n_runs, pop_size, 4
-    if adaptive:  # validates the probabilities and eq23 once
-        adaptive_probabilities(1.0, 1.0, 0, 1, pc_max=pc_max, pc_min=pc_min, pm_max=pm_max,
-                               pm_min=pm_min, eq23=eq23)
-    binary = encoding == "binary"
-    if binary:
-        # Genes are stored as integers (runs, pop, 4), bit j of gene i being bit j of the
-        # string of 4 * bits (most significant first); random bits are drawn as that string
-        # and packed exactly (sums of powers of two below 2**53).
-        pow2 = 2.0 ** np.arange(bits - 1, -1, -1)
-        gene_no = np.arange(d)
-
-        def pack(bitstring):
-            return (bitstring.reshape(bitstring.shape[:-1] + (d, bits)) @ pow2).astype(np.int64)
-
-        def decode(gen):
-            return lo + (hi - lo) * gen / (2.0 ** bits - 1)
-
-        geno = pack(rng.random((s, p, d * bits)) < 0.5)
-    else:
-        def decode(gen):
-            return gen
-
-        geno = lo + rng.random((s, p, d)) * (hi - lo)
-    h = objective(decode(geno))
-    ar = np.arange(s)
-    ib = np.argmin(h, axis=1)
-    best_g = geno[ar, ib]
-    best_h = h[ar, ib]
-    hist = [best_h.copy()]
-    pcs, pms = [pc if not adaptive else pc_max], [pm if not adaptive else pm_min]
-    rows = ar[:, None]
-    n_search = int(np.ceil(np.log2(p))) + 1
-    for g in range(1, generations + 1):
-        f = fitness(h)
-        total = f.sum(axis=1, keepdims=True)
-        prob = np.where(total > 0, f / np.where(total > 0, total, 1), 1.0 / p)
-        cum = np.cumsum(prob, axis=1)
-        u = rng.random((s, p))
-        # roulette wheel: index = number of cumulative probabilities below u (cum is sorted),
-        # found by a batched binary search over the population axis
-        low_i = np.zeros((s, p), dtype=np.int64)
-        high_i = np.full((s, p), p, dtype=np.int64)
-        for _ in range(n_search):
-            mid = (low_i + high_i) // 2
-            below = cum[rows, np.minimum(mid, p - 1)] < u
-            active = low_i < high_i
-            low_i = np.where(active & below, mid + 1, low_i)
-            high_i = np.where(active & ~below, mid, high_i)
-        idx = np.minimum(low_i, p - 1)
-        par = geno[rows, idx]
-        fpar = f[rows, idx]
-        a, b = par[:, 0::2], par[:, 1::2]                    # (s, p/2, genes)
-        fa, fb = fpar[:, 0::2], fpar[:, 1::2]
-        if adaptive:
-            fmean = f.mean(axis=1, keepdims=True)
-            pc_pair, _ = adaptive_probabilities(np.maximum(fa, fb), fmean, g, generations,
-                                                pc_max=pc_max, pc_min=pc_min, pm_max=pm_max,
-                                                pm_min=pm_min, eq23=eq23)
-            _, pm_ind = adaptive_probabilities(np.concatenate([fa, fb], 1), fmean, g,
-                                               generations, pc_max=pc_max, pc_min=pc_min,
-                                               pm_max=pm_max, pm_min=pm_min, eq23=eq23)
-            pm_ind = np.clip(pm_ind, 0.0, 1.0)
-        else:
-            pc_pair = np.full((s, p // 2), pc)
-            pm_ind = np.full((s, p), pm)
-        cross = (rng.random((s, p // 2)) < pc_pair)[..., None]
-        if binary:
-            cut = rng.integers(1, d * bits, size=(s, p // 2, 1))
-            # single-point crossover at bit `cut` of the string: the tail of gene i is its
-            # last bits - clip(cut - i * bits, 0, bits) bits
-            tail_bits = bits - np.clip(cut - gene_no * bits, 0, bits)
-            swap = np.where(cross, (np.int64(1) << tail_bits) - 1, 0)
-            c1 = (a & ~swap) | (b & swap)
-            c2 = (b & ~swap) | (a & swap)
-        else:
-            beta = rng.random((s, p // 2, d))
-            c1 = np.where(cross, beta * a + (1 - beta) * b, a)
-            c2 = np.where(cross, (1 - beta) * a + beta * b, b)
-        child = np.concatenate([c1, c2], axis=1)             # pm_ind is ordered alike
-        if binary:
-            geno = child ^ pack(rng.random((s, p, d * bits)) < pm_ind[..., None])
-        else:
-            mut = rng.random(child.shape) < pm_ind[..., None]
-            step = rng.normal(size=child.shape) * mutation_scale * (hi - lo)
-            geno = _reflect(np.where(mut, child + step, child), lo, hi)
-        h = objective(decode(geno))
-        # elitism: the best so far replaces the worst child; ties (equal H, e.g. several
-        # degenerate layouts with H = inf) go to the lowest population index (argmax/argmin
-        # return the first), so a run is a function of its random numbers only
-        iw = np.argmax(h, axis=1)
-        geno[ar, iw] = best_g
-        h[ar, iw] = best_h
-        ib = np.argmin(h, axis=1)
-        better = h[ar, ib] < best_h
-        best_g = np.where(better[:, None], geno[ar, ib], best_g)
-        best_h = np.where(better, h[ar, ib], best_h)
-        hist.append(best_h.copy())
-        pcs.append(float(pc_pair.mean()))
-        pms.append(float(pm_ind.mean()))
+    enc = (RealEncoding(lo, hi, mutation_scale) if encoding == "real"
+           else BinaryEncoding(lo, hi, bits))
+    rates = (dict(pc_max=pc_max, pc_min=pc_min, pm_max=pm_max, pm_min=pm_min, eq23=eq23)
+             if adaptive else None)
     label = ("improved GA (Eqs. 22-23" + (", printed Eq. 23)" if eq23 == "printed" else ")")
              if adaptive else f"traditional GA (Pc={pc:g}, Pm={pm:g})")
-    return GAResult(best_x=decode(best_g), best_h=best_h, history=np.array(hist),
-                    pc=np.array(pcs), pm=np.array(pms), evaluations_per_generation=p,
-                    label=f"{label}, {encoding}")
+    return generic_ga(objective, enc, n_runs=n_runs, pop_size=pop_size,
+                      generations=generations, seed=seed, fitness=fitness, adaptive=rates,
+                      pc=pc, pm=pm, label=f"{label}, {encoding}")
 
 
 def _differential_evolution(objective, lo, hi, n_runs: int, n_pop: int, generations: int, rng,

@@ -1,0 +1,256 @@
+"""A genetic algorithm batched over independent runs, for any vectorised objective.
+
+The algorithm knows nothing of what it optimises: it takes an ``objective`` that maps genes
+``(runs, population, d)`` (decoded into the search box) to values to minimise ``(runs,
+population)``, a ``fitness`` that turns those values into non-negative selection weights, and an
+*encoding* (:class:`RealEncoding`, :class:`BinaryEncoding`) that owns how genes are stored,
+drawn, crossed and mutated.  Every step is an array over (runs, population); the only Python
+loop is over generations.
+
+The scheme: uniform initial population; roulette-wheel (fitness-proportional) selection;
+consecutive selected parents paired and crossed with probability ``Pc`` per pair; every child
+mutated with probability ``Pm`` per gene (real) or per bit (binary); elitism (the best so far
+replaces the worst child).  The rates are fixed, or adaptive (:func:`adaptive_rates`: the rule of
+Yang et al. 2021, Eqs. 22-23, with ``Pc`` per pair from the fitter parent and ``Pm`` per child
+from its own parent).
+
+Hand-written rather than taken from a library (DEAP, pymoo, scipy) because the adaptive rates are
+what the paper contributes and because hundreds of independent runs must be batched, which those
+libraries do one run at a time.  Ties (equal values in a population) go to the lowest index, so a
+run is a function of its random numbers only.
+"""
+
+from __future__ import annotations
+
+__all__ = ["GAResult", "RealEncoding", "BinaryEncoding", "adaptive_rates", "run_ga"]
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class GAResult:
+    """Runs of a genetic algorithm (or of differential evolution), batched over runs."""
+
+    best_x: np.ndarray      # (runs, d) best genes found (decoded)
+    best_h: np.ndarray      # (runs,) best objective
+    history: np.ndarray     # (generations + 1, runs) best-so-far objective; row 0 = initial pop.
+    pc: np.ndarray          # (generations + 1,) mean crossover probability used
+    pm: np.ndarray          # (generations + 1,) mean mutation probability used
+    evaluations_per_generation: int
+    label: str = ""
+
+
+def _box(lo, hi):
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    if lo.ndim != 1 or lo.shape != hi.shape or not np.all(np.isfinite(lo) & np.isfinite(hi)) \
+            or np.any(lo >= hi):
+        raise ValueError(f"the search box needs finite low < high per gene, got {lo}, {hi}")
+    return lo, hi
+
+
+def _reflect(x, lo, hi):
+    w = hi - lo
+    y = np.mod(x - lo, 2 * w)
+    return lo + np.where(y > w, 2 * w - y, y)
+
+
+class RealEncoding:
+    """Genes stored as their values in the box ``[lo, hi]`` (each (d,)).
+
+    Crossover: arithmetic, ``c1 = b x1 + (1 - b) x2``, ``c2 = (1 - b) x1 + b x2`` with
+    ``b ~ U(0, 1)`` per gene.  Mutation: a Gaussian step of ``mutation_scale`` x the gene's range,
+    reflected into the box."""
+
+    def __init__(self, lo, hi, mutation_scale: float = 0.1):
+        self.lo, self.hi = _box(lo, hi)
+        if not mutation_scale > 0:
+            raise ValueError(f"mutation_scale must be > 0, got {mutation_scale!r}")
+        self.mutation_scale = float(mutation_scale)
+        self.name = "real"
+
+    @property
+    def n_genes(self) -> int:
+        return self.lo.shape[0]
+
+    def initial(self, rng, runs: int, pop: int) -> np.ndarray:
+        return self.lo + rng.random((runs, pop, self.n_genes)) * (self.hi - self.lo)
+
+    def decode(self, geno) -> np.ndarray:
+        return geno
+
+    def crossover(self, a, b, cross, rng):
+        beta = rng.random(a.shape)
+        return (np.where(cross, beta * a + (1 - beta) * b, a),
+                np.where(cross, (1 - beta) * a + beta * b, b))
+
+    def mutate(self, child, pm, rng) -> np.ndarray:
+        mut = rng.random(child.shape) < pm[..., None]
+        step = rng.normal(size=child.shape) * self.mutation_scale * (self.hi - self.lo)
+        return _reflect(np.where(mut, child + step, child), self.lo, self.hi)
+
+
+class BinaryEncoding:
+    """Each gene a ``bits``-bit integer over its range (the classic GA of the toolboxes), the d
+    genes one string of ``d * bits`` bits, most significant first.  Crossover: single point on
+    the string.  Mutation: each bit flipped with probability ``Pm``.  Genes are stored as the
+    integers (runs, pop, d); random bits are drawn as the string and packed exactly (sums of
+    powers of two below 2**53)."""
+
+    def __init__(self, lo, hi, bits: int = 16):
+        self.lo, self.hi = _box(lo, hi)
+        if isinstance(bits, bool) or not isinstance(bits, int | np.integer) or not 2 <= bits <= 30:
+            raise ValueError(f"bits must be an integer from 2 to 30, got {bits!r}")
+        self.bits = int(bits)
+        self._pow2 = 2.0 ** np.arange(self.bits - 1, -1, -1)
+        self.name = "binary"
+
+    @property
+    def n_genes(self) -> int:
+        return self.lo.shape[0]
+
+    def _pack(self, bitstring):
+        d = self.n_genes
+        return (bitstring.reshape(bitstring.shape[:-1] + (d, self.bits)) @ self._pow2
+                ).astype(np.int64)
+
+    def initial(self, rng, runs: int, pop: int) -> np.ndarray:
+        return self._pack(rng.random((runs, pop, self.n_genes * self.bits)) < 0.5)
+
+    def decode(self, geno) -> np.ndarray:
+        return self.lo + (self.hi - self.lo) * geno / (2.0 ** self.bits - 1)
+
+    def crossover(self, a, b, cross, rng):
+        d, bits = self.n_genes, self.bits
+        cut = rng.integers(1, d * bits, size=a.shape[:-1] + (1,))
+        # single-point crossover at bit `cut` of the string: the tail of gene i is its last
+        # bits - clip(cut - i * bits, 0, bits) bits
+        tail_bits = bits - np.clip(cut - np.arange(d) * bits, 0, bits)
+        swap = np.where(cross, (np.int64(1) << tail_bits) - 1, 0)
+        return (a & ~swap) | (b & swap), (b & ~swap) | (a & swap)
+
+    def mutate(self, child, pm, rng) -> np.ndarray:
+        flips = rng.random(child.shape[:-1] + (self.n_genes * self.bits,)) < pm[..., None]
+        return child ^ self._pack(flips)
+
+
+def adaptive_rates(f, f_mean, generation, max_generation, *, pc_max, pc_min, pm_max, pm_min,
+                   eq23: str = "corrected"):
+    """Adaptive crossover and mutation probabilities (Yang et al. 2021, Eqs. 22-23).
+
+    ``Pc = Pc_max`` if ``F < F_mean``, else ``Pc_max - (Pc_max - Pc_min) alpha / alpha_max``;
+    ``Pm = Pm_min`` if ``F < F_mean``, else, as printed (``eq23="printed"``),
+    ``Pm_min - (Pm_max - Pm_min) alpha / alpha_max`` (falling, and negative late in a run), or
+    corrected (default) ``Pm_min + (Pm_max - Pm_min) alpha / alpha_max``, rising as the paper's
+    text describes.  ``alpha`` = ``generation``, ``alpha_max`` = ``max_generation``.  Returns the
+    raw values (:func:`run_ga` clips ``Pm`` to [0, 1])."""
+    if eq23 not in ("corrected", "printed"):
+        raise ValueError(f"eq23 must be 'corrected' or 'printed', got {eq23!r}")
+    if not 0 <= generation <= max_generation or max_generation < 1:
+        raise ValueError(f"need 0 <= generation <= max_generation (>= 1), got {generation!r}, "
+                         f"{max_generation!r}")
+    if not (0 <= pc_min <= pc_max <= 1 and 0 <= pm_min <= pm_max <= 1):
+        raise ValueError("need 0 <= pc_min <= pc_max <= 1 and 0 <= pm_min <= pm_max <= 1")
+    f = np.asarray(f, dtype=float)
+    above = f >= np.asarray(f_mean, dtype=float)
+    frac = generation / max_generation
+    pc = np.where(above, pc_max - (pc_max - pc_min) * frac, pc_max)
+    sign = 1.0 if eq23 == "corrected" else -1.0
+    pm = np.where(above, pm_min + sign * (pm_max - pm_min) * frac, pm_min)
+    return pc, pm
+
+
+def _roulette(f, rng, rows):
+    """Fitness-proportional selection per run: ``(runs, pop)`` indices, by a batched binary
+    search of ``u`` in the cumulative probabilities (a uniform choice where all fitness is 0)."""
+    s, p = f.shape
+    total = f.sum(axis=1, keepdims=True)
+    prob = np.where(total > 0, f / np.where(total > 0, total, 1), 1.0 / p)
+    cum = np.cumsum(prob, axis=1)
+    u = rng.random((s, p))
+    low_i = np.zeros((s, p), dtype=np.int64)
+    high_i = np.full((s, p), p, dtype=np.int64)
+    for _ in range(int(np.ceil(np.log2(p))) + 1):
+        mid = (low_i + high_i) // 2
+        below = cum[rows, np.minimum(mid, p - 1)] < u
+        active = low_i < high_i
+        low_i = np.where(active & below, mid + 1, low_i)
+        high_i = np.where(active & ~below, mid, high_i)
+    return np.minimum(low_i, p - 1)
+
+
+def run_ga(objective: Callable[[np.ndarray], np.ndarray], encoding, *, n_runs: int = 32,
+           pop_size: int = 50, generations: int = 200, seed=0,
+           fitness: Callable[[np.ndarray], np.ndarray] | None = None,
+           adaptive: dict | None = None, pc: float = 0.8, pm: float = 0.05,
+           label: str = "") -> GAResult:
+    """Minimise ``objective`` with ``n_runs`` independent runs of a genetic algorithm at once.
+
+    ``objective(x)``: values to minimise ``(runs, pop)`` of decoded genes ``x`` ``(runs, pop,
+    d)``.  ``encoding``: :class:`RealEncoding` or :class:`BinaryEncoding` (or any object with
+    ``initial``, ``decode``, ``crossover``, ``mutate``).  ``fitness``: selection weights from the
+    values (default ``1 / value`` where finite and positive, else 0).  ``adaptive``: None for
+    fixed rates ``pc``, ``pm``; else the keyword arguments of :func:`adaptive_rates`
+    (``pc_max, pc_min, pm_max, pm_min, eq23``).  ``seed`` seeds one ``numpy.random.Generator``
+    (or pass a Generator).  Returns a :class:`GAResult` with the best decoded genes per run."""
+    for name, v, low in (("n_runs", n_runs, 1), ("pop_size", pop_size, 4),
+                         ("generations", generations, 1)):
+        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
+            raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
+    if pop_size % 2:
+        raise ValueError(f"pop_size must be even (parents are paired), got {pop_size}")
+    if not (0 <= pc <= 1 and 0 <= pm <= 1):
+        raise ValueError(f"pc and pm must be probabilities in [0, 1], got {pc!r}, {pm!r}")
+    if adaptive is not None:
+        adaptive_rates(1.0, 1.0, 0, 1, **adaptive)          # validates once
+    if fitness is None:
+        def fitness(h):
+            h = np.asarray(h, dtype=float)
+            with np.errstate(divide="ignore"):
+                return np.where(np.isfinite(h) & (h > 0), 1.0 / h, 0.0)
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    s, p = n_runs, pop_size
+    geno = encoding.initial(rng, s, p)
+    h = objective(encoding.decode(geno))
+    ar = np.arange(s)
+    rows = ar[:, None]
+    ib = np.argmin(h, axis=1)
+    best_g, best_h = geno[ar, ib], h[ar, ib]
+    hist = [best_h.copy()]
+    pcs = [pc if adaptive is None else adaptive["pc_max"]]
+    pms = [pm if adaptive is None else adaptive["pm_min"]]
+    for g in range(1, generations + 1):
+        f = fitness(h)
+        idx = _roulette(f, rng, rows)
+        par, fpar = geno[rows, idx], f[rows, idx]
+        a, b = par[:, 0::2], par[:, 1::2]                    # (s, p/2, genes)
+        fa, fb = fpar[:, 0::2], fpar[:, 1::2]
+        if adaptive is not None:
+            fmean = f.mean(axis=1, keepdims=True)
+            pc_pair, _ = adaptive_rates(np.maximum(fa, fb), fmean, g, generations, **adaptive)
+            _, pm_ind = adaptive_rates(np.concatenate([fa, fb], 1), fmean, g, generations,
+                                       **adaptive)
+            pm_ind = np.clip(pm_ind, 0.0, 1.0)
+        else:
+            pc_pair = np.full((s, p // 2), pc)
+            pm_ind = np.full((s, p), pm)
+        cross = (rng.random((s, p // 2)) < pc_pair)[..., None]
+        c1, c2 = encoding.crossover(a, b, cross, rng)
+        geno = encoding.mutate(np.concatenate([c1, c2], axis=1), pm_ind, rng)
+        h = objective(encoding.decode(geno))
+        # elitism: the best so far replaces the worst child; ties go to the lowest index
+        iw = np.argmax(h, axis=1)
+        geno[ar, iw] = best_g
+        h[ar, iw] = best_h
+        ib = np.argmin(h, axis=1)
+        better = h[ar, ib] < best_h
+        best_g = np.where(better[:, None], geno[ar, ib], best_g)
+        best_h = np.where(better, h[ar, ib], best_h)
+        hist.append(best_h.copy())
+        pcs.append(float(pc_pair.mean()))
+        pms.append(float(pm_ind.mean()))
+    return GAResult(best_x=encoding.decode(best_g), best_h=best_h, history=np.array(hist),
+                    pc=np.array(pcs), pm=np.array(pms), evaluations_per_generation=p,
+                    label=label)
