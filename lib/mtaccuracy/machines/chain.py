@@ -1069,3 +1069,28 @@ def read_ranges(path, machine: ChainMachine) -> np.ndarray:
             raise ValueError(f"{line}: the range must be finite with high > low, got ({lo}, {hi})")
         bounds[:, names.index(s)] = lo * _errors.UNIT_SCALE[unit], hi * _errors.UNIT_SCALE[unit]
     return bounds
+
+
+_SLOT_TEXT = {"motion": "error motion (after the motion)", "pre": "location (before the motion)",
+              "post": "location (after the motion)", "tilt": "squareness (tilts the direction)"}
+
+
+def catalogue_table(machine: ChainMachine, bounds=None):
+    """A machine's errors as a table: symbol, kind, the axis it belongs to, where it enters the
+    chain and its component (``X Y Z`` translations, ``A B C`` rotations), with the ``bounds``
+    (2, n) of uniform ranges in um and urad when given.  A pandas DataFrame."""
+    import pandas as pd
+
+    table = pd.DataFrame({
+        "symbol": machine.error_names, "kind": [e.kind for e in machine.catalogue],
+        "axis": [p.axis for p in machine.placements],
+        "enters": [_SLOT_TEXT[p.slot] for p in machine.placements],
+        "component": [COMPONENTS[p.component] for p in machine.placements]})
+    if bounds is not None:
+        b = np.asarray(bounds, dtype=float)
+        if b.shape != (2, machine.n_errors):
+            raise ValueError(f"bounds must be (2, {machine.n_errors}), got {b.shape}")
+        scale = np.where([e.translational for e in machine.catalogue], 1e-3, 1e-6)
+        table["low"], table["high"] = b[0] / scale, b[1] / scale
+        table["unit"] = ["um" if e.translational else "urad" for e in machine.catalogue]
+    return table

@@ -9,6 +9,8 @@ One submodule per method; everything is re-exported here, so notebooks write
 | ``sobol`` | Sobol first-order and total indices (Saltelli/Jansen), chunked model evaluation |
 | ``linear`` | closed-form Sobol indices of the first-order model J(pose) e: at poses, pose uniform
   in a box (Gauss-Legendre), and the size of the nonlinear remainder it misses |
+| ``checks`` | the closed form over a workspace (atlas, dominant errors) and checked against
+  sampled indices of the exact model (family-wise bootstrap intervals plus the remainder) |
 | ``pce`` | sparse polynomial chaos (OMP/LARS, bases by input law, validated basis adaptivity) and
   Sobol indices from its coefficients (Zheng et al.) |
 | ``benchmarks`` | Ishigami, G function, interaction polynomial: exact indices for tests and bench |
@@ -16,6 +18,7 @@ One submodule per method; everything is re-exported here, so notebooks write
 """
 
 from . import benchmarks  # noqa: F401
+from .checks import *  # noqa: F403
 from .linear import *  # noqa: F403
 from .pce import *  # noqa: F403
 from .screening import *  # noqa: F403

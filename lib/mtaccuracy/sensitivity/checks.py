@@ -1,0 +1,152 @@
+"""The closed-form (linear) indices over a workspace, and checked against sampling.
+
+Two uses of :mod:`.linear` that every study of a machine repeats:
+
+* an **atlas**: the closed-form indices at many poses, summarised per error and output (the share
+  of the poses where the error is *key*, its mean and largest index) and the *dominant* error at
+  each pose (:func:`atlas_table`, :func:`dominant_errors`);
+* a **check against sampling**: at a pose, Saltelli estimates of the exact model with their
+  bootstrap half-widths beside the closed form and the nonlinear remainder
+  (:func:`sample_at_pose`), and the comparison of all of them at once, with the half-widths widened
+  to a family-wise level by Bonferroni (:func:`compare_with_sampling`).
+"""
+
+from __future__ import annotations
+
+__all__ = ["atlas_table", "dominant_errors", "first_order_outputs", "SampledIndices",
+           "sample_at_pose", "compare_with_sampling"]
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from .linear import indices_at_poses, nonlinear_remainder
+from .sobol import (
+    base_samples,
+    from_unit_uniform,
+    merge_ties,
+    sobol_bootstrap,
+    sobol_estimate,
+    sobol_evaluate,
+)
+
+#: an output whose first-order variance is below this share of the largest one has no
+#: first-order term (e.g. the change of a unit vector along itself): no closed form there
+FIRST_ORDER_FLOOR = 1e-12
+
+
+def first_order_outputs(jacobian: np.ndarray, var: np.ndarray) -> np.ndarray:
+    """(..., q) True where the output has a first-order term: its linear variance
+    ``sum_i J_ki^2 var_i`` above :data:`FIRST_ORDER_FLOOR` of the largest among the outputs of
+    its kind at that pose (outputs in triples of one unit, positions then orientations, when q
+    is a multiple of 3; else all together)."""
+    v = (np.asarray(jacobian) ** 2 * var).sum(-1)                    # (..., q)
+    q = v.shape[-1]
+    g = v.reshape(v.shape[:-1] + ((q // 3, 3) if q % 3 == 0 else (1, q)))
+    return (g > FIRST_ORDER_FLOOR * g.max(axis=-1, keepdims=True)).reshape(v.shape)
+
+
+def atlas_table(indices: np.ndarray, names: Sequence[str], outputs: Sequence[str],
+                key_share: float):
+    """Per error and output, over P poses: the share of the poses where the error is key
+    (index >= ``key_share``), its mean and its largest index.  ``indices`` (P, d, q) as
+    :func:`~mtaccuracy.sensitivity.indices_at_poses` returns.  A pandas DataFrame with the
+    columns ``symbol, output, key_share, mean_index, max_index``, outputs outermost."""
+    import pandas as pd
+
+    idx = np.asarray(indices, dtype=float)
+    if idx.ndim != 3 or idx.shape[1:] != (len(names), len(outputs)):
+        raise ValueError(f"indices must be (P, {len(names)}, {len(outputs)}), got {idx.shape}")
+    if not 0 < key_share < 1:
+        raise ValueError(f"key_share must be in (0, 1), got {key_share!r}")
+    key = (idx >= key_share).mean(0)
+    return pd.DataFrame([dict(symbol=s, output=o, key_share=key[i, k],
+                              mean_index=idx[:, i, k].mean(), max_index=idx[:, i, k].max())
+                         for k, o in enumerate(outputs) for i, s in enumerate(names)])
+
+
+def dominant_errors(jacobian: np.ndarray, var) -> np.ndarray:
+    """(P, q) the column of the error with the largest closed-form index at each pose and
+    output, -1 where the output has no first-order term.  Errors whose indices are equal within
+    the tie tolerance of :func:`~mtaccuracy.sensitivity.merge_ties` (errors that enter
+    identically) go to the first in the catalogue, so the answer does not depend on rounding."""
+    jac = np.asarray(jacobian, dtype=float)
+    var = np.asarray(var, dtype=float)
+    idx = indices_at_poses(jac, var)                                  # (P, d, q)
+    p, d, q = idx.shape
+    merged = merge_ties(idx.transpose(1, 0, 2).reshape(d, -1)).reshape(d, p, q)
+    dom = np.argmax(merged, axis=0)
+    dom[~first_order_outputs(jac, var)] = -1
+    return dom
+
+
+@dataclass
+class SampledIndices:
+    """Total indices of the exact model at one pose, sampled, beside the closed form."""
+
+    st: np.ndarray                # (d, q) Saltelli/Jansen estimate
+    half_width: np.ndarray        # (d, q) 95 % bootstrap half-width
+    closed_form: np.ndarray       # (d, q) linear indices
+    centred_remainder: np.ndarray  # (q,) std of the nonlinear remainder / std of the output
+    first_order: np.ndarray       # (q,) the output has a first-order term
+
+
+def sample_at_pose(model: Callable[[np.ndarray], np.ndarray], jacobian: np.ndarray, bounds,
+                   n: int, n_boot: int, seed) -> SampledIndices:
+    """Saltelli estimates of the total indices of ``model`` (errors (m, d) -> (m, q), the exact
+    model at one pose) with independent uniform errors on ``bounds`` (2, d), N = ``n`` ("mc"
+    design, ``seed``), their bootstrap half-widths (``n_boot`` resamples, ``seed + 10``), the
+    closed form from ``jacobian`` (q, d) and the nonlinear remainder on the A design."""
+    bounds = np.asarray(bounds, dtype=float)
+    d = bounds.shape[1]
+    ua, ub = base_samples(n, d, "mc", seed)
+    a, b = from_unit_uniform(ua, bounds), from_unit_uniform(ub, bounds)
+    ya, yb, yab = sobol_evaluate(model, a, b)
+    _, st = sobol_estimate(ya, yb, yab)
+    _, half = sobol_bootstrap(ya, yb, yab, n_boot, seed + 10)
+    var = (bounds[1] - bounds[0]) ** 2 / 12.0
+    jac = np.asarray(jacobian, dtype=float)
+    rem = nonlinear_remainder(model, jac, a)
+    return SampledIndices(st, half, indices_at_poses(jac[None], var)[0], rem.centred_ratio,
+                          first_order_outputs(jac, var))
+
+
+def compare_with_sampling(checks: Sequence[SampledIndices], names: Sequence[str],
+                          outputs: Sequence[str], level: float = 0.95):
+    """Compare every sampled index with the closed form at once: a difference is allowed the
+    95 % bootstrap half-width widened to a family-wise ``level`` over all compared indices
+    (Bonferroni: ``z(1 - (1 - level) / 2 / m) / z(0.975)``, m the number compared) plus twice
+    the centred remainder of its output (the first-order bound on what the linear model
+    misses).  Outputs without a first-order term are not compared.
+
+    Returns ``(rows, summary, widen, m)``: ``rows`` per pose, output and error (sampled, its
+    half-width, closed form, difference); ``summary`` per pose and output (largest difference,
+    largest half-width, remainder, the largest ratio of difference to allowance, the sum of the
+    sampled indices: 1 for a linear model, its spread is the sampling error of the variance,
+    common to all indices of the output)."""
+    import pandas as pd
+
+    if not 0 < level < 1:
+        raise ValueError(f"level must be in (0, 1), got {level!r}")
+    m = len(names) * sum(int(c.first_order.sum()) for c in checks)
+    widen = stats.norm.ppf(1 - (1 - level) / 2 / max(m, 1)) / stats.norm.ppf(0.975)
+    rows, summary = [], []
+    for p_i, c in enumerate(checks):
+        diff = c.st - c.closed_form
+        allow = widen * c.half_width + 2 * c.centred_remainder[None, :]
+        for k, o in enumerate(outputs):
+            for i, s in enumerate(names):
+                rows.append(dict(pose=p_i, output=o, symbol=s, st_sampled=c.st[i, k],
+                                 half_width=c.half_width[i, k], st_closed_form=c.closed_form[i, k],
+                                 difference=diff[i, k]))
+            first = bool(c.first_order[k])
+            ratio = np.abs(diff[:, k]) / np.maximum(allow[:, k], 1e-300)
+            summary.append(dict(pose=p_i, output=o, first_order=first,
+                                max_abs_difference=np.abs(diff[:, k]).max(),
+                                max_half_width=c.half_width[:, k].max(),
+                                centred_remainder=c.centred_remainder[k] if first else np.nan,
+                                largest_ratio_to_allowed=ratio.max() if first else np.nan,
+                                sum_st_sampled=c.st[:, k].sum()))
+    return pd.DataFrame(rows), pd.DataFrame(summary), widen, m
