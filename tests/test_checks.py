@@ -8,7 +8,6 @@ from mtaccuracy import sensitivity as S
 from mtaccuracy.machines import build
 from mtaccuracy.machines import chain as C
 
-RNG = np.random.default_rng(4)
 
 
 def test_atlas_table_counts_key_poses_and_dominant_errors_break_ties_by_catalogue():

@@ -9,10 +9,14 @@ from __future__ import annotations
 
 import csv
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from . import paths
+#: The working map of paper symbols to ISO 230-1 codes, a data file of the repository
+#: (``lib/mtaccuracy/errors.py`` -> ``data/iso230/``); found from this file, so that the science
+#: modules need nothing of the compendium's machinery (``paths``).
+ISO230_NAMES = Path(__file__).resolve().parents[2] / "data" / "iso230" / "iso230_names.csv"
 
 #: Paper units -> library units (mm, rad).
 UNIT_SCALE = {"um": 1e-3, "mm": 1.0, "rad": 1.0, "urad": 1e-6, "um/m": 1e-6,
@@ -87,7 +91,7 @@ def iso_names(path=None) -> dict[str, str]:
     That file writes the symbols as ``d_xz`` (x error of Z) and ``e_zx``; this returns them
     as given there.
     """
-    path = path or paths.DATA / "iso230" / "iso230_names.csv"
+    path = path or ISO230_NAMES
     with open(path, newline="", encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
     missing = {"paper_symbol", "iso230_code"} - set(rows[0] if rows else {})
