@@ -9,7 +9,6 @@ from mtaccuracy.machines import build
 from mtaccuracy.machines import chain as C
 
 
-
 def test_atlas_table_counts_key_poses_and_dominant_errors_break_ties_by_catalogue():
     # two poses, three errors, one output: indices from a hand-made Jacobian
     jac = np.array([[[1.0, 1.0, 0.5]], [[0.1, 2.0, 0.0]]])             # (P=2, q=1, d=3)
