@@ -119,7 +119,28 @@ _GRAMMAR = ("a topology is read from the workpiece to the tool: 'w', the workpie
 
 
 def parse_topology(text: str) -> Topology:
-    """Parse a topology string (see the module docstring); a clear ValueError otherwise."""
+    """Parse a topology string (ISO 10791-1 spirit; see the module docstring).
+
+    Parameters
+    ----------
+    text : str
+        The machine from the workpiece to the tool: ``w``, the workpiece-side axes (the one
+        carrying the workpiece first), ``b`` (the bed), the tool-side axes (from the bed out),
+        an optional ``s`` and ``t``; axes ``X Y Z`` (linear) and ``A B C`` (rotary about x, y,
+        z), each at most once, separated by spaces (or written without spaces, ``wCAbYXZt``);
+        a trailing prime (``C'``) is allowed and ignored.
+
+    Returns
+    -------
+    Topology
+        ``work`` and ``tool`` axes, each listed from the bed outwards.
+
+    Raises
+    ------
+    ValueError
+        For an unknown letter, a missing or repeated ``w``, ``b`` or ``t``, a repeated axis or
+        no axis, with the grammar in the message.
+    """
     if not isinstance(text, str):
         raise TypeError(f"topology must be a string, got {type(text).__name__}; {_GRAMMAR}")
     tokens = text.split() if re.search(r"\s", text.strip()) else list(text.strip())
@@ -358,19 +379,44 @@ def _apply(v, r, t):
 class ChainMachine(Machine):
     """A machine built from a topology and an error placement (see the module docstring).
 
-    ``topology``: a string (:func:`parse_topology`); ``catalogue``: the errors
-    (:class:`mtaccuracy.errors.ErrorSpec`, column order); ``placements``: symbol ->
-    :class:`Placement`; ``form``: the block form (:data:`FORMS`); ``tilt``: ``exact`` or
-    ``first_order`` tilt of a direction; ``tool_offsets``: pose names of the tool offset, one
-    (along the tool axis z) or three (x, y, z in the last tool-side frame); ``orientation``:
-    ``rotation_vector`` (Rx, Ry, Rz: ``vee(R_actual R_ideal^T)``) or ``tool_axis`` (Vx, Vy,
-    Vz: the change of the tool-axis direction, the third column of R); ``pivots``: rotary axis
-    -> a point (mm) its axis passes through, in the frame it rides on (default the origin);
-    ``travels``: pose name (x, y, z lower case, A, B, C) -> (low, high) (mm or rad), for
-    atlases and checks; ``axis_names``: the order of the axes' pose names (messages, tables;
-    default the topology's); ``chunk``: samples
-    per batch (4096: every row of a batch stays in cache; the batch buffers are allocated
-    once per call, so an instance is not to be shared between threads).
+    Parameters
+    ----------
+    topology : str
+        The chain from the workpiece to the tool (:func:`parse_topology`).
+    catalogue : sequence of :class:`mtaccuracy.errors.ErrorSpec`
+        The errors; their order is the column order of every ``(n, n_errors)`` error array.
+    placements : mapping of str to :class:`Placement`
+        Where each error (by symbol) enters the chain.
+    name : str
+        The machine's name.
+    form : {"euler", "screw", "rodrigues", "first_order"}
+        The rigid motion of a block of errors ``(d, w)``: ``[Rx Ry Rz | d]``, ``exp`` of the
+        twist, ``[exp([w]x) | d]`` or ``[I + [w]x | d]``.
+    tilt : {"exact", "first_order"}
+        How a squareness error ``w`` tilts a linear axis' direction: ``exp([w]x) e_k`` or
+        ``e_k + w x e_k``.
+    tool_offsets : sequence of str
+        Pose names of the tool offset: one (along the tool axis z) or three (x, y, z in the
+        last tool-side frame), mm.
+    orientation : {"rotation_vector", "tool_axis"}
+        The orientation part of the pose error: ``vee(R_actual R_ideal^T)`` (columns
+        ``Rx Ry Rz``) or the change of the tool-axis direction (``Vx Vy Vz``), rad.
+    pivots : mapping of str to (3,) array, optional
+        Rotary axis -> a point its axis line passes through, mm, in the frame it rides on
+        (default: the origin).
+    travels : mapping of str to (float, float), optional
+        Pose name (``x y z`` lower case, ``A B C``) -> (low, high), mm or rad.
+    chunk : int
+        Samples per batch (4096: every row of a batch stays in cache; the batch buffers are
+        allocated once per call, so an instance is not to be shared between threads).
+    axis_names : sequence of str, optional
+        The order of the axes' pose names (messages, tables); default the topology's.
+
+    Notes
+    -----
+    The error motions are ISO 230-1's (six per axis, in the frame after the motion), the
+    location errors ISO 230-7's (the axis average line; before the motion, or after it in
+    Zheng et al.'s reading of their Eq. 9).
     """
 
     def __init__(self, topology: str, catalogue: Sequence, placements: Mapping[str, Placement],
@@ -638,9 +684,23 @@ class ChainMachine(Machine):
         return r, t
 
     def pose_error(self, errors, pose: Mapping) -> np.ndarray:
-        """(n, 6): tool-tip position error (mm) in the workpiece frame, then the orientation
-        error: the rotation vector ``vee(R_actual R_ideal^T)`` (``rotation_vector``) or the
-        change of the tool-axis direction (``tool_axis``), rad."""
+        """The pose error of the tool in the workpiece frame, actual minus ideal.
+
+        Parameters
+        ----------
+        errors : (n, n_errors) array
+            Error values in mm and rad, columns in catalogue order.
+        pose : mapping of str to float or (n,) array
+            Axis positions (mm, rad) and tool offsets (mm); a pose the same for every sample
+            is evaluated once for the ideal chain.
+
+        Returns
+        -------
+        (n, 6) array
+            Tool-tip position error ``Px, Py, Pz`` (mm), then the orientation error (rad): the
+            rotation vector ``vee(R_actual R_ideal^T)`` or the change of the tool-axis
+            direction, as ``self.components`` names them.
+        """
         e = self.check_errors(errors)
         n = e.shape[0]
         p = self.check_pose(pose, n)
@@ -921,11 +981,28 @@ def redundant_location_errors(machine: ChainMachine, n_poses: int = 64, seed=0,
 
 def iso_machine(topology: str, *, name: str = "iso_machine", keep_redundant: bool = False,
                 **options) -> ChainMachine:
-    """A machine of any topology with its ISO 230-1 catalogue (:func:`iso_catalogue`), the
-    redundant location errors removed (:func:`redundant_location_errors`; the removed ones
-    and why are in ``machine.removed``).  Location errors sit before their axis' motion
-    (ISO 230-7), squareness as tilts; ``options`` go to :class:`ChainMachine` (default
-    ``form="euler"``, ``orientation="tool_axis"`` when the topology has a rotary axis)."""
+    """A machine of any topology with its ISO 230-1 / 230-7 catalogue.
+
+    Parameters
+    ----------
+    topology : str
+        The chain (:func:`parse_topology`).
+    name : str
+        The machine's name.
+    keep_redundant : bool
+        Keep the location errors :func:`redundant_location_errors` finds (default: removed).
+    **options
+        Passed to :class:`ChainMachine` (``form`` default ``"euler"``; ``orientation``
+        default ``"tool_axis"`` when the topology has a rotary axis, else
+        ``"rotation_vector"``; ``pivots``, ``travels``, ``tool_offsets`` ...).
+
+    Returns
+    -------
+    ChainMachine
+        With ``machine.removed``: the (symbol, reason) of every removed location error.
+        Location errors sit before their axis' motion (ISO 230-7), squareness errors tilt the
+        directions of the linear axes (:func:`iso_catalogue`).
+    """
     cat, placements = iso_catalogue(topology)
     topo = parse_topology(topology)
     options.setdefault("orientation", "tool_axis" if any(a in ROTARY for a in topo.axes)
