@@ -247,6 +247,41 @@ def _harmonic_list(ks, limit: int = 12) -> str:
             + ")")
 
 
+def _check_options(first_harmonic, rcond):
+    if first_harmonic not in ("eccentricity", "radial"):
+        raise ValueError(f"first_harmonic must be 'eccentricity' or 'radial', "
+                         f"got {first_harmonic!r}")
+    if not (0 < rcond < 1):
+        raise ValueError(f"rcond must be in (0, 1), got {rcond!r}")
+
+
+def _check_max_harmonic(max_harmonic, n: int) -> int:
+    """``max_harmonic`` (default N/2) checked to be an integer in 1..N/2."""
+    if max_harmonic is None:
+        return n // 2
+    if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
+            or not 1 <= max_harmonic <= n // 2:
+        raise ValueError(f"max_harmonic must be an integer in 1..N/2 = {n // 2}, "
+                         f"got {max_harmonic!r}")
+    return int(max_harmonic)
+
+
+def _set_aside(keep, n, max_harmonic, allow_cancelled, describe, hint, stacklevel):
+    """The harmonics 0..N/2 not solved (``~keep``); those besides the first and up to
+    ``max_harmonic`` are refused (``ValueError``: ``describe(list) + hint``) or, with
+    ``allow_cancelled``, named in a :class:`CancelledHarmonicsWarning`."""
+    harm = np.arange(n // 2 + 1)
+    cancelled = harm[~keep[: n // 2 + 1]]
+    extra = cancelled[(cancelled != 1) & (cancelled <= max_harmonic)]
+    if extra.size:
+        msg = describe(_harmonic_list(extra))
+        if not allow_cancelled:
+            raise ValueError(msg + hint)
+        warnings.warn(msg + " (allow_cancelled=True: proceeding without them)",
+                      CancelledHarmonicsWarning, stacklevel=stacklevel)
+    return cancelled
+
+
 def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
                      rcond: float = 1e-9, check: bool = True,
                      allow_cancelled: bool = False, max_harmonic: int | None = None) -> Separation:
@@ -266,18 +301,9 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
     harmonic the signals can contain (e.g. after :func:`lowpass`); a cancelled harmonic above it
     loses nothing and is set aside without complaint.
     """
-    if first_harmonic not in ("eccentricity", "radial"):
-        raise ValueError(f"first_harmonic must be 'eccentricity' or 'radial', "
-                         f"got {first_harmonic!r}")
-    if not (0 < rcond < 1):
-        raise ValueError(f"rcond must be in (0, 1), got {rcond!r}")
+    _check_options(first_harmonic, rcond)
     y, n, phi4, w, p = _check_signals(signals, phi, w, check)
-    if max_harmonic is None:
-        max_harmonic = n // 2
-    if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
-            or not 1 <= max_harmonic <= n // 2:
-        raise ValueError(f"max_harmonic must be an integer in 1..N/2 = {n // 2}, "
-                         f"got {max_harmonic!r}")
+    max_harmonic = _check_max_harmonic(max_harmonic, n)
 
     # Profile without the cancelled harmonics: pseudo-inverse of the circulant matrix by FFT.
     big_y = np.einsum("l,...ln->...n", w, y)
@@ -287,19 +313,13 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
     inv = np.zeros(n, dtype=complex)
     inv[keep] = 1.0 / lam[keep]
     r0 = np.fft.ifft(np.fft.fft(big_y, axis=-1) * inv, axis=-1).real
-    harm = np.arange(n // 2 + 1)
-    cancelled = harm[~keep[: n // 2 + 1]]
-    extra = cancelled[(cancelled != 1) & (cancelled <= max_harmonic)]
-    if extra.size:
-        msg = (f"the layout (probe positions {p.tolist()} of N = {n}, weights "
-               f"{np.round(w, 4).tolist()}) cancels harmonic(s) {_harmonic_list(extra)} besides "
-               f"the first (|Lambda_k| <= rcond * max|Lambda| = {rcond:g} * "
-               f"{np.abs(lam).max():.4g}): the separated profile would lack them")
-        if not allow_cancelled:
-            raise ValueError(msg + "; move a probe or change a3, or pass allow_cancelled=True "
-                             "to separate without them")
-        warnings.warn(msg + " (allow_cancelled=True: proceeding without them)",
-                      CancelledHarmonicsWarning, stacklevel=3)
+    cancelled = _set_aside(
+        keep, n, max_harmonic, allow_cancelled, stacklevel=4,
+        describe=lambda ks: (f"the layout (probe positions {p.tolist()} of N = {n}, weights "
+                             f"{np.round(w, 4).tolist()}) cancels harmonic(s) {ks} besides the "
+                             f"first (|Lambda_k| <= rcond * max|Lambda| = {rcond:g} * "
+                             f"{np.abs(lam).max():.4g}): the separated profile would lack them"),
+        hint="; move a probe or change a3, or pass allow_cancelled=True to separate without them")
 
     profile, z, cd, residual_rms = _motion_and_first_harmonic(y, r0, phi4, p, first_harmonic)
     return Separation(profile=profile, dx=z.real, dy=z.imag, profile_no_first=r0,
@@ -389,11 +409,7 @@ def separate_least_squares(signals, phi, *, first_harmonic: str = "eccentricity"
     result as :func:`separate_details` (``eigen`` holds the smallest singular value of each
     bin's design, ``rank`` the number of bins solved in full); ``signals`` may have any number
     L >= 3 of probes, ``phi`` their L angles (or L - 1 with phi_0 = 0)."""
-    if first_harmonic not in ("eccentricity", "radial"):
-        raise ValueError(f"first_harmonic must be 'eccentricity' or 'radial', "
-                         f"got {first_harmonic!r}")
-    if not (0 < rcond < 1):
-        raise ValueError(f"rcond must be in (0, 1), got {rcond!r}")
+    _check_options(first_harmonic, rcond)
     y = np.asarray(signals, dtype=float)
     if y.ndim < 2 or y.shape[-2] < 3:
         raise ValueError(f"signals must have shape (..., L, N) with L >= 3 probes, got {y.shape}")
@@ -412,27 +428,18 @@ def separate_least_squares(signals, phi, *, first_harmonic: str = "eccentricity"
         raise ValueError("every probe angle must be 2 pi p / N with integer p (N = "
                          f"{n}); the nearest positions are {np.round(pos).astype(int).tolist()}")
     p = np.round(pos).astype(int) % n
-    if max_harmonic is None:
-        max_harmonic = n // 2
-    if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
-            or not 1 <= max_harmonic <= n // 2:
-        raise ValueError(f"max_harmonic must be an integer in 1..N/2 = {n // 2}, "
-                         f"got {max_harmonic!r}")
+    max_harmonic = _check_max_harmonic(max_harmonic, n)
     a = _ls_design(phi, np.arange(n))                                    # (N, L, 3)
     sv = np.linalg.svd(a, compute_uv=False)
     keep = sv[:, -1] > rcond * sv[:, 0]
     keep[[1, n - 1]] = False                             # the first harmonic: never separable
-    harm = np.arange(n // 2 + 1)
-    cancelled = harm[~keep[: n // 2 + 1]]
-    extra = cancelled[(cancelled != 1) & (cancelled <= max_harmonic)]
-    if extra.size:
-        msg = (f"the layout (probe positions {p.tolist()} of N = {n}) cannot separate "
-               f"harmonic(s) {_harmonic_list(extra)} besides the first (the profile harmonic "
-               f"reads on the probes as a motion would): the separated profile would lack them")
-        if not allow_cancelled:
-            raise ValueError(msg + "; move a probe, or pass allow_cancelled=True")
-        warnings.warn(msg + " (allow_cancelled=True: proceeding without them)",
-                      CancelledHarmonicsWarning, stacklevel=2)
+    cancelled = _set_aside(
+        keep, n, max_harmonic, allow_cancelled, stacklevel=3,
+        describe=lambda ks: (f"the layout (probe positions {p.tolist()} of N = {n}) cannot "
+                             f"separate harmonic(s) {ks} besides the first (the profile harmonic "
+                             f"reads on the probes as a motion would): the separated profile "
+                             f"would lack them"),
+        hint="; move a probe, or pass allow_cancelled=True")
     pinv = np.zeros((n, 3, n_probes), dtype=complex)
     pinv[keep] = np.linalg.pinv(a[keep])
     spec = np.fft.fft(y, axis=-1)                                        # (..., L, N)
