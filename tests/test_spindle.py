@@ -497,3 +497,26 @@ def test_least_squares_with_more_probes_and_a_layout_it_cannot_use():
         S.separate_least_squares(y4[:2], S.probe_angles(half, N)[:2])
     with pytest.raises(ValueError, match="integer p"):
         S.separate_least_squares(y4, S.probe_angles(half, N) + 0.01)
+
+
+def test_grid_layout_snaps_to_samples_and_cancelled_harmonics_match_separate():
+    p, phi, w = S.grid_layout(np.r_[S.probe_angles([14, 65, 116], N) + 0.01, 1.953], N)
+    assert p.tolist() == [0, 14, 65, 116] and np.allclose(w, S.full_weights(phi, 1.953))
+    assert S.cancelled_harmonics(phi, w, N) == []
+    _, ph2, w2 = _half_circle_layout()                      # weights (1, 0, 0, 1): every odd k
+    assert S.cancelled_harmonics(ph2, w2, N) == list(range(3, N // 2, 2))
+    with pytest.raises(ValueError, match="one gene vector"):
+        S.grid_layout(np.zeros((2, 4)), N)
+
+
+def test_measure_separated_counts_revolutions_and_separates_a_clean_signal():
+    rng = np.random.default_rng(5)
+    r = S.lowpass(rng.standard_normal(N), 20)
+    dx, dy = (S.lowpass(v, 20) for v in _motion_without_fundamental(rng))
+    p, phi, w = S.grid_layout(np.r_[S.probe_angles([14, 65, 116], N), 1.953], N)
+    kw = dict(duration_s=1.0, interleave=2, async_sd_600=0.0, async_exponent=1.0, noise_sd=0.0,
+              n_measurements=3, lowpass_harmonic=30, first_harmonic="eccentricity", rng=rng)
+    s, n_rev = S.measure_separated(r, dx, dy, p, phi, w, speed_rpm=600, **kw)
+    assert n_rev == 10 and s.profile.shape == (3, N)
+    assert np.abs(s.profile - r).max() < 1e-9 and np.abs(s.dx - dx).max() < 1e-9
+    assert S.measure_separated(r, dx, dy, p, phi, w, speed_rpm=30, **kw)[1] == 2   # at least one set

@@ -14,11 +14,20 @@ from __future__ import annotations
 
 __all__ = ["PAPER_BOX", "FULL_BOX", "objective_H", "objective_worst", "fitness", "optimal_a3",
            "genes_to_layout", "lower_bound_H", "weights_bound_H", "bound_layout",
-           "worst_case_bound", "equivalent_genes", "canonical_genes", "select_best"]
+           "worst_case_bound", "equivalent_genes", "canonical_genes", "select_best",
+           "grid_layout"]
 
 import numpy as np
 
-from .separation import _DEGENERATE, TWO_PI, _check_n, _raw_weights, _split_phi
+from .separation import (
+    _DEGENERATE,
+    TWO_PI,
+    _check_n,
+    _raw_weights,
+    _split_phi,
+    full_weights,
+    probe_angles,
+)
 
 #: The search box the paper recommends (Section 3, end) and within which every Table 1 layout lies:
 #: phi_1 in [0, pi/4], phi_2 in [pi/4, 3 pi/2], phi_3 in [3 pi/2, 2 pi]; a_3 is our assumption.
@@ -303,3 +312,17 @@ def select_best(h, x, bounds=None, rel_tol: float = 1e-9):
     canon = canonical_genes(x, bounds)
     first = _lexicographic_first(canon, tied)
     return first, np.take_along_axis(canon, first[..., None, None], axis=-2)[..., 0, :]
+
+
+def grid_layout(x, n_samples: int):
+    """The layout of genes ``x = (phi_1, phi_2, phi_3, a_3)`` on a sampling grid of ``n_samples``
+    per revolution (the matrix method shifts by whole samples): the probe positions ``p``
+    (4,) with ``p_0 = 0`` and each angle rounded to the nearest sample, their angles
+    ``2 pi p / N`` and the weights ``a_0..a_3`` of Eq. 15 for those angles and ``a_3``."""
+    x = _genes(x)
+    if x.ndim != 1:
+        raise ValueError(f"grid_layout takes one gene vector (4,), got shape {x.shape}")
+    n = _check_n(n_samples)
+    p = np.r_[0, np.round(np.asarray(x[:3]) * n / TWO_PI).astype(int) % n]
+    phi = probe_angles(p, n)
+    return p, phi, full_weights(phi, x[3])

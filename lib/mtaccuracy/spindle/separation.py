@@ -32,7 +32,8 @@ from __future__ import annotations
 __all__ = ["Separation", "CancelledHarmonicsWarning", "probe_angles", "weights", "full_weights",
            "eigenvalues", "transfer", "circulant_matrix", "probe_signals", "separate",
            "separate_details", "separate_least_squares", "least_squares_transfer",
-           "rotation_error", "motion_from_scalar", "MAPPINGS"]
+           "rotation_error", "motion_from_scalar", "MAPPINGS",
+           "cancelled_harmonics"]
 
 import warnings
 from dataclasses import dataclass, field
@@ -515,3 +516,11 @@ def motion_from_scalar(delta, mapping: str = "radial", theta=None):
     if mapping == "x_only":
         return delta, np.zeros_like(delta), lambda dx, dy: np.asarray(dx)
     raise ValueError(f"unknown mapping {mapping!r}; known: {', '.join(MAPPINGS)}")
+
+
+def cancelled_harmonics(phi, w, n_samples: int, rcond: float = 1e-9) -> list[int]:
+    """The harmonics 2..N/2 a layout's weights cancel: ``|Lambda_k| <= rcond * max|Lambda|``,
+    the test of :func:`separate_details` (which refuses such a layout unless told)."""
+    n = _check_n(n_samples)
+    lam = np.abs(eigenvalues(phi, w, np.arange(n)))
+    return [k for k in range(2, n // 2 + 1) if lam[k] <= rcond * lam.max()]

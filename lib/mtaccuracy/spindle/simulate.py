@@ -5,12 +5,12 @@ probe signals with asynchronous error motion and noise sampled over several revo
 
 from __future__ import annotations
 
-__all__ = ["random_profile", "simulate_measurements", "coincidence_ratio"]
+__all__ = ["random_profile", "simulate_measurements", "coincidence_ratio", "measure_separated"]
 
 import numpy as np
 
-from ..roundness import _profile, mz_roundness
-from .separation import TWO_PI, _check_n, probe_angles, probe_signals
+from ..roundness import _profile, lowpass, mz_roundness
+from .separation import TWO_PI, _check_n, probe_angles, probe_signals, separate_details
 
 
 def random_profile(n_samples: int, harmonics, rng, decay: float = 1.0,
@@ -105,3 +105,25 @@ def coincidence_ratio(curves, k: float = 2.0) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         out = np.where(se > 0, rms / (k * se), np.where(rms > 0, np.inf, 0.0))
     return out
+
+
+def measure_separated(profile, dx, dy, positions, phi, w, *, speed_rpm: float, duration_s: float,
+                      interleave: int, async_sd_600: float, async_exponent: float,
+                      noise_sd: float, n_measurements: int, lowpass_harmonic: int,
+                      first_harmonic: str, rng):
+    """One simulated measurement campaign at one spindle speed, separated (Section 3, simulated).
+
+    The revolutions are those of ``duration_s`` at ``speed_rpm``, a whole number of
+    ``interleave`` sets and at least one; the asynchronous motion has standard deviation
+    ``async_sd_600 (speed / 600)^async_exponent``; the signals (:func:`simulate_measurements`,
+    ``n_measurements`` of them) are low-passed to ``lowpass_harmonic`` and separated with the
+    layout ``positions``, ``phi``, ``w`` (:func:`~.separation.separate_details`, told that no
+    harmonic above the cut-off is present).  Returns ``(separation, revolutions)``."""
+    n_rev = max(interleave, int(duration_s * speed_rpm / 60) // interleave * interleave)
+    amp = async_sd_600 * (speed_rpm / 600) ** async_exponent
+    y = simulate_measurements(profile, dx, dy, positions, n_rev=n_rev, interleave=interleave,
+                              async_sd=amp, noise_sd=noise_sd, n_measurements=n_measurements,
+                              rng=rng)
+    s = separate_details(lowpass(y, lowpass_harmonic), phi, w, first_harmonic=first_harmonic,
+                         max_harmonic=lowpass_harmonic)
+    return s, n_rev
