@@ -519,4 +519,4 @@ def test_measure_separated_counts_revolutions_and_separates_a_clean_signal():
     s, n_rev = S.measure_separated(r, dx, dy, p, phi, w, speed_rpm=600, **kw)
     assert n_rev == 10 and s.profile.shape == (3, N)
     assert np.abs(s.profile - r).max() < 1e-9 and np.abs(s.dx - dx).max() < 1e-9
-    assert S.measure_separated(r, dx, dy, p, phi, w, speed_rpm=30, **kw)[1] == 2   # at least one set
+    assert S.measure_separated(r, dx, dy, p, phi, w, speed_rpm=30, **kw)[1] == 2  # one set at least
