@@ -115,17 +115,39 @@ def sample_at_pose(model: Callable[[np.ndarray], np.ndarray], jacobian: np.ndarr
 
 def compare_with_sampling(checks: Sequence[SampledIndices], names: Sequence[str],
                           outputs: Sequence[str], level: float = 0.95):
-    """Compare every sampled index with the closed form at once: a difference is allowed the
-    95 % bootstrap half-width widened to a family-wise ``level`` over all compared indices
-    (Bonferroni: ``z(1 - (1 - level) / 2 / m) / z(0.975)``, m the number compared) plus twice
-    the centred remainder of its output (the first-order bound on what the linear model
-    misses).  Outputs without a first-order term are not compared.
+    """Compare every sampled total index with the closed form, all at once.
 
-    Returns ``(rows, summary, widen, m)``: ``rows`` per pose, output and error (sampled, its
-    half-width, closed form, difference); ``summary`` per pose and output (largest difference,
-    largest half-width, remainder, the largest ratio of difference to allowance, the sum of the
-    sampled indices: 1 for a linear model, its spread is the sampling error of the variance,
-    common to all indices of the output)."""
+    Parameters
+    ----------
+    checks : sequence of :class:`SampledIndices`
+        One per pose (:func:`sample_at_pose`).
+    names, outputs : sequences of str
+        The inputs (d) and outputs (q), for the tables.
+    level : float
+        The family-wise confidence level.
+
+    Returns
+    -------
+    rows : DataFrame
+        Per pose, output and input: the sampled index, its half-width, the closed form and the
+        difference.
+    summary : DataFrame
+        Per pose and output: the largest difference and half-width, the centred remainder, the
+        largest ratio of difference to allowance, and the sum of the sampled indices (1 for a
+        linear model; its spread is the sampling error of the variance, common to all indices
+        of the output).
+    widen : float
+        The factor on the 95 % half-widths.
+    m : int
+        The number of indices compared.
+
+    Notes
+    -----
+    A difference is allowed its 95 % bootstrap half-width widened to a family-wise ``level``
+    over the m compared indices (Bonferroni: ``z(1 - (1 - level) / 2 / m) / z(0.975)``), plus
+    twice the centred remainder of its output, the first-order bound on what the linear model
+    misses.  Outputs without a first-order term at a pose are not compared.
+    """
     import pandas as pd
 
     if not 0 < level < 1:

@@ -186,10 +186,21 @@ def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
 
 
 def indices_at_poses(jacobian: np.ndarray, var) -> np.ndarray:
-    """Sobol indices (S1 = ST) of the first-order model at each of P fixed poses, (P, d, q),
-    from the Jacobians (P, q, d) and the input variances (d,): ``J_ki^2 var_i / sum_j J_kj^2
-    var_j``, exact for any independent inputs.  The kernel of a pose atlas (one batched
-    expression, no loop over poses); an output with no variance at a pose gets zeros."""
+    """Sobol indices (first order = total) of the first-order model at each of P poses.
+
+    Parameters
+    ----------
+    jacobian : (P, q, d) array
+        d(outputs)/d(inputs) at zero inputs, per pose (e.g. ``machine.linear_jacobian``).
+    var : (d,) array
+        The variances of the independent inputs (any laws).
+
+    Returns
+    -------
+    (P, d, q) array
+        ``J_ki^2 var_i / sum_j J_kj^2 var_j``; an output with no variance at a pose gets zeros.
+        The kernel of a pose atlas: one batched expression, no loop over poses.
+    """
     c = np.asarray(jacobian, dtype=float)
     var = np.asarray(var, dtype=float)
     if c.ndim != 3 or var.shape != c.shape[-1:]:

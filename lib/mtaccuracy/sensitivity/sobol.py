@@ -241,17 +241,37 @@ def sobol_bootstrap(ya, yb, yab, n_boot: int, seed, conf: float = 0.95, chunk: i
 def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarray,
                   chunk: int = 200_000, progress: Callable[[int, int], None] | None = None
                   ) -> tuple[np.ndarray, np.ndarray]:
-    """S1 and ST (D, q) of ``model`` from the designs A and B, streaming: the numbers of
-    :func:`sobol_estimate` on :func:`sobol_evaluate` (equal within rounding; a test checks
-    1e-12) without ever holding ``yab`` (D N q floats: 200 MB for 41 inputs, N = 1e5, six
-    outputs).
+    """First-order and total Sobol indices of ``model``, streaming over the AB runs.
 
-    Every term of the estimators is a sum over rows, so each AB_i block, once run, adds its
-    per-input sums of ``yab_i - ya``, ``(yb - c)(yab_i - ya)`` and ``(yab_i - ya)^2`` and
-    is dropped; ``c`` is the mean of ``ya`` and ``yb`` (the overall mean ``mu``, which needs
-    every run, enters at the end: ``mean((yb - mu) diff) = mean((yb - c) diff) - (mu - c)
-    mean(diff)``, with no cancellation because the outputs are centred).  Memory: A, B, one
-    batch of ``chunk`` runs, ``ya`` and ``yb``.  Arguments as :func:`sobol_evaluate`.
+    The estimators are Saltelli et al. 2010 (first order) and Jansen 1999 (total), on outputs
+    standardised over all N (D + 2) runs, as SALib's ``sobol.analyze``; the numbers equal
+    :func:`sobol_estimate` on :func:`sobol_evaluate` within rounding (a test checks 1e-12)
+    without ever holding ``yab`` (D N q floats: 200 MB for 41 inputs, N = 1e5, six outputs).
+
+    Parameters
+    ----------
+    model : callable
+        ``(m, D)`` inputs to ``(m, q)`` (or ``(m,)``) outputs; must not modify its input (the
+        AB blocks share one buffer).
+    a, b : (N, D) arrays
+        The two independent designs (:func:`base_samples`, mapped to the input laws).
+    chunk : int
+        Model runs per call.
+    progress : callable, optional
+        ``progress(done, total)`` after each call, counting runs.
+
+    Returns
+    -------
+    s1, st : (D, q) arrays
+        First-order and total indices.
+
+    Notes
+    -----
+    Each AB_i batch, once run, adds its per-input sums of ``yab_i - ya``,
+    ``(yb - c)(yab_i - ya)`` and ``(yab_i - ya)^2`` and is dropped; ``c`` is the mean of ``ya``
+    and ``yb``, and the overall mean ``mu`` enters at the end:
+    ``mean((yb - mu) d) = mean((yb - c) d) - (mu - c) mean(d)``, without cancellation because
+    the outputs are centred.  Memory: A, B, one batch of ``chunk`` runs, ``ya`` and ``yb``.
     """
     a, b = _check_ab(a, b)
     n, d = a.shape
