@@ -1044,13 +1044,33 @@ def _read_csv(path, columns, what):
 
 
 def read_axis_table(path, topology: str) -> tuple[dict, dict]:
-    """The travels and pivots of a topology's axes from a CSV with the columns
-    :data:`AXIS_TABLE_COLUMNS`: one row per axis of the topology (``axis`` the letter, X ...
-    C), its travel ``low``, ``high`` in ``unit`` (``mm`` for linear axes, ``deg`` for rotary
-    ones), and for a rotary axis the point its axis line passes through (``pivot_*_mm``, in the
-    frame of the body it rides on; empty means the origin; must be empty for a linear axis).
-    Returns ``(travels, pivots)``: pose name -> (low, high) in mm or rad, rotary axis -> point.
-    Every inconsistency is a ValueError naming the file and the row."""
+    """The travels and rotary pivots of a topology's axes from a CSV file, checked.
+
+    Parameters
+    ----------
+    path : str or Path
+        A CSV with the columns ``axis, low, high, unit, pivot_x_mm, pivot_y_mm, pivot_z_mm``
+        (:data:`AXIS_TABLE_COLUMNS`): one row per axis of the topology; the travel in ``mm``
+        (linear) or ``deg`` (rotary); for a rotary axis a point its axis line passes through,
+        mm, in the frame of the body it rides on (empty: the origin; must be empty for a
+        linear axis).
+    topology : str
+        The machine's topology (:func:`parse_topology`).
+
+    Returns
+    -------
+    travels : dict
+        Pose name (``x y z``, ``A B C``) -> (low, high) in mm or rad.
+    pivots : dict
+        Rotary axis letter -> (3,) point, mm.
+
+    Raises
+    ------
+    ValueError
+        Naming the file and the row, for a missing or extra axis, a repeated axis, a wrong
+        unit, a travel that is not finite with low < high, a pivot on a linear axis, half a
+        pivot, a missing column.
+    """
     topo = parse_topology(topology)
     table = _read_csv(path, AXIS_TABLE_COLUMNS, "axis table")
     where = f"axis table {str(path)!r}"
@@ -1105,11 +1125,31 @@ def read_axis_table(path, topology: str) -> tuple[dict, dict]:
 
 
 def read_ranges(path, machine: ChainMachine) -> np.ndarray:
-    """Bounds (2, n_errors) in mm and rad of independent uniform errors from a CSV with the
-    columns :data:`RANGE_COLUMNS`: one row per error of ``machine``'s catalogue (``symbol``),
-    ``low`` < ``high`` in ``unit`` (um, mm, urad, rad, arcsec, um/m).  A row for an error the
-    catalogue lacks (e.g. a redundant location error, ``machine.removed``), a missing or a
-    repeated error, an unknown unit or a bad range is a ValueError naming the file and row."""
+    """Uniform error ranges of a machine from a CSV file, checked against its catalogue.
+
+    Parameters
+    ----------
+    path : str or Path
+        A CSV with the columns ``symbol, low, high, unit`` (:data:`RANGE_COLUMNS`; others are
+        ignored, ``#`` starts a comment): one row per error of the catalogue; units ``um``,
+        ``mm`` for translations and ``urad``, ``rad``, ``arcsec``, ``um/m`` for angles.
+    machine : ChainMachine
+        Whose catalogue the rows must match.
+
+    Returns
+    -------
+    (2, n_errors) array
+        Low and high bounds in mm and rad, columns in catalogue order.
+
+    Raises
+    ------
+    ValueError
+        Naming the file and the row, for: an error the catalogue lacks (with why, when it is a
+        redundant location error the catalogue removed), a missing or repeated error, an
+        unknown unit or one of the wrong kind, a range that is not finite with low < high.
+    FileNotFoundError
+        When the file does not exist.
+    """
     table = _read_csv(path, RANGE_COLUMNS, "range file")
     where = f"range file {str(path)!r}"
     names = machine.error_names

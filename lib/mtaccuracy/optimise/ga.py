@@ -188,13 +188,35 @@ def run_ga(objective: Callable[[np.ndarray], np.ndarray], encoding, *, n_runs: i
            label: str = "") -> GAResult:
     """Minimise ``objective`` with ``n_runs`` independent runs of a genetic algorithm at once.
 
-    ``objective(x)``: values to minimise ``(runs, pop)`` of decoded genes ``x`` ``(runs, pop,
-    d)``.  ``encoding``: :class:`RealEncoding` or :class:`BinaryEncoding` (or any object with
-    ``initial``, ``decode``, ``crossover``, ``mutate``).  ``fitness``: selection weights from the
-    values (default ``1 / value`` where finite and positive, else 0).  ``adaptive``: None for
-    fixed rates ``pc``, ``pm``; else the keyword arguments of :func:`adaptive_rates`
-    (``pc_max, pc_min, pm_max, pm_min, eq23``).  ``seed`` seeds one ``numpy.random.Generator``
-    (or pass a Generator).  Returns a :class:`GAResult` with the best decoded genes per run."""
+    Parameters
+    ----------
+    objective : callable
+        Decoded genes ``(runs, pop, d)`` to the values to minimise ``(runs, pop)``.
+    encoding : RealEncoding or BinaryEncoding
+        Or any object with ``initial(rng, runs, pop)``, ``decode(geno)``,
+        ``crossover(a, b, cross, rng)`` and ``mutate(child, pm, rng)``.
+    n_runs, pop_size, generations : int
+        Independent runs, individuals per run (even: parents are paired), generations.
+    seed : int or numpy.random.Generator
+        Seeds one generator for everything.
+    fitness : callable, optional
+        Selection weights from the values (default ``1 / value`` where finite and positive,
+        else 0).
+    adaptive : dict, optional
+        None for the fixed rates ``pc``, ``pm``; else the keyword arguments of
+        :func:`adaptive_rates` (``pc_max, pc_min, pm_max, pm_min, eq23``): ``Pc`` per pair from
+        the fitter parent, ``Pm`` per child from its own parent (Yang et al. 2021, Eqs. 22-23).
+    pc, pm : float
+        The fixed crossover probability per pair and mutation probability per gene or bit.
+    label : str
+        Stored in the result.
+
+    Returns
+    -------
+    GAResult
+        The best decoded genes ``(runs, d)`` and values ``(runs,)``, the best-so-far history
+        ``(generations + 1, runs)`` and the mean rates used per generation.
+    """
     for name, v, low in (("n_runs", n_runs, 1), ("pop_size", pop_size, 4),
                          ("generations", generations, 1)):
         if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
