@@ -108,3 +108,12 @@ def output_dir(path: str | os.PathLike) -> Path:
     p = Path(staging) if staging else resolve_output(path)
     p.mkdir(parents=True, exist_ok=True)
     return p
+
+
+def input_file(name, what: str) -> Path:
+    """An input file a notebook parameter names: relative paths are taken from the
+    repository root; a missing file is a ``FileNotFoundError`` naming the parameter."""
+    path = Path(name) if Path(name).is_absolute() else ROOT / name
+    if not path.exists():
+        raise FileNotFoundError(f"{what} {name!r} not found")
+    return path

@@ -307,7 +307,7 @@ def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, star
     """
     import pandas as pd
 
-    from ..sensitivity.sobol import linear_indices
+    from ..sensitivity.linear import linear_indices
 
     free = tuple(free)
     fixed = dict(fixed or {})
@@ -367,7 +367,7 @@ def index_invariants(machine: ACDoubleTurntable, sd, rows, cols, poses: Mapping,
     """
     import pandas as pd
 
-    from ..sensitivity.sobol import linear_indices
+    from ..sensitivity.linear import linear_indices
 
     rows, cols = np.asarray(rows), np.asarray(cols)
     s = linear_indices(machine.linear_jacobian(poses), sd)[:, rows, cols]   # (P, entries)
@@ -430,7 +430,7 @@ def fit_pose_average_to_indices(machine: ACDoubleTurntable, sd, target, rows, co
     and ``status``."""
     import pandas as pd
 
-    from ..sensitivity.sobol import linear_indices
+    from ..sensitivity.linear import linear_indices
 
     starts = np.asarray(starts, dtype=float)
     if starts.ndim != 3 or starts.shape[2] != 5:

@@ -227,26 +227,13 @@ def _check_placements(topology: Topology, catalogue, placements) -> list[Placeme
 # Small numerical kernels on rows (structure of arrays): V is (m, 3, k), R is 3x3 of rows
 # ------------------------------------------------------------------------------------------
 
-def _cos_sin(x):
-    """cos and sin; below 1e-3 rad (every geometric error) by Taylor polynomials whose
-    truncation error is under half an ulp: to x^2 and x^3 below 1e-4 rad (errors < x^4/24 <
-    5e-18 and x^5/120 < 1e-22), to x^4 and x^5 below 1e-3 rad (< x^6/720 and x^7/5040): plain
-    arithmetic, so the same rounding on every CPU (unlike vectorised sin and cos), and several
-    times faster; numpy's above."""
-    x = np.asarray(x, dtype=float)
-    m = np.abs(x).max() if x.size else 0.0
-    if m >= 1e-3:
-        return np.cos(x), np.sin(x)
-    x2 = x * x
-    if m < 1e-4:
-        return 1.0 - 0.5 * x2, x * (1.0 - x2 / 6.0)
-    return 1.0 - 0.5 * x2 * (1.0 - x2 / 12.0), x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0))
-
-
 def _cos_sin_into(x, c, s, x2):
-    """:func:`_cos_sin` of the rows ``x`` into the buffers ``c`` and ``s`` (``x2``: scratch
-    of x's shape), in place: no temporaries the size of the chunk (they would be allocated
-    and returned to the system for every chunk)."""
+    """cos and sin of ``x`` into the buffers ``c`` and ``s`` (``x2``: scratch of x's shape),
+    in place: no temporaries the size of a chunk.  Below 1e-3 rad (every geometric error) by
+    Taylor polynomials whose truncation error is under half an ulp: to x^2 and x^3 below
+    1e-4 rad (errors < x^4/24 < 5e-18 and x^5/120 < 1e-22), to x^4 and x^5 below 1e-3 rad
+    (< x^6/720 and x^7/5040): plain arithmetic, so the same rounding on every CPU (unlike
+    vectorised sin and cos), and several times faster; numpy's above."""
     m = max(x.max(initial=0.0), -x.min(initial=0.0))
     if m >= 1e-3:
         np.cos(x, out=c)
@@ -275,6 +262,15 @@ def _cos_sin_into(x, c, s, x2):
     s *= x
 
 
+def _cos_sin(x):
+    """cos and sin of ``x`` by :func:`_cos_sin_into`; a scalar gives Python floats (the
+    operations of one pose then multiply by scalars, the fast case)."""
+    a = np.atleast_1d(np.asarray(x, dtype=float))
+    c, s, x2 = np.empty_like(a), np.empty_like(a), np.empty_like(a)
+    _cos_sin_into(a, c, s, x2)
+    return (float(c[0]), float(s[0])) if np.ndim(x) == 0 else (c, s)
+
+
 def _exp_coefficients(t2):
     """``a = sin t / t``, ``b = (1 - cos t) / t^2``, ``c = (t - sin t) / t^3`` of ``t2 = t^2``:
     series below t = 1e-3 (error < 1e-29), sin and cos above."""
@@ -290,27 +286,10 @@ def _exp_coefficients(t2):
     return a, b, c
 
 
-def _rot_elem(axis: int, c, s):
-    """Rotation about coordinate ``axis`` as a 3x3 nested list of rows (or scalars)."""
-    one, zero = 1.0, 0.0
-    if axis == 0:
-        return [[one, zero, zero], [zero, c, -s], [zero, s, c]]
-    if axis == 1:
-        return [[c, zero, s], [zero, one, zero], [-s, zero, c]]
-    return [[c, -s, zero], [s, c, zero], [zero, zero, one]]
-
-
-def _matmul(r, q):
-    """Product of two 3x3 nested lists of rows/scalars, in a fixed order."""
-    return [[r[i][0] * q[0][j] + r[i][1] * q[1][j] + r[i][2] * q[2][j] for j in range(3)]
-            for i in range(3)]
-
-
 def _rotation(form: str, w):
-    """The 3x3 (nested list of rows) of a block's rotation parameters ``w`` (3 rows)."""
-    if form == "euler":
-        cs = [_cos_sin(v) for v in w]
-        return _matmul(_matmul(_rot_elem(0, *cs[0]), _rot_elem(1, *cs[1])), _rot_elem(2, *cs[2]))
+    """The 3x3 (nested list of rows) of a block's rotation parameters ``w`` (3 rows), forms
+    ``first_order``, ``rodrigues`` and ``screw`` (``euler`` blocks are applied as elementary
+    rotations, :meth:`ChainMachine._ops`)."""
     wx, wy, wz = w
     if form == "first_order":
         return [[1.0, -wz, wy], [wz, 1.0, -wx], [-wy, wx, 1.0]]
@@ -356,20 +335,8 @@ def _inverse(form: str, r, t, w):
 
 
 def _cross_axis1(u, v):
-    """Cross products along axis 1 of (E, 3, ...) arrays (broadcast), written out."""
-    return np.stack([u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1], u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
-                     u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]], axis=1)
-
-
-def _apply(v, r, t):
-    """``v`` (m, 3, k) -> R v, with t added to the point row 0 (r: 3x3 of rows/scalars, t: 3
-    rows/scalars or None)."""
-    out = np.empty_like(v)
-    for i in range(3):
-        out[:, i] = r[i][0] * v[:, 0] + r[i][1] * v[:, 1] + r[i][2] * v[:, 2]
-        if t is not None:
-            out[0, i] += t[i]
-    return out
+    """:func:`_cross` along axis 1 of (E, 3, ...) arrays (broadcast)."""
+    return np.stack(_cross(np.moveaxis(u, 1, 0), np.moveaxis(v, 1, 0)), axis=1)
 
 
 # ------------------------------------------------------------------------------------------
@@ -466,8 +433,6 @@ class ChainMachine(Machine):
             raise ValueError(f"travels given for {unknown}, not pose names of the axes "
                              f"({', '.join(self.axes)})")
         self.chunk = int(chunk)
-        self._trig = None
-        self._work = {}
         self._blocks = {(a, s): _Block() for a in self.topology.axes for s in SLOTS}
         for j, p in enumerate(self.placements):
             b = self._blocks[(p.axis, p.slot)]
@@ -501,15 +466,6 @@ class ChainMachine(Machine):
         return list(reversed(work)) + tool
 
     # -- evaluation ------------------------------------------------------------------------
-    def _block_rows(self, e, axis, slot, k):
-        b = self._blocks[(axis, slot)]
-        if not b.cols:
-            return None
-        rows = [np.zeros(k) for _ in range(6)]
-        for j, c, s in zip(b.cols, b.comps, b.signs, strict=True):
-            rows[c] = e[j] if s == 1.0 else s * e[j]
-        return rows[:3], rows[3:]
-
     def _direction(self, e, axis, k):
         """The (possibly tilted) direction of a linear axis: 3 rows or scalars."""
         unit = [0.0, 0.0, 0.0]
@@ -527,33 +483,11 @@ class ChainMachine(Machine):
         wwxe = _cross(w, wxe)
         return [unit[i] + a * wxe[i] + bb * wwxe[i] for i in range(3)]
 
-    def _factor(self, e, p, side, axis, slot, k):
-        """(R, t, w) of one factor (w: rotation parameters, for the first-order inverse)."""
-        if slot == "move":
-            q = p[self._axis_pose[axis]]
-            if axis in LINEAR:
-                sign = -1.0 if side < 0 else 1.0
-                d = self._direction(e, axis, k)
-                return None, [d[i] * (sign * q) for i in range(3)], None
-            c, s = _cos_sin(q)
-            r = _rot_elem(DIRECTION[axis], c, s)
-            piv = self.pivots.get(axis)
-            if piv is None:
-                return r, None, None
-            t = [piv[i] - (r[i][0] * piv[0] + r[i][1] * piv[1] + r[i][2] * piv[2])
-                 for i in range(3)]
-            return r, t, None
-        rows = self._block_rows(e, axis, slot, k)
-        if rows is None:
-            return None
-        d, w = rows
-        r, t = _block_transform(self.form, d, w)
-        return r, t, w
-
-    def _ops(self, e, p, side, axis, slot, k):
+    def _ops(self, e, p, side, axis, slot, k, trig=None):
         """The factor as operations on the carried rows, in the order they apply: ``("t",
         [3 rows or None])`` adds to the point, ``("r", i, c, s)`` rotates about coordinate i,
-        ``("m", R)`` multiplies by a 3x3 of rows; inverted for the workpiece side."""
+        ``("m", R)`` multiplies by a 3x3 of rows; inverted for the workpiece side.  ``trig``:
+        error column -> (cos, sin) rows of every euler-block angle."""
         if slot == "move":
             q = p[self._axis_pose[axis]]
             if axis in LINEAR:
@@ -579,11 +513,10 @@ class ChainMachine(Machine):
             else:
                 w[c - 3] = val
         if self.form == "euler":      # [Rx Ry Rz | d]: Rz first, then Ry, Rx, then + d
-            trig = self._trig if self._trig is not None else {}
             rots = []
             for j, c, sg in zip(b.cols, b.comps, b.signs, strict=True):
                 if c >= 3:
-                    cj, sj = trig[j] if j in trig else _cos_sin(e[j])
+                    cj, sj = trig[j]
                     rots.append((c - 3, ("r", c - 3, cj, sj if sg == 1.0 else -sj)))
             rots = [op for _, op in sorted(rots, key=lambda t: -t[0])]
             if side > 0:
@@ -625,31 +558,29 @@ class ChainMachine(Machine):
                 v[:] = [r[i][0] * v0 + r[i][1] * v1 + r[i][2] * v2 for i in range(3)]
         return v
 
-    def _propagate(self, e, p, vecs):
+    def _propagate(self, e, p, vecs, work: dict):
         """Carry ``vecs`` (m, 3, k) (row 0 a point, the others directions) through g_wt;
-        ``e`` (k, n_errors) is read as contiguous rows, one per error."""
+        ``e`` (k, n_errors) is read as contiguous rows, one per error.  ``work``: the buffers
+        of one call, by chunk size (allocated once, not per chunk)."""
         k = e.shape[0]
         cols = self._euler_angles
-        w = self._work.get(k)
-        if w is None:       # buffers for chunks of k samples, kept while pose_error runs
-            w = self._work[k] = (None, np.empty((self.n_errors, k)),
-                                 *(np.empty((len(cols), k)) for _ in range(4)))
-        rows, e_t, ang, c_all, s_all, x2 = w
+        if k not in work:
+            work[k] = (np.empty((self.n_errors, k)),
+                       *(np.empty((len(cols), k)) for _ in range(4)))
+        e_t, ang, c_all, s_all, x2 = work[k]
         e_t[...] = e.T
-        e = e_t
         v = [np.ascontiguousarray(vecs[:, i]) for i in range(3)]
         if v[0].shape[-1] != k:
             v = [np.ascontiguousarray(np.broadcast_to(r, (r.shape[0], k))) for r in v]
         scratch = (np.empty_like(v[0]), np.empty_like(v[0]))
         # cos and sin of every angle of an euler block at once (one call, not one per angle)
-        self._trig = None
+        trig = {}
         if cols:
-            np.take(e, cols, axis=0, out=ang, mode="clip")
+            np.take(e_t, cols, axis=0, out=ang, mode="clip")
             _cos_sin_into(ang, c_all, s_all, x2)
-            self._trig = {j: (c_all[i], s_all[i]) for i, j in enumerate(cols)}
+            trig = {j: (c_all[i], s_all[i]) for i, j in enumerate(cols)}
         for side, axis, slot in reversed(self.factors()):
-            self._run(v, self._ops(e, p, side, axis, slot, k), scratch)
-        self._trig = None
+            self._run(v, self._ops(e_t, p, side, axis, slot, k, trig), scratch)
         return np.stack(v, axis=1)
 
     def _start(self, p, k):
@@ -673,14 +604,14 @@ class ChainMachine(Machine):
             e = np.zeros_like(e)
         r = np.empty((n, 3, 3))
         t = np.empty((n, 3))
+        work = {}
         for s0 in range(0, n, self.chunk):
             sl = slice(s0, s0 + self.chunk)
             es = e[sl]
             ps = {key: val[sl] for key, val in p.items()}
-            v = self._propagate(es, ps, self._start(ps, es.shape[0]))
+            v = self._propagate(es, ps, self._start(ps, es.shape[0]), work)
             t[sl] = v[0].T
             r[sl] = np.moveaxis(v[1:], 2, 0).transpose(0, 2, 1)
-        self._work.clear()
         return r, t
 
     def pose_error(self, errors, pose: Mapping) -> np.ndarray:
@@ -705,6 +636,7 @@ class ChainMachine(Machine):
         n = e.shape[0]
         p = self.check_pose(pose, n)
         out = np.empty((n, 6))
+        work = {}
         want_frame = self.orientation == "rotation_vector"
         # one pose for every sample: scalars (cheaper operations) and the ideal chain once
         one = n > 0 and all(bool((val == val[0]).all()) for val in p.values())
@@ -713,7 +645,7 @@ class ChainMachine(Machine):
             start = self._start(p, 1)
             if not want_frame:
                 start = start[[0, 3]]
-            ide = self._propagate(np.zeros((1, e.shape[1])), p, start)
+            ide = self._propagate(np.zeros((1, e.shape[1])), p, start, work)
         for s0 in range(0, n, self.chunk):
             sl = slice(s0, s0 + self.chunk)
             es = e[sl]
@@ -722,9 +654,9 @@ class ChainMachine(Machine):
             start = self._start(ps, k)
             if not want_frame:
                 start = start[[0, 3]]
-            act = self._propagate(es, ps, start)
+            act = self._propagate(es, ps, start, work)
             if not one:
-                ide = self._propagate(np.zeros_like(es), ps, start)
+                ide = self._propagate(np.zeros_like(es), ps, start, work)
             out[sl, :3] = (act[0] - ide[0]).T
             if want_frame:
                 # vee of the skew part of R_a R_i^T = sum_j a_j i_j^T (a_j, i_j the columns)
@@ -735,7 +667,6 @@ class ChainMachine(Machine):
                 out[sl, 5] = 0.5 * (m[1][0] - m[0][1])
             else:
                 out[sl, 3:] = (act[1] - ide[1]).T
-        self._work.clear()
         return out
 
     def transforms(self, errors, pose: Mapping):
@@ -789,38 +720,30 @@ class ChainMachine(Machine):
         zero_e = np.zeros((self.n_errors, n))        # errors as rows, one per error
         seq = self.factors()
         # forward: rotation of everything before each factor, (n, 3, 3); only the rotary
-        # motions turn (every other factor is a translation or, at zero errors, identity)
+        # motions turn (every other factor is a translation or, at zero errors, identity):
+        # their rotation is their operations applied to the three basis vectors
         before = []
         rot = np.broadcast_to(np.eye(3), (n, 3, 3))
         for side, axis, slot in seq:
             before.append(rot)
             if slot == "move" and axis in ROTARY:
-                r, _, _ = self._factor(zero_e, p, side, axis, slot, n)
-                m3 = np.empty((n, 3, 3))
+                basis = [np.zeros((4, n)) for _ in range(3)]    # row 0 a point, 1-3 the axes
                 for i in range(3):
-                    for j in range(3):
-                        m3[:, i, j] = r[j][i] if side < 0 else r[i][j]
-                rot = matmul3(rot, m3)
-        # backward: tip and tool axis after each factor (in that factor's frame)
+                    basis[i][1 + i] = 1.0
+                scratch = (np.empty((4, n)), np.empty((4, n)))
+                self._run(basis, self._ops(zero_e, p, side, axis, slot, n), scratch)
+                rot = matmul3(rot, np.stack([b[1:] for b in basis]).transpose(2, 0, 1))  # [i, j]
+        # backward: tip and tool axis after each factor (in that factor's frame); only the
+        # motions move them at zero errors
         after = [None] * len(seq)
-        v = self._start(p, n)[[0, 3]]
+        start = self._start(p, n)[[0, 3]]
+        v = [np.ascontiguousarray(start[:, i]) for i in range(3)]
+        scratch = (np.empty_like(v[0]), np.empty_like(v[0]))
         for i in range(len(seq) - 1, -1, -1):
-            after[i] = v
+            after[i] = np.stack(v, axis=1)
             side, axis, slot = seq[i]
-            if slot != "move":
-                continue
-            r, t, w = self._factor(zero_e, p, side, axis, slot, n)
-            if side < 0:
-                if r is None:
-                    t = [-ti for ti in t]
-                else:
-                    r, t = _inverse("euler", r, t if t is not None else [0.0] * 3, w)
-            if r is None:
-                v = v.copy()
-                for j in range(3):
-                    v[0, j] += t[j]
-            else:
-                v = _apply(v, r, t)
+            if slot == "move":
+                self._run(v, self._ops(zero_e, p, side, axis, slot, n), scratch)
         pos, kind, unit, ek, scale, tilt_axis = self._jacobian_plan()
         ra = np.stack(before)                                     # (F, n, 3, 3)
         aft = np.stack(after)                                     # (F, 2, 3, n)

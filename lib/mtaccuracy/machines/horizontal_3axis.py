@@ -191,13 +191,6 @@ class Horizontal3Axis(ChainMachine):
         return self.first_order_jacobian(single)[0]
 
 
-def _linear_parts(machine: Horizontal3Axis, bounds, components: int):
-    """Means and variances (21,) of the uniform errors on ``bounds`` (2, 21)."""
-    from ..sensitivity import linear as _linear
-
-    return _linear.uniform_moments(bounds, machine.n_errors)
-
-
 def linear_sobol_indices(machine: Horizontal3Axis, bounds, pose: Mapping | None = None,
                          pose_bounds: Mapping | None = None, components: int = 3
                          ) -> tuple[np.ndarray, np.ndarray]:
@@ -231,7 +224,7 @@ def linear_sobol_indices_batch(machine: Horizontal3Axis, bounds, poses: Mapping 
     T x 2^k quadrature poses."""
     from ..sensitivity import linear as _linear
 
-    mean, var = _linear_parts(machine, bounds, components)
+    mean, var = _linear.uniform_moments(bounds, machine.n_errors)
     return _linear.pose_box_indices(machine.first_order_jacobian, mean, var, poses, pose_bounds,
                                     components, nodes=2,
                                     names=machine.axes + machine.tool_offsets,
@@ -259,5 +252,5 @@ def linear_indices_at_poses(machine: Horizontal3Axis, bounds, poses: Mapping,
     A component with no variance at a pose gets zeros."""
     from ..sensitivity import linear as _linear
 
-    _, var = _linear_parts(machine, bounds, components)
+    _, var = _linear.uniform_moments(bounds, machine.n_errors)
     return _linear.indices_at_poses(machine.first_order_jacobian(poses)[:, :components], var)
