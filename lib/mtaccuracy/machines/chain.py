@@ -375,7 +375,7 @@ class ChainMachine(Machine):
         Pose name (``x y z`` lower case, ``A B C``) -> (low, high), mm or rad.
     chunk : int
         Samples per batch (4096: every row of a batch stays in cache; the batch buffers are
-        allocated once per call, so an instance is not to be shared between threads).
+        allocated once per call).
     axis_names : sequence of str, optional
         The order of the axes' pose names (messages, tables); default the topology's.
 
@@ -442,6 +442,8 @@ class ChainMachine(Machine):
         self._euler_angles = sorted(
             j for (_, slot), b in self._blocks.items() if form == "euler" and slot != "tilt"
             for j, c in zip(b.cols, b.comps, strict=True) if c >= 3)
+        self._factors = self._build_factors()
+        self._plan = self._build_plan()
 
     # -- description -----------------------------------------------------------------------
     def describe(self) -> str:
@@ -450,8 +452,6 @@ class ChainMachine(Machine):
     def factors(self) -> list[tuple[int, str, str]]:
         """The chain in output order as (side, axis, slot): the workpiece side inverted (its
         factors outermost-last), then the tool side; slot ``move`` is the nominal motion."""
-        if getattr(self, "_factors", None) is None:
-            self._factors = self._build_factors()
         return list(self._factors)
 
     def _build_factors(self):
@@ -676,12 +676,10 @@ class ChainMachine(Machine):
                 homogeneous(*self.relative(errors, pose, with_errors=False)))
 
     # -- first order ------------------------------------------------------------------------
-    def _jacobian_plan(self):
+    def _build_plan(self):
         """Per error, for :meth:`linear_jacobian`: the position of its factor in
         :meth:`factors`, its kind (0 translation, 1 rotation, 2 tilt), the unit vector of its
         component, the direction of its axis (tilts), sign x side, and the axis (tilts)."""
-        if getattr(self, "_plan", None) is not None:
-            return self._plan
         seq = self.factors()
         where = {}
         for i, (side, axis, slot) in enumerate(seq):
@@ -702,8 +700,7 @@ class ChainMachine(Machine):
                 scale[j] = pl.sign * side * side    # the move is by s q, s = side for linear
             else:
                 kind[j] = 0 if pl.component < 3 else 1
-        self._plan = (pos, kind, unit, ek, scale, tilt_axis)
-        return self._plan
+        return pos, kind, unit, ek, scale, tilt_axis
 
     def linear_jacobian(self, pose: Mapping) -> np.ndarray:
         """The exact first-order Jacobian d(pose error)/d(errors) at zero errors, (P, 6, n)
@@ -744,7 +741,7 @@ class ChainMachine(Machine):
             side, axis, slot = seq[i]
             if slot == "move":
                 self._run(v, self._ops(zero_e, p, side, axis, slot, n), scratch)
-        pos, kind, unit, ek, scale, tilt_axis = self._jacobian_plan()
+        pos, kind, unit, ek, scale, tilt_axis = self._plan
         ra = np.stack(before)                                     # (F, n, 3, 3)
         aft = np.stack(after)                                     # (F, 2, 3, n)
         tip, ax = aft[pos, 0], aft[pos, 1]                        # (E, 3, n)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from .linear import indices_at_poses, nonlinear_remainder
+from .linear import indices_at_poses, nonlinear_remainder, uniform_moments
 from .sobol import (
     base_samples,
     from_unit_uniform,
@@ -106,7 +106,7 @@ def sample_at_pose(model: Callable[[np.ndarray], np.ndarray], jacobian: np.ndarr
     ya, yb, yab = sobol_evaluate(model, a, b)
     _, st = sobol_estimate(ya, yb, yab)
     _, half = sobol_bootstrap(ya, yb, yab, n_boot, seed + 10)
-    var = (bounds[1] - bounds[0]) ** 2 / 12.0
+    _, var = uniform_moments(bounds)
     jac = np.asarray(jacobian, dtype=float)
     rem = nonlinear_remainder(model, jac, a)
     return SampledIndices(st, half, indices_at_poses(jac[None], var)[0], rem.centred_ratio,
