@@ -34,13 +34,13 @@ $(STAMP): environment.txt pyproject.toml
 	@echo "==> $(VENV) ready"
 
 reproduce: $(STAMP)
-	@$(PY) -m mtaccuracy.runner --from-env
-	@$(PY) -m mtaccuracy.reproduction gather
-	@$(PY) -m mtaccuracy.report
+	@$(PY) -m mtaccuracy.compendium.runner --from-env
+	@$(PY) -m mtaccuracy.compendium.reproduction gather
+	@$(PY) -m mtaccuracy.compendium.report
 
 # The static report (figures/index.html) from what is in figures/ now, without running anything.
 report: $(STAMP)
-	$(PY) -m mtaccuracy.report
+	$(PY) -m mtaccuracy.compendium.report
 
 # Debian's Chromium and ChromeDriver for the browser test (root; apt-get; never a browser download).
 browser:
@@ -60,13 +60,13 @@ lint: $(STAMP)
 
 # Bound to 127.0.0.1 with a token; --allow-root when run as root (containers); LAB_ARGS for more.
 lab: $(STAMP)
-	@$(PY) -m mtaccuracy.lab
+	@$(PY) -m mtaccuracy.compendium.lab
 
 # The speed targets; BENCH_ARGS=--quick skips timing make reproduce and make test themselves.
 BENCH_ARGS ?=
 export BENCH_ARGS
 bench: $(STAMP)
-	@$(PY) -m mtaccuracy.bench --from-env
+	@$(PY) -m mtaccuracy.compendium.bench --from-env
 
 # Regenerate the lock from the direct requirements in a throw-away venv.
 lock:

@@ -4,7 +4,8 @@
   (through ``$MTACCURACY_OUTPUT_BASE``), never over the committed ``figures/``.
 * When the session includes tests that use the ``notebook_runs`` fixture
   (tests/test_notebooks.py), every notebook starts executing in the background as soon as the
-  tests are collected, two at a time (``python -m mtaccuracy.runner NN --copy-to DIR``), while
+  tests are collected, two at a time
+  (``python -m mtaccuracy.compendium.runner NN --copy-to DIR``), while
   the unit tests run; those tests wait for the run they need.
 * A session-wide guard fails the run if anything in the working tree's ``figures/`` or
   ``notebooks/`` changed while the tests ran.
@@ -76,7 +77,7 @@ class NotebookRuns:
             while pending and len(active) < self.jobs:
                 name, nb, params = pending.pop(0)
                 log = open(self.base / f"{name}.log", "w+")  # noqa: SIM115 - closed below
-                cmd = [sys.executable, "-m", "mtaccuracy.runner", nb, *params,
+                cmd = [sys.executable, "-m", "mtaccuracy.compendium.runner", nb, *params,
                        f"--copy-to={self.folder(name)}"]
                 # the environment as the session started (a test may be changing os.environ
                 # in the main thread right now)
@@ -129,7 +130,7 @@ def pytest_collection_finish(session):
     global _RUNS
     if not any("notebook_runs" in getattr(i, "fixturenames", ()) for i in session.items):
         return
-    from mtaccuracy import runner
+    from mtaccuracy.compendium import runner
 
     base = TEST_OUTPUT / "notebooks"
     base.mkdir(parents=True, exist_ok=True)
@@ -182,7 +183,7 @@ def test_output() -> Path:
 def committed_report() -> Path:
     """The report built once from a copy of the committed ``figures/`` (the notebook exports
     take most of the time); returns that copy's folder."""
-    from mtaccuracy import report
+    from mtaccuracy.compendium import report
 
     figures = TEST_OUTPUT / "committed-report" / "figures"
     shutil.copytree(ROOT / "figures", figures,

@@ -8,11 +8,11 @@ import sys
 
 import pytest
 
-from mtaccuracy import bench
+from mtaccuracy.compendium import bench
 
 
 def test_a_task_runs_in_its_own_process_and_reports_json():
-    out = subprocess.run([sys.executable, "-m", "mtaccuracy.bench", "--task",
+    out = subprocess.run([sys.executable, "-m", "mtaccuracy.compendium.bench", "--task",
                           "pce_interaction_polynomial_omp"], capture_output=True, text=True,
                          check=True)
     r = json.loads(out.stdout.strip().splitlines()[-1])

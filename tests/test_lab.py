@@ -2,7 +2,7 @@
 
 import pytest
 
-from mtaccuracy import lab
+from mtaccuracy.compendium import lab
 
 
 def test_root_gets_allow_root_and_the_lab_stays_local():

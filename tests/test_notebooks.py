@@ -1,7 +1,7 @@
 """Every notebook executed and checked against what is committed.
 
 The notebooks run in the background while the unit tests run (conftest.py starts them as soon as
-the tests are collected, two at a time, each with ``python -m mtaccuracy.runner NN
+the tests are collected, two at a time, each with ``python -m mtaccuracy.compendium.runner NN
 --copy-to DIR``, so nothing in the working tree is touched).  For each notebook:
 
 * every cell executes without error;
@@ -22,7 +22,7 @@ import json
 
 import pytest
 
-from mtaccuracy import paths, provenance, reproduction, runner
+from mtaccuracy.compendium import paths, provenance, reproduction, runner
 
 STEMS = [p.stem for p in runner.all_notebooks()]
 CHECK = "# NBVAL_CHECK_OUTPUT"

@@ -10,7 +10,7 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from mtaccuracy import paths, plotting, provenance, report, reproduction, runner  # noqa: E402
+from mtaccuracy.compendium import paths, plotting, provenance, report, reproduction, runner  # noqa: E402
 
 
 @pytest.fixture

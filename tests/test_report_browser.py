@@ -31,7 +31,7 @@ import pandas as pd
 import pytest
 from playwright.sync_api import sync_playwright
 
-from mtaccuracy import paths, reproduction, runner
+from mtaccuracy.compendium import paths, reproduction, runner
 
 CHROMIUM = Path("/usr/bin/chromium")
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",

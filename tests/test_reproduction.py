@@ -3,7 +3,7 @@ import json
 import pandas as pd
 import pytest
 
-from mtaccuracy import reproduction as R
+from mtaccuracy.compendium import reproduction as R
 
 ROW = dict(item="Fig. 1", quantity="q", published="1.0", reproduced="1.1", unit="",
            tolerance="0.2", verdict="reproduced", basis="independent", note="")

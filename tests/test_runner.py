@@ -12,9 +12,10 @@ import time
 import nbformat
 import pytest
 
-from mtaccuracy import paths, runner
+from mtaccuracy.compendium import paths, runner
 
 NB03 = "03_guo2016_spearman_21_errors"
+RUNNER = runner.__name__   # "mtaccuracy.compendium.runner", run with python -m
 
 
 def test_reads_the_declared_parameters_of_notebook_03():
@@ -80,7 +81,8 @@ def _tiny(tmp_path, monkeypatch, body, extra_params=""):
     return path
 
 
-WRITE = ("import os, time\nfrom mtaccuracy import paths\nout = paths.output_dir(output_dir)\n"
+WRITE = ("import os, time\nfrom mtaccuracy.compendium import paths\n"
+         "out = paths.output_dir(output_dir)\n"
          "(out / 'table.csv').write_text(f'n\\n{n}\\n')\n")
 
 
@@ -211,11 +213,11 @@ def test_params_from_the_environment_are_never_evaluated_by_a_shell(tmp_path):
     assert res.returncode != 0
     assert "must be written name=value" in res.stderr and not (tmp_path / "x").exists()
     env["PARAMS"] = "seed=7 'unbalanced"
-    res = subprocess.run([sys.executable, "-m", "mtaccuracy.runner", "--from-env", "--check"],
+    res = subprocess.run([sys.executable, "-m", RUNNER, "--from-env", "--check"],
                          env=env, capture_output=True, text=True, timeout=60)
     assert res.returncode == 2 and "No closing quotation" in res.stderr
     env["PARAMS"] = "seed=7 n_samples=100"
-    res = subprocess.run([sys.executable, "-m", "mtaccuracy.runner", "--from-env", "--check"],
+    res = subprocess.run([sys.executable, "-m", RUNNER, "--from-env", "--check"],
                          env=env, capture_output=True, text=True, timeout=60)
     assert res.returncode == 0, res.stderr
 

@@ -8,7 +8,8 @@ import pandas as pd
 import papermill as pm
 import pytest
 
-from mtaccuracy import paths, reproduction, thermal, thermal_data
+from mtaccuracy import thermal, thermal_data
+from mtaccuracy.compendium import paths, reproduction
 
 COMMITTED = paths.ROOT / thermal_data.DEFAULT_DIR
 RNG = np.random.default_rng(5)

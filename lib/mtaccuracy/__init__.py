@@ -2,6 +2,25 @@
 
 Units inside the library are millimetres and radians; every function that draws random
 numbers takes a ``numpy.random.Generator`` or an explicit seed.
+
+Where things are
+----------------
+Science (usable without this repository; none of it imports :mod:`mtaccuracy.compendium`):
+
+=======================  ================================================================
+``kinematics``           homogeneous transforms, rotations, pose differences
+``errors``               the geometric error catalogue (ISO 230-1 names), ranges, sampling
+``machines``             kinematic chains of any machine (``machines.chain``) and the
+                         three papers' machines built on it
+``sensitivity``          Sobol' (sampling, PCE, linear closed form), Spearman, screening
+``spindle``              multi-probe spindle error separation, probe-layout design
+``roundness``            roundness of a profile (least squares, minimum zone, filters)
+``thermal``              thermal error modelling: data, clustering, estimators, validation
+``optimise``             a genetic algorithm over real or binary encodings
+=======================  ================================================================
+
+The compendium's machinery (runner, report, provenance, published values, paths, plotting,
+bench) is in :mod:`mtaccuracy.compendium`.
 """
 
 __version__ = "0.1.0"

@@ -38,7 +38,7 @@ from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import GridSearchCV, GroupKFold
 from sklearn.svm import SVR
 
-from . import provenance, reproduction
+from .compendium import provenance, reproduction
 
 __all__ = [
     "DataFormatError", "ThermalData", "read_measurements", "write_measurements",
@@ -417,8 +417,8 @@ def _check_zeroing(path, experiments: np.ndarray, errors: np.ndarray, positions)
 
 def write_measurements(data: ThermalData, folder, temperature_decimals: int = 2,
                        error_decimals: int = 3) -> list[Path]:
-    """Write ``data`` in the schema (:func:`mtaccuracy.reproduction.save_table`, which rewrites a
-    file only when its bytes change).  Returns the files whose content changed."""
+    """Write ``data`` in the schema (:func:`mtaccuracy.compendium.reproduction.save_table`,
+    which rewrites a file only when its bytes change).  Returns the files whose content changed."""
     def whole(v):  # integers print without decimals
         v = np.asarray(v)
         return v.astype(int) if np.all(v == np.round(v)) else v

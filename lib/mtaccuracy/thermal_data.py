@@ -52,7 +52,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import paths, reproduction
+from .compendium import paths, reproduction
 from .thermal import ThermalData, decouple, write_measurements
 
 #: The seed of the committed reconstruction.

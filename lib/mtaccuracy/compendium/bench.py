@@ -1,6 +1,6 @@
 """``make bench``: the speed targets named in the issues, measured.
 
-Every task runs in a fresh Python process of its own (``python -m mtaccuracy.bench --task
+Every task runs in a fresh Python process of its own (``python -m mtaccuracy.compendium.bench --task
 NAME``), so its memory is that task's alone: the row gives the process's peak RSS and, of it,
 what the task added above the RSS the process had when the task started (imports and inputs).
 Times are the minimum of ``repeat`` runs (3 unless a row says otherwise) after one warm-up run
@@ -51,7 +51,7 @@ def _min_time(fn, repeat: int = REPEAT):
 # ------------------------------------------------------------------------------------------
 
 def _zheng():
-    from .machines import build
+    from ..machines import build
 
     m = build("ac_double_turntable")
     sd = np.array([e.to_library * (15.0 if e.translational else 10.0) / 3 for e in m.catalogue])
@@ -60,8 +60,8 @@ def _zheng():
 
 
 def task_guo_pose_error():
-    from . import errors, sensitivity
-    from .machines import build
+    from .. import errors, sensitivity
+    from ..machines import build
 
     m = build("vertical_xyfz")
     b = errors.uniform_bounds(m.catalogue, {"positioning": (0, 3), "straightness": (0, 4),
@@ -73,8 +73,8 @@ def task_guo_pose_error():
 
 
 def task_guo_spearman():
-    from . import errors, sensitivity
-    from .machines import build
+    from .. import errors, sensitivity
+    from ..machines import build
 
     m = build("vertical_xyfz")
     b = errors.uniform_bounds(m.catalogue, {"positioning": (0, 3), "straightness": (0, 4),
@@ -95,7 +95,7 @@ def task_zheng_pose_error():
 
 
 def _zheng_pce(components):
-    from . import sensitivity as S
+    from .. import sensitivity as S
 
     m, sd, pose = _zheng()
     u = S.base_samples(1000, 41, "lhs", 1)[0]
@@ -121,7 +121,7 @@ def task_zheng_pce_six():
 
 
 def task_zheng_mcs():
-    from . import sensitivity as S
+    from .. import sensitivity as S
 
     m, sd, pose = _zheng()
 
@@ -138,7 +138,7 @@ def task_zheng_mcs():
 def task_zheng_linear_pose():
     """All 41 x 6 closed-form indices at one pose, the Jacobian included; one call is too
     quick for the timer, so a loop of 1000 calls is timed and divided."""
-    from . import sensitivity as S
+    from .. import sensitivity as S
 
     m, sd, pose = _zheng()
     loop = 1000
@@ -160,7 +160,7 @@ def task_zheng_linear_pose():
 
 
 def task_zheng_linear_atlas():
-    from . import sensitivity as S
+    from .. import sensitivity as S
 
     m, sd, _ = _zheng()
     rng = np.random.default_rng(0)
@@ -181,7 +181,7 @@ PCE_CASES = {  # name: (benchmark, n, degrees for ours, OpenTURNS degree, OpenTU
 
 
 def _case(name):
-    from .sensitivity.benchmarks import BENCHMARKS
+    from ..sensitivity.benchmarks import BENCHMARKS
 
     bench, n, degrees, ot_degree, ot_repeat = PCE_CASES[name]
     b = BENCHMARKS[bench]()
@@ -200,7 +200,7 @@ def _errors(b, s1, st):
 def _task_ours(name, method):
     import warnings
 
-    from .sensitivity import pce as P
+    from ..sensitivity import pce as P
 
     b, x, y, degrees, _, _ = _case(name)
     inp = P.ChaosInputs(b.marginals)
@@ -296,7 +296,7 @@ def run_task(name: str) -> dict:
     """Run one task in this process; its time, peak RSS and the task's own memory: peak RSS
     above the process with the library imported (numpy, scipy, pandas, scikit-learn, chaospy:
     about 120 MB, the same for every task), MB."""
-    from . import machines, sensitivity  # noqa: F401
+    from .. import machines, sensitivity  # noqa: F401
 
     start = _rss_mb()
     out = TASKS[name]()
@@ -306,7 +306,7 @@ def run_task(name: str) -> dict:
 
 def _in_subprocess(name: str, timeout: float | None = None) -> dict:
     try:
-        res = subprocess.run([sys.executable, "-m", "mtaccuracy.bench", "--task", name],
+        res = subprocess.run([sys.executable, "-m", "mtaccuracy.compendium.bench", "--task", name],
                              capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
         return dict(time=float("nan"), peak_mb=float("nan"), task_mb=float("nan"),
@@ -357,7 +357,7 @@ def main(argv=None) -> int:
     import argparse
     import shlex
 
-    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.bench")
+    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.compendium.bench")
     ap.add_argument("--quick", action="store_true",
                     help="skip timing make reproduce and make test (a few minutes)")
     ap.add_argument("--from-env", action="store_true",

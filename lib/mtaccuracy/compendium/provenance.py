@@ -1,6 +1,6 @@
 """Provenance of every output: which code, notebook, parameters and input data made it.
 
-A notebook's first call, :func:`mtaccuracy.runner.check_parameters`, starts a record
+A notebook's first call, :func:`mtaccuracy.compendium.runner.check_parameters`, starts a record
 (:func:`start`); every input file read through the library is hashed into it (:func:`track`,
 called by ``reproduction.published`` and the data readers); every figure and table saved
 through ``plotting.save`` and ``reproduction.save_table`` carries it: PNG text chunk
@@ -13,10 +13,11 @@ cells (code and markdown, not outputs), of each input file, plus the notebook's 
 It has no timestamp and no git commit: unchanged code, notebook, inputs and parameters give
 identical records and so identical figure bytes, whatever was committed in between.  The runner
 keeps the commit of each run in ``figures/.runs.json`` (not committed; see
-:mod:`mtaccuracy.runner`).
+:mod:`mtaccuracy.compendium.runner`).
 
 Each file entry of the sidecar also says how the regenerated-table test compares it on another
-machine: ``tolerance`` (per float column, see :class:`mtaccuracy.reproduction.Tolerance`) or
+machine: ``tolerance`` (per float column, see
+:class:`mtaccuracy.compendium.reproduction.Tolerance`) or
 ``measured`` (a measurement of the machine, such as wall-clock time: never compared, no hash).
 """
 
@@ -81,7 +82,7 @@ def library_hash() -> str:
     """SHA-256 over the library's Python sources, in path order.  Computed once per process:
     the code a process runs is the code it imported, whatever changes on disk later."""
     h = hashlib.sha256()
-    lib = Path(__file__).resolve().parent
+    lib = Path(__file__).resolve().parent.parent   # the mtaccuracy package
     for p in sorted(lib.rglob("*.py")):
         h.update(p.relative_to(lib).as_posix().encode())
         h.update(p.read_bytes())

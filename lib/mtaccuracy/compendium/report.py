@@ -14,7 +14,7 @@ exits with status 1 naming it.
 
 The report uses no script and no external resource; the notebook exports have their CDN script
 tags removed, so they open offline too (LaTeX then shows as source).  ``python -m
-mtaccuracy.report`` builds it; ``make reproduce`` does so at the end.
+mtaccuracy.compendium.report`` builds it; ``make reproduce`` does so at the end.
 """
 
 from __future__ import annotations
@@ -368,7 +368,7 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.report")
+    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.compendium.report")
     ap.add_argument("--figures", default=None, help="figures folder (default: figures/)")
     args = ap.parse_args(argv)
     broken: list = []

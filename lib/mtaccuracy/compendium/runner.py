@@ -16,7 +16,7 @@ The type is the default's type (an int parameter refuses 2.5; a float one accept
 must be finite.  The ``memory`` line is an arithmetic expression of the parameters giving the
 run's peak memory in bytes: a run that cannot fit in the memory available is refused before it
 starts, naming the limit.  ``output_dir`` must be the notebook's own folder under ``figures/``
-or a folder outside the repository (:func:`mtaccuracy.paths.check_output_dir`).  The same
+or a folder outside the repository (:func:`mtaccuracy.compendium.paths.check_output_dir`).  The same
 checks run inside the notebook (:func:`check_parameters`), so an interactive run in JupyterLab
 refuses a bad value too.
 
@@ -37,7 +37,7 @@ byte-identical.
 Command line (``make reproduce NB=03 PARAMS="n_samples=1000 seed=2"`` calls this, passing
 ``NB`` and ``PARAMS`` through the environment, never through a shell)::
 
-    python -m mtaccuracy.runner all|03|notebooks/03_....ipynb [name=value ...] [--check]
+    python -m mtaccuracy.compendium.runner all|03|notebooks/03_....ipynb [name=value ...] [--check]
                                 [--list] [--jobs N]
 
 ``all`` runs the notebooks two at a time on a machine with two cores or more (each kernel with
@@ -321,7 +321,7 @@ def _check_one(p: Parameter, value, notebook: str) -> object:
             if op == "in":
                 ok = v in bound
             elif op == "errors":
-                from .machines import build
+                from ..machines import build
                 ok = v in build(bound).error_names
                 if not ok:
                     raise ParameterError(
@@ -356,7 +356,7 @@ def validate(notebook: str | Path, overrides: dict, share: int = 1) -> dict:
 
 def check_parameters(namespace: dict, notebook: str) -> None:
     """Inside a notebook: check the current values of its declared parameters, and start the
-    provenance record of this run (:mod:`mtaccuracy.provenance`)."""
+    provenance record of this run (:mod:`mtaccuracy.compendium.provenance`)."""
     from . import provenance
 
     declared = read_parameters(notebook)
@@ -650,7 +650,7 @@ RUNS = ".runs.json"
 def _record_run(stem: str, seconds: float) -> None:
     """Keep, for the report, each notebook's last run time and the commit it ran on, in
     ``figures/.runs.json``: not committed (a measurement of this machine), and the only place
-    the commit is kept: figures carry content hashes (:mod:`mtaccuracy.provenance`)."""
+    the commit is kept: figures carry content hashes (:mod:`mtaccuracy.compendium.provenance`)."""
     rt = paths.FIGURES / RUNS
     try:
         data = json.loads(rt.read_text(encoding="utf-8")) if rt.exists() else {}
@@ -684,8 +684,9 @@ def _child_env() -> dict:
 
 
 def _run_parallel(targets: list[Path], items: list[str], jobs: int) -> int:
-    """Run each notebook in its own ``python -m mtaccuracy.runner`` process, ``jobs`` at a
-    time, the longest (by the last recorded run) first; returns the number that failed."""
+    """Run each notebook in its own ``python -m mtaccuracy.compendium.runner`` process,
+    ``jobs`` at a time, the longest (by the last recorded run) first; returns the number that
+    failed."""
     known = last_runs()
     order = sorted(targets, key=lambda t: -float(known.get(t.stem, {}).get("seconds", 0)))
     pending, active, failures = list(order), {}, 0
@@ -700,8 +701,8 @@ def _run_parallel(targets: list[Path], items: list[str], jobs: int) -> int:
         while pending or active:
             while pending and len(active) < jobs:
                 t = pending.pop(0)
-                cmd = [sys.executable, "-m", "mtaccuracy.runner", str(t), *items, "--quiet",
-                       f"--share={jobs}"]
+                cmd = [sys.executable, "-m", "mtaccuracy.compendium.runner", str(t), *items,
+                       "--quiet", f"--share={jobs}"]
                 active[t] = subprocess.Popen(cmd, env=_child_env())
                 print(f"[{n - len(pending)}/{n}] started "
                       f"{t.stem}", flush=True)
@@ -751,7 +752,7 @@ def _arguments(argv) -> list[str]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.runner",
+    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.compendium.runner",
                                  description="Validate parameters and run notebooks in place.")
     ap.add_argument("notebook", help="'all', a number such as 03, a stem or a path")
     ap.add_argument("params", nargs="*", help="name=value overrides (Python literals)")

@@ -1,9 +1,9 @@
 """Published values, reproduction scorecards and their aggregation.
 
 Published numbers are read only from ``data/papers``; each notebook writes
-``figures/<stem>/reproduction.csv`` with :data:`COLUMNS`; ``python -m mtaccuracy.reproduction
-gather`` collects every card into ``figures/REPRODUCTION.md`` and the marked scorecard section
-of ``README.md``.
+``figures/<stem>/reproduction.csv`` with :data:`COLUMNS`;
+``python -m mtaccuracy.compendium.reproduction gather`` collects every card into
+``figures/REPRODUCTION.md`` and the marked scorecard section of ``README.md``.
 """
 
 from __future__ import annotations
@@ -741,7 +741,7 @@ def gather(figures=None, readme=None, report=None) -> tuple[Path, Path]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.reproduction")
+    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.compendium.reproduction")
     ap.add_argument("command", choices=["gather"])
     args = ap.parse_args(argv)
     if args.command == "gather":

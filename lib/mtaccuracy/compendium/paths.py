@@ -13,7 +13,7 @@ repository other than its own, never a non-empty folder the compendium did not w
 
 When the runner executes a notebook it sets ``$MTACCURACY_STAGING``: :func:`output_dir` then
 returns that staging folder, and the runner moves its content into the real output folder only
-when the whole run succeeded (see :mod:`mtaccuracy.runner`).
+when the whole run succeeded (see :mod:`mtaccuracy.compendium.runner`).
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ import json
 import os
 from pathlib import Path
 
-#: The repository root (``lib/mtaccuracy/paths.py`` -> two levels up from ``lib``).
-ROOT = Path(__file__).resolve().parents[2]
+#: The repository root (``lib/mtaccuracy/compendium/paths.py`` -> three levels up).
+ROOT = Path(__file__).resolve().parents[3]
 DATA = ROOT / "data"
 PAPERS = DATA / "papers"
 NOTEBOOKS = ROOT / "notebooks"

@@ -3,7 +3,7 @@
 ``save(fig, folder, name)`` writes PNG and SVG with no timestamps (SVG ``Date`` removed, a
 fixed ``svg.hashsalt`` for element ids), so the same figure gives the same bytes, and stamps the
 run's provenance into each file (PNG text chunk ``mtaccuracy:provenance``, SVG
-``Description``; see :mod:`mtaccuracy.provenance`).
+``Description``; see :mod:`mtaccuracy.compendium.provenance`).
 """
 
 from __future__ import annotations

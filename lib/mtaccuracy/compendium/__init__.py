@@ -1,0 +1,20 @@
+"""The compendium's machinery: how this repository runs, checks and publishes its notebooks.
+
+None of it is science; the science packages (:mod:`mtaccuracy.kinematics`,
+:mod:`mtaccuracy.errors`, :mod:`mtaccuracy.machines`, :mod:`mtaccuracy.sensitivity`,
+:mod:`mtaccuracy.spindle`, :mod:`mtaccuracy.roundness`, :mod:`mtaccuracy.thermal`,
+:mod:`mtaccuracy.optimise`) never import it, and ``tests/test_layering.py`` enforces that
+direction, so they can be taken into other work without this repository's runner.
+
+=================  ====================================================================
+``runner``         runs a notebook with papermill: parameter checks, staging, Ctrl-C
+                   safety (``python -m mtaccuracy.compendium.runner``, ``make reproduce``)
+``paths``          the repository's folders, output folders, input files checked
+``provenance``     which code, notebook, parameters and inputs made each output
+``reproduction``   published values (``data/papers/``), tolerances, the scorecard ``Card``
+``report``         the HTML report and ``figures/REPRODUCTION.md``
+``plotting``       the house style and byte-stable figure files
+``bench``          ``make bench``: the speed targets of the issues, measured
+``lab``            ``make lab``: JupyterLab on the notebooks
+=================  ====================================================================
+"""
