@@ -11,10 +11,8 @@ LIB = Path(mtaccuracy.__file__).parent
 MACHINERY = {"compendium"}   # runner, report, provenance, reproduction, paths, plotting, lab, bench
 SCIENCE = ["kinematics.py", "errors.py", "roundness.py", "machines", "sensitivity", "spindle",
            "optimise"]
-#: science modules that still import machinery, with why; issue 15 item 2 (the thermal package:
-#: io, clustering, models, validation, synthetic) removes them
-PENDING = {"thermal.py": "reads and writes through provenance.track and reproduction.save_table",
-           "thermal_data.py": "reconstructs the dataset from the published values"}
+#: science modules that still import machinery, with why (none since issue 15's thermal package)
+PENDING: dict[str, str] = {}
 
 
 def _imports(path: Path) -> set[str]:

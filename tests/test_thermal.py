@@ -7,11 +7,12 @@ import numpy as np
 import pandas as pd
 import papermill as pm
 import pytest
+from sklearn.linear_model import LinearRegression
 
-from mtaccuracy import thermal, thermal_data
-from mtaccuracy.compendium import paths, reproduction
+from mtaccuracy import thermal
+from mtaccuracy.compendium import paths, reproduction, xu2022
 
-COMMITTED = paths.ROOT / thermal_data.DEFAULT_DIR
+COMMITTED = paths.ROOT / xu2022.DEFAULT_DIR
 RNG = np.random.default_rng(5)
 
 
@@ -50,7 +51,8 @@ def test_decouple_refuses_mismatched_positions():
 
 def test_printed_model_reads_rises_for_d_terms():
     coef = {"intercept": 1.0, "T1": 2.0, "dT2": -3.0}
-    assert thermal_data.printed_model(coef, {"T1": np.array([1.0]), "T2": np.array([0.5])}) == \
+    values = {"T1": np.array([1.0]), "T2": np.array([0.5])}
+    assert thermal.synthetic.printed_model(coef, values) == \
         pytest.approx([1.5])
 
 
@@ -411,7 +413,7 @@ def test_data_beyond_the_size_limits_are_refused(good_dir):
 
 
 def test_an_oversized_file_is_refused_before_it_is_read(good_dir, monkeypatch):
-    monkeypatch.setattr(thermal, "MAX_FILE_BYTES", 5000)
+    monkeypatch.setattr(thermal.io, "MAX_FILE_BYTES", 5000)
     with pytest.raises(thermal.DataFormatError,
                        match=r"errors.csv: 6776 bytes; files up to 5000 bytes are read"):
         thermal.read_measurements(good_dir)
@@ -442,23 +444,30 @@ def _synthetic(n_exp=4, n_meas=6, seed=0):
 
 def test_decoupled_mlr_recovers_exact_linear_relations():
     d = _synthetic()
-    m = thermal.Decoupled(["T1", "T2"], ["T3"]).fit(d.subset([1, 2, 3]))
-    c = m.coefficients().set_index(["target", "term"]).coefficient
+    inputs = {"k": ["T1", "T2"], "b": ["T3"]}
+    m = thermal.decoupled(d.subset([1, 2, 3]), inputs)
+    c = thermal.eq9_table(m, inputs).set_index(["target", "term"]).coefficient
     assert c[("k (um/m)", "T1")] == pytest.approx(2.0) and c[("k (um/m)", "T2")] == \
         pytest.approx(-1.0)
     assert c[("b (um)", "dT3")] == pytest.approx(-3.0) and c[("b (um)", "intercept")] == \
         pytest.approx(0.5)
     test = d.subset(4)
-    assert np.allclose(m.predict(test), test.errors)
+    assert np.allclose(m.predict(thermal.design(test, inputs, "decoupled")), test.errors)
 
 
 def test_point_by_point_is_one_regression_per_position():
     d = _synthetic()
-    p = thermal.PointByPoint(["T1", "T3"]).fit(d.subset([1, 2, 3]))
-    assert len(p.models) == len(d.positions_mm)
-    assert p.predict(d.subset(4)).shape == d.subset(4).errors.shape
-    assert list(p.coefficients(d.positions_mm).columns) == ["position_mm", "intercept", "T1",
-                                                            "T3"]
+    inputs = {"point": ["T1", "T3"]}
+    p = thermal.point_by_point(d.subset([1, 2, 3]), inputs)
+    assert len(p.estimators_) == len(d.positions_mm)
+    x4 = thermal.design(d.subset(4), inputs, "point")
+    assert p.predict(x4).shape == d.subset(4).errors.shape
+    assert list(thermal.eq8_table(p, inputs["point"], d.positions_mm).columns) == [
+        "position_mm", "intercept", "T1", "T3"]
+    for j, m in enumerate(p.estimators_):                  # each column its own regression
+        one = LinearRegression().fit(thermal.design(d.subset([1, 2, 3]), inputs, "point"),
+                                     d.subset([1, 2, 3]).errors[:, j])
+        assert np.allclose(m.coef_, one.coef_) and np.isclose(m.intercept_, one.intercept_)
 
 
 def test_svr_search_is_grouped_and_deterministic():
@@ -536,7 +545,7 @@ def test_leave_one_out_reuses_a_split_already_evaluated(monkeypatch):
     other = thermal.evaluate_split(d, [1, 2, 3], [4], 2, kinds=("mlr",))   # other settings
     calls = []
     real = thermal.evaluate_split
-    monkeypatch.setattr(thermal, "evaluate_split",
+    monkeypatch.setattr(thermal.validation, "evaluate_split",
                         lambda data, train, test, *a, **k: calls.append(test) or
                         real(data, train, test, *a, **k))
     again = thermal.leave_one_experiment_out(d, 2, kinds=("mlr",), sensors=fixed,
@@ -557,7 +566,7 @@ def test_evaluate_split_refuses_unknown_sensors_and_experiments():
 
 @pytest.fixture(scope="module")
 def recon():
-    return thermal_data.reconstruct()
+    return xu2022.reconstruct()
 
 
 def test_generator_regenerates_the_committed_files_byte_identically(recon, tmp_path):
@@ -565,11 +574,11 @@ def test_generator_regenerates_the_committed_files_byte_identically(recon, tmp_p
     assert sorted(p.name for p in written) == sorted(p.name for p in COMMITTED.glob("*.csv"))
     for f in COMMITTED.glob("*.csv"):
         assert (tmp_path / f.name).read_bytes() == f.read_bytes(), f.name
-    assert thermal.write_measurements(thermal_data.reconstruct(), tmp_path) == []
+    assert thermal.write_measurements(xu2022.reconstruct(), tmp_path) == []
 
 
 def test_decoupling_the_reconstruction_gives_table5(recon):
-    k5, b5, _ = thermal_data.published_targets()
+    k5, b5, _ = xu2022.published_targets()
     k, b = thermal.decouple(recon.offsets_mm(), recon.errors)
     assert np.abs(k - k5.ravel()).max() <= 0.05
     assert np.abs(b - b5.ravel()).max() <= 0.05
@@ -579,18 +588,18 @@ def test_decoupling_the_reconstruction_gives_table5(recon):
 
 def test_the_printed_models_fit_the_reconstruction_within_the_published_residuals(recon):
     models = reproduction.published("xu2022_models")
-    c = thermal_data.eq9_consistency(recon, models)
+    c = thermal.synthetic.eq9_consistency(recon, models)
     assert c.k_residual.abs().max() <= 3.6                # Table 7, largest slope residual
     assert c.b_residual.abs().max() <= 0.8                # Table 7, largest intercept residual
     rms4 = np.sqrt(np.mean(c[c.experiment == 4].k_residual ** 2))
     assert 2.0 <= rms4 <= 3.2                             # Table 7: RMSE 2.6 um/m
-    r8 = thermal_data.eq8_residuals(recon, models)
+    r8 = thermal.synthetic.eq8_residuals(recon, models)
     assert sorted(r8.position_mm.unique()) == [185, 205, 225, 445]
     assert r8.residual.abs().max() <= 4.3                 # Table 4, largest residual
 
 
 def test_reconstruction_is_physically_plausible(recon):
-    _, _, t1 = thermal_data.published_targets()
+    _, _, t1 = xu2022.published_targets()
     for _, r in t1.iterrows():
         air = recon.subset(int(r.experiment)).temperatures["T10"]
         assert abs(air.min() - r.ambient_min_C) <= 0.05 and abs(air.max() - r.ambient_max_C) <= 0.05
@@ -604,7 +613,7 @@ def test_reconstruction_is_physically_plausible(recon):
 
 
 def test_noise_replicates_start_with_the_reconstruction_and_redraw_only_the_noise(recon):
-    reps = thermal_data.noise_replicates(2022, 4)
+    reps = xu2022.noise_replicates(2022, 4)
     assert len(reps) == 4 and reps.sensors == recon.sensors
     assert np.array_equal(reps.temperatures[0], recon.temperatures.to_numpy())
     assert np.array_equal(reps.errors[0], recon.errors)
@@ -615,7 +624,7 @@ def test_noise_replicates_start_with_the_reconstruction_and_redraw_only_the_nois
     assert np.all(reps.errors[:, recon.index.measurement == 1, 0] == 0.0)   # laser zeroing
     assert not np.array_equal(reps.errors[1], reps.errors[2])
     with pytest.raises(ValueError, match="at least 2 replicates"):
-        thermal_data.noise_replicates(2022, 1)
+        xu2022.noise_replicates(2022, 1)
 
 
 def test_fit_linear_is_linear_regression_batched():
@@ -643,17 +652,17 @@ def test_replicate_split_on_replicate_0_is_the_notebooks_split(recon):
     fixed = {"point": ["T1", "T11", "T12"], "k": ["T1", "T6", "T12"], "b": ["T2", "T7", "T11"]}
     params = {"k": {"kernel": "linear", "C": 10.0, "epsilon": 0.1},
               "b": {"kernel": "rbf", "C": 10.0, "gamma": 0.1, "epsilon": 0.1}}
-    reps = thermal_data.noise_replicates(2022, 3)
+    reps = xu2022.noise_replicates(2022, 3)
     f = thermal.replicate_split(reps, [1, 2, 3], [4], fixed, params)
     assert len(f) == 3 and f.iloc[1:].std().max() > 0
     r = thermal.evaluate_split(recon, [1, 2, 3], [4], kinds=("mlr",), sensors=fixed)
     for (method, target), row in r.table.set_index(["method", "target"]).iterrows():
         for m in ("rmse", "max_residual", "mae"):
             assert f[(method, target, m)].iloc[0] == pytest.approx(row[m], rel=1e-9)
-    eq9 = r.models["decoupled_mlr"].coefficients()
+    eq9 = thermal.eq9_table(r.models["decoupled_mlr"], fixed)
     for _, c in eq9.iterrows():
         assert f[("eq9", c.target, c.term)].iloc[0] == pytest.approx(c.coefficient, rel=1e-9)
-    eq8 = r.models["point_by_point_mlr"].coefficients(recon.positions_mm)
+    eq8 = thermal.eq8_table(r.models["point_by_point_mlr"], fixed["point"], recon.positions_mm)
     assert f[("eq8", "445", "T11")].iloc[0] == pytest.approx(eq8.T11.iloc[-1], rel=1e-9)
     resid = r.measured - r.predictions["point_by_point_mlr"]
     assert f[("point_by_point_mlr", "largest residual at", "185")].iloc[0] == \
@@ -662,9 +671,9 @@ def test_replicate_split_on_replicate_0_is_the_notebooks_split(recon):
         pytest.approx((r.measured - r.predictions["decoupled_mlr"]).min())
     assert f[("test", "largest |error|", "")].iloc[0] == np.abs(recon.subset(4).errors).max()
     tr, te = recon.subset([1, 2, 3]), recon.subset(4)
-    d = thermal.Decoupled(fixed["k"], fixed["b"])
     k, b = thermal.decouple(tr.offsets_mm(), tr.errors)
-    (xk, xb), (tk, tb) = d.inputs(tr), d.inputs(te)
+    xtr, xte = thermal.design(tr, fixed, "decoupled"), thermal.design(te, fixed, "decoupled")
+    (xk, xb), (tk, tb) = (xtr[:, :3], xtr[:, 3:]), (xte[:, :3], xte[:, 3:])
     kp = thermal.StandardisedSVR(**params["k"]).fit(xk, k).predict(tk)
     bp = thermal.StandardisedSVR(**params["b"]).fit(xb, b).predict(tb)
     want = thermal.metrics(te.errors - thermal.compose(kp, bp, te.offsets_mm()))
@@ -677,19 +686,19 @@ def test_replicate_split_on_replicate_0_is_the_notebooks_split(recon):
 
 def test_prepare_never_writes_a_readers_folder(good_dir):
     before = {f.name: (f.read_bytes(), f.stat().st_mtime_ns) for f in good_dir.iterdir()}
-    folder, changed, what = thermal_data.prepare(str(good_dir), regenerate=True, seed=7)
+    folder, changed, what = xu2022.prepare(str(good_dir), regenerate=True, seed=7)
     assert folder == good_dir and changed == [] and "read only" in what
     assert {f.name: (f.read_bytes(), f.stat().st_mtime_ns) for f in good_dir.iterdir()} == before
 
 
 def test_prepare_regenerates_only_the_default_folder(tmp_path, monkeypatch):
     monkeypatch.setenv(paths.OUTPUT_BASE_ENV, str(tmp_path))
-    folder, changed, what = thermal_data.prepare("data/thermal", regenerate=True)
+    folder, changed, what = xu2022.prepare("data/thermal", regenerate=True)
     assert folder == tmp_path / "data" / "thermal" and len(changed) == 3
     assert "seed 2022" in what
-    assert thermal_data.prepare("data/thermal", regenerate=True)[1] == []   # byte-identical
-    assert thermal_data.prepare("data/thermal", regenerate=False)[0] == COMMITTED
-    assert thermal_data.is_default_dir(str(COMMITTED)) and not thermal_data.is_default_dir("x")
+    assert xu2022.prepare("data/thermal", regenerate=True)[1] == []   # byte-identical
+    assert xu2022.prepare("data/thermal", regenerate=False)[0] == COMMITTED
+    assert xu2022.is_default_dir(str(COMMITTED)) and not xu2022.is_default_dir("x")
 
 
 def test_published_inputs_decoupled_beats_point_by_point_on_the_paper_split(recon):
@@ -721,6 +730,56 @@ def test_notebook_regenerated_the_committed_dataset(notebook_runs):
     (into its own output base, never over data/thermal)."""
     code, log, _ = notebook_runs.result("04_xu2022_thermal_mlr_svr")
     assert code == 0, log[-2000:]
-    fresh = notebook_runs.folder("04_xu2022_thermal_mlr_svr") / thermal_data.DEFAULT_DIR
+    fresh = notebook_runs.folder("04_xu2022_thermal_mlr_svr") / xu2022.DEFAULT_DIR
     for f in COMMITTED.glob("*.csv"):
         assert (fresh / f.name).read_bytes() == f.read_bytes(), f.name
+
+
+# ------------------------------------------------------------------ scikit-learn conformance
+
+@pytest.mark.parametrize("estimator", [
+    thermal.StandardisedSVR(),
+    thermal.PointByPointRegressor(),
+    thermal.GroupedSVR(grid=[{"kernel": ["linear"], "C": [0.1, 1.0], "epsilon": [0.1]}]),
+], ids=lambda e: type(e).__name__)
+def test_estimators_pass_scikit_learns_checks(estimator):
+    from sklearn.utils.estimator_checks import check_estimator
+
+    failed = check_estimator(estimator, on_fail=None)
+    bad = [(r["check_name"], str(r["exception"])[:200]) for r in failed
+           if r["status"] == "failed"]
+    assert not bad, bad
+
+
+def test_decoupled_regressor_composes_with_grid_search_and_group_kfold():
+    from sklearn.base import clone
+    from sklearn.model_selection import GridSearchCV, GroupKFold, cross_val_score
+
+    d = _synthetic()
+    inputs = {"k": ["T1", "T2"], "b": ["T3"]}
+    x = thermal.design(d, inputs, "decoupled")
+    model = thermal.DecoupledRegressor(d.offsets_mm(), [0, 1], [2])
+    assert clone(model).get_params()["k_columns"] == [0, 1]       # parameters kept unchanged
+    assert not hasattr(model, "k_estimator_")                     # fitted state only after fit
+    scores = cross_val_score(model, x, d.errors, groups=d.groups, cv=GroupKFold(4),
+                             scoring="neg_root_mean_squared_error")
+    assert scores.shape == (4,) and np.all(-scores < 1e-8)        # exact linear relations
+    search = GridSearchCV(model, {"b_columns": [[2], [1]]}, cv=GroupKFold(4),
+                          scoring="neg_root_mean_squared_error").fit(x, d.errors, groups=d.groups)
+    assert search.best_params_ == {"b_columns": [2]}              # b is linear in T3's rise
+    with pytest.raises(ValueError, match=r"y must be \(n, 5\)"):
+        model.fit(x, d.errors[:, :3])
+
+
+def test_svr_through_the_decoupled_regressor_gets_the_groups():
+    d = _synthetic()
+    tr = d.subset([1, 2, 3])
+    m = thermal.decoupled(tr, {"k": ["T1", "T2"], "b": ["T3"]}, kind="svr")
+    direct = thermal.svr_search(tr.temperatures[["T1", "T2"]].to_numpy(),
+                                thermal.decouple(tr.offsets_mm(), tr.errors)[0], tr.groups)
+    assert m.k_estimator_.search_.best_params_ == direct.best_params_
+    assert m.k_estimator_.search_.n_splits_ == 3                  # one fold per experiment
+    hp = thermal.svr_hyperparameters(m)
+    assert list(hp.target) == ["k", "b"] and (hp.candidates == 40).all()
+    with pytest.raises(ValueError, match="unknown model kind 'gp'"):
+        thermal.decoupled(tr, {"k": ["T1"], "b": ["T3"]}, kind="gp")

@@ -1,5 +1,9 @@
 """The reconstructed dataset of Xu et al. 2022 (``data/thermal/``): a seeded, documented generator.
 
+The published values it is built from (Table 5's k and b, Table 1's experiments) are passed in
+by the caller (:func:`targets_from_tables`); the compendium reads them from ``data/papers/``
+(``mtaccuracy.compendium.xu2022``).
+
 The paper publishes no temperatures and no per-position errors, only what was computed from
 them: the slope k and intercept b of all 32 measurements (Table 5), the experiment settings
 (Table 1), the fitted models (Eqs. 8-9) and their prediction metrics (Tables 4, 7, 8).  This
@@ -47,18 +51,22 @@ sampling uncertainty of results computed on the reconstruction.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from .compendium import paths, reproduction
-from .thermal import ThermalData, decouple, write_measurements
+from .io import ThermalData
+from .models import decouple
+
+__all__ = [
+    "DEFAULT_SEED", "TIMES_MIN", "POSITIONS_MM", "AMBIENT", "Sensor", "SENSORS",
+    "GROUP_OFFSETS", "NOISE_C", "Targets", "targets_from_tables", "ambient", "simulate",
+    "reconstruct", "Replicates", "noise_replicates", "printed_eq9", "printed_eq8",
+    "printed_model", "eq9_consistency", "eq8_residuals", "calibrate",
+]
 
 #: The seed of the committed reconstruction.
 DEFAULT_SEED = 2022
-#: Where the committed reconstruction lives (relative to the repository root).
-DEFAULT_DIR = "data/thermal"
 #: Measurement times (min): about 20 min apart over about 160 min; the paper's text names
 #: measurements at 140 and 161 min, hence a 23 min spacing with the last two 140 and 161.
 TIMES_MIN = np.array([0, 23, 46, 69, 92, 115, 140, 161])
@@ -110,17 +118,40 @@ BOW_UM_PER_C = 0.08
 INTERFEROMETER_NOISE_UM = 0.06
 
 
-def published_targets(folder=None):
-    """Table 5 (k, b as (4, 8) arrays) and Table 1 (feeds, ambient ranges) from data/papers."""
-    t5 = reproduction.published("xu2022_table5_slope_intercept",
-                                ["experiment", "measurement", "k_um_per_m", "b_um"], folder)
-    t1 = reproduction.published("xu2022_table1_experiments",
-                                ["experiment", "feed_mm_per_min", "ambient_min_C",
-                                 "ambient_max_C"], folder)
-    n_exp = len(t1)
-    k = t5.k_um_per_m.astype(float).to_numpy().reshape(n_exp, -1)
-    b = t5.b_um.astype(float).to_numpy().reshape(n_exp, -1)
-    return k, b, t1.astype(float)
+@dataclass(frozen=True)
+class Targets:
+    """What the reconstruction reproduces: Table 5's slope ``k`` (n_exp, n_meas) in um/m and
+    intercept ``b`` (n_exp, n_meas) in um, and Table 1 ``t1`` (experiment, feed_mm_per_min,
+    ambient_min_C, ambient_max_C), one row per experiment."""
+
+    k: np.ndarray
+    b: np.ndarray
+    t1: pd.DataFrame
+
+    def __iter__(self):
+        """Unpacks as ``k, b, t1``."""
+        return iter((self.k, self.b, self.t1))
+
+
+def targets_from_tables(table5: pd.DataFrame, table1: pd.DataFrame) -> Targets:
+    """:class:`Targets` from the two published tables.
+
+    Parameters
+    ----------
+    table5 : DataFrame
+        Columns experiment, measurement, k_um_per_m, b_um; rows by experiment, then
+        measurement (Xu et al. 2022, Table 5).
+    table1 : DataFrame
+        Columns experiment, feed_mm_per_min, ambient_min_C, ambient_max_C (Table 1).
+
+    Returns
+    -------
+    Targets
+    """
+    n_exp = len(table1)
+    k = table5.k_um_per_m.astype(float).to_numpy().reshape(n_exp, -1)
+    b = table5.b_um.astype(float).to_numpy().reshape(n_exp, -1)
+    return Targets(k, b, table1.astype(float))
 
 
 def ambient(t1: pd.DataFrame, minutes: np.ndarray) -> np.ndarray:
@@ -211,9 +242,22 @@ def _index(n_exp: int, n_meas: int) -> pd.DataFrame:
                          "time_min": np.tile(TIMES_MIN, n_exp)})
 
 
-def reconstruct(seed: int = DEFAULT_SEED, papers_folder=None) -> ThermalData:
-    """The reconstructed dataset: 4 experiments x 8 measurements, 12 temperatures, 14 errors."""
-    k, b, t1 = published_targets(papers_folder)
+def reconstruct(targets: Targets, seed: int = DEFAULT_SEED) -> ThermalData:
+    """The reconstructed dataset: 4 experiments x 8 measurements, 12 temperatures, 14 errors.
+
+    Parameters
+    ----------
+    targets : Targets
+        Table 5 and Table 1 (:func:`targets_from_tables`).
+    seed : int
+        Seed of ``numpy.random.default_rng``; :data:`DEFAULT_SEED` gives ``data/thermal``.
+
+    Returns
+    -------
+    ThermalData
+        32 measurements, 12 sensors (degC), errors (32, 14) in um, ``source="reconstructed"``.
+    """
+    k, b, t1 = targets.k, targets.b, targets.t1
     n_exp, n_meas = k.shape
     order, temps, errors = _generate(np.random.default_rng(seed), k, b, t1)
     temperatures = pd.DataFrame(temps.reshape(n_exp * n_meas, -1), columns=order)
@@ -239,7 +283,7 @@ class Replicates:
         return len(self.temperatures)
 
 
-def noise_replicates(seed: int = DEFAULT_SEED, n: int = 40, papers_folder=None) -> Replicates:
+def noise_replicates(targets: Targets, seed: int = DEFAULT_SEED, n: int = 40) -> Replicates:
     """Replicate 0 is the reconstruction of ``seed``; replicates 1..n-1 redraw every noise term
     (sensor noise, T12's quantisation of it, interferometer noise, the bow that follows the
     nut's noisy rise) from one generator seeded by ``SeedSequence(seed).spawn(1)``, all at
@@ -248,7 +292,7 @@ def noise_replicates(seed: int = DEFAULT_SEED, n: int = 40, papers_folder=None) 
     noise gives it, not the uncertainty of the reconstruction's choices."""
     if n < 2:
         raise ValueError(f"need at least 2 replicates for a spread, got {n}")
-    k, b, t1 = published_targets(papers_folder)
+    k, b, t1 = targets.k, targets.b, targets.t1
     n_exp, n_meas = k.shape
     order, t0, e0 = _generate(np.random.default_rng(seed), k, b, t1)
     rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
@@ -256,52 +300,6 @@ def noise_replicates(seed: int = DEFAULT_SEED, n: int = 40, papers_folder=None) 
     temps = np.concatenate([t0[None], tr]).reshape(n, n_exp * n_meas, -1)
     errors = np.concatenate([e0[None], er]).reshape(n, n_exp * n_meas, -1)
     return Replicates(_index(n_exp, n_meas), order, temps, errors, POSITIONS_MM.astype(float))
-
-
-def is_default_dir(data_dir) -> bool:
-    """Whether ``data_dir`` names the committed reconstruction folder ``data/thermal``."""
-    p = Path(data_dir)
-    p = p if p.is_absolute() else paths.ROOT / p
-    return p.resolve() == (paths.ROOT / DEFAULT_DIR).resolve()
-
-
-def prepare(data_dir: str = DEFAULT_DIR, regenerate: bool = True,
-            seed: int = DEFAULT_SEED, out=None) -> tuple[Path, list[Path], str]:
-    """Decide where to read from and, for the reconstruction only, regenerate it first.
-
-    * ``data_dir`` is the default ``data/thermal``, ``regenerate`` is true and ``seed`` is the
-      committed one: the generator writes into it (resolved like an output folder, so under the
-      tests it goes to ``.test-output/data/thermal``), a file only when its bytes change.
-    * the same with another ``seed``: the reconstruction goes to ``<out>/reconstruction`` (the
-      run's own output folder), never over the committed data.
-    * any other ``data_dir`` is the reader's own measurements: read, **never written**.
-
-    Returns (folder to read, files that changed, a sentence saying what happened).
-    """
-    if not is_default_dir(data_dir):
-        p = Path(data_dir)
-        p = p if p.is_absolute() else paths.ROOT / p
-        what = (f"{data_dir}: your measurements, read only"
-                + (" (regenerate_data applies to the reconstruction only)" if regenerate else ""))
-        return p, [], what
-    if not regenerate:
-        return paths.ROOT / DEFAULT_DIR, [], f"{DEFAULT_DIR}: committed reconstruction, as stored"
-    if seed == DEFAULT_SEED:
-        folder = paths.resolve_output(DEFAULT_DIR)
-    elif out is None:
-        raise ValueError(f"a reconstruction with seed {seed} (not the committed {DEFAULT_SEED}) "
-                         f"is written into the run's output folder: pass out=")
-    else:
-        folder = Path(out) / "reconstruction"
-    folder.mkdir(parents=True, exist_ok=True)
-    changed = write_measurements(reconstruct(seed), folder)
-    where = (folder.relative_to(paths.ROOT) if folder.is_relative_to(paths.ROOT)
-             else f"<output_dir>/{folder.name}" if out is not None and folder.parent == Path(out)
-             else folder)
-    what = (f"{where}: reconstruction regenerated with seed {seed}: "
-            + (f"{len(changed)} file(s) rewritten ({', '.join(p.name for p in changed)})"
-               if changed else "every file byte-identical, nothing rewritten"))
-    return folder, changed, what
 
 
 def printed_eq9(models: pd.DataFrame) -> dict:
@@ -369,7 +367,8 @@ WARMING_GROUPS = ("transmission", "motor")
 CALIBRATION_TIES = (("T1", "T2"), ("T6", "T11"), ("T7", "T12"))
 
 
-def calibrate(papers_folder=None, max_nfev: int = 20000, eq8_weight: float = 1.0):
+def calibrate(targets: Targets, models: pd.DataFrame, max_nfev: int = 20000,
+              eq8_weight: float = 1.0):
     """How :data:`SENSORS` (T1, T2, T6, T7, T11, T12) and :data:`GROUP_OFFSETS` were found.
 
     Weighted least squares (``scipy.optimize.least_squares``, deterministic) on the noise-free
@@ -390,13 +389,13 @@ def calibrate(papers_folder=None, max_nfev: int = 20000, eq8_weight: float = 1.0
     Not run by the notebook (it takes about a minute): the rounded result is stored in
     :data:`SENSORS` and :data:`GROUP_OFFSETS`, so generation needs no optimiser; run again, it
     gives back the stored values.
+    ``targets`` are Table 5 and Table 1 (:func:`targets_from_tables`), ``models`` the
+    printed models (``xu2022_models.csv``: model, target, term, coefficient).
     Returns (sensors, group_offsets, scipy result).
     """
     from scipy.optimize import least_squares
 
-    k5, b5, t1 = published_targets(papers_folder)
-    models = reproduction.published("xu2022_models", ["model", "target", "term", "coefficient"],
-                                    papers_folder)
+    k5, b5, t1 = targets.k, targets.b, targets.t1
     eq9, eq8 = printed_eq9(models), printed_eq8(models)
     line = {p: k5 * (p - POSITIONS_MM[0]) / 1000.0 + b5 for p in eq8}
     free = list(CALIBRATION_PRIOR)

@@ -1,0 +1,37 @@
+"""Thermal positioning error of a linear axis (Xu et al. 2022): data, sensitive points, models.
+
+=================  ========================================================================
+``io``             :class:`ThermalData`, :func:`read_measurements`,
+                   :func:`write_measurements`: the CSV schema of ``data/thermal/README.md``
+``clustering``     fuzzy equivalence clustering (Eqs. 1-3), grey relational grade (Eq. 4),
+                   :func:`select_sensitive_points`
+``models``         :func:`decouple` (Eq. 6), :func:`compose` (Eq. 7), and scikit-learn
+                   estimators: :class:`PointByPointRegressor` (Eqs. 5, 8),
+                   :class:`DecoupledRegressor` (Eq. 9), :class:`StandardisedSVR`,
+                   :class:`GroupedSVR` (hyperparameters by ``GroupKFold``)
+``validation``     :func:`metrics`, :func:`evaluate_split`, :func:`leave_one_experiment_out`,
+                   :func:`replicate_split`
+``synthetic``      the seeded reconstruction of the paper's dataset (not the authors' data)
+=================  ========================================================================
+
+Everything in ``io``, ``clustering``, ``models`` and ``validation`` is importable from here.
+Units: positions in mm, errors in um, slopes k in um/m (so ``k * x_mm / 1000`` is um),
+temperatures in degrees Celsius.  The position axis is shifted to start at 0 (the paper models
+185..445 mm as 0..260 mm so that the intercept b is the error at the first target).
+
+Example: the decoupled MLR on arrays, composed with scikit-learn's model selection::
+
+    from sklearn.linear_model import LinearRegression
+    from sklearn.model_selection import GroupKFold, cross_val_score
+    model = DecoupledRegressor(offsets_mm, k_columns=[0, 1], b_columns=[2],
+                               k_estimator=LinearRegression(), b_estimator=LinearRegression())
+    cross_val_score(model, X, errors, groups=experiment, cv=GroupKFold(4))
+"""
+
+from . import clustering, io, models, synthetic, validation  # noqa: F401
+from .clustering import *  # noqa: F403
+from .io import *  # noqa: F403
+from .models import *  # noqa: F403
+from .validation import *  # noqa: F403
+
+__all__ = [*io.__all__, *clustering.__all__, *models.__all__, *validation.__all__]

@@ -1,0 +1,431 @@
+"""Thermal error models (Xu et al. 2022, Section 4): decoupling and the MLR / SVR estimators.
+
+* :func:`decouple`, :func:`compose`: the least-squares line of every measurement (Eq. 6) and
+  back (Eq. 7); by hand, the paper's contribution and two lines of algebra.
+* :class:`PointByPointRegressor`: one regression per target position (Eqs. 5, 8).
+* :class:`DecoupledRegressor`: the slope k and the intercept b each regressed on their own
+  sensors, the error composed as k x + b (Eqs. 7, 9).
+* :class:`StandardisedSVR`, :class:`GroupedSVR`, :func:`svr_search`: scikit-learn's ``SVR`` on
+  standardised data, hyperparameters by ``GridSearchCV`` with ``GroupKFold`` (one experiment
+  held out per fold), tied scores to the simplest candidate (:func:`canonical_best`).
+* :func:`fit_linear`, :func:`predict_linear`: least squares on a stack of problems at once
+  (the batched twin of ``LinearRegression``, for noise replicates).
+
+The three regressors are scikit-learn estimators: constructor arguments stored unchanged,
+``fit(X, y)`` on arrays, fitted attributes ending in ``_``, ``get_params``/``set_params``,
+``clone``; they compose with ``GridSearchCV``, ``cross_val_score`` and ``GroupKFold``
+(``groups`` is passed through ``fit`` to an inner estimator that takes it).
+
+Units: positions in mm, errors in um, slopes k in um/m (so ``k * x_mm / 1000`` is um).
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+
+import numpy as np
+from sklearn import config_context
+from sklearn.base import BaseEstimator, RegressorMixin, clone
+from sklearn.linear_model import LinearRegression
+from sklearn.model_selection import GridSearchCV, GroupKFold, KFold
+from sklearn.svm import SVR
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+__all__ = [
+    "decouple", "compose", "StandardisedSVR", "GroupedSVR", "PointByPointRegressor",
+    "DecoupledRegressor", "svr_search", "svr_simplicity", "canonical_best", "tie_margin",
+    "SVR_GRID", "SVR_SOLVER_TOL", "SVR_TIE_RTOL", "fit_linear", "predict_linear",
+]
+
+# --------------------------------------------------------------------------------------------
+# Decoupling (Eq. 6) and composition (Eq. 7)
+# --------------------------------------------------------------------------------------------
+
+def decouple(offsets_mm: np.ndarray, errors_um: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 6: least-squares line through every measurement; returns k (um/m) and b (um).
+
+    ``offsets_mm`` (n_positions,) are the positions from the first target (0..260 mm), so b is
+    the line's value at the first target; ``errors_um`` is (..., n_positions).  Written out (not
+    ``np.polyfit``) because it *is* the paper's Eq. 6.
+    """
+    x = np.asarray(offsets_mm, dtype=float)
+    y = np.asarray(errors_um, dtype=float)
+    if y.shape[-1] != len(x) or len(x) < 2 or np.ptp(x) == 0:
+        raise ValueError(f"need >= 2 distinct positions matching the last axis of the errors; "
+                         f"got {len(x)} positions and errors of shape {y.shape}")
+    dx = x - x.mean()
+    slope = (y - y.mean(axis=-1, keepdims=True)) @ dx / (dx @ dx)   # um per mm
+    b = y.mean(axis=-1) - slope * x.mean()
+    return slope * 1000.0, b
+
+
+def compose(k_um_per_m, b_um, offsets_mm) -> np.ndarray:
+    """Eq. 7: y(x) = k x + b at every offset; returns (n_measurements, n_positions) in um."""
+    k = np.asarray(k_um_per_m, dtype=float)[..., None]
+    b = np.asarray(b_um, dtype=float)[..., None]
+    return k * np.asarray(offsets_mm, dtype=float) / 1000.0 + b
+
+
+# --------------------------------------------------------------------------------------------
+# Models: scikit-learn's LinearRegression and SVR
+# --------------------------------------------------------------------------------------------
+
+#: SVR search grid (inputs and target standardised inside :class:`StandardisedSVR`, so
+#: epsilon and gamma are in standard units).  Linear and RBF kernels both compete.
+SVR_GRID = [
+    {"kernel": ["linear"], "C": [0.01, 0.1, 1.0, 10.0, 100.0], "epsilon": [0.01, 0.1]},
+    {"kernel": ["rbf"], "C": [0.1, 1.0, 10.0, 100.0, 1000.0], "gamma": [0.01, 0.1, 1.0],
+     "epsilon": [0.01, 0.1]},
+]
+
+#: libsvm's stopping tolerance (the KKT violation, in standardised units).  scikit-learn's
+#: default, 1e-3, leaves ill-conditioned candidates (RBF with gamma 0.01 and C 1000 is nearly
+#: a linear model with a huge C) so far from their optimum that a rounding-level change of the
+#: inputs (1e-15 relative, what another BLAS kernel does) moved cross-validated RMSEs by up to
+#: 2 % and held-out metrics by 0.5 %.  At 1e-6 the same perturbations move the scores of the
+#: candidates within 5 % of the best by < 2e-6 and the held-out metrics by < 3e-5 (relative;
+#: the reconstruction, every split of the notebook), at no measurable cost in time.
+SVR_SOLVER_TOL = 1e-6
+
+#: Cross-validated RMSEs within this relative distance of the best are ties: candidates that
+#: give the same model (a C larger than every dual variable needs, an epsilon tube no sample
+#: touches) score equal up to rounding, and which of them scikit-learn's "first best" picks
+#: would follow floating-point noise.  1e-3 is 500 times the scatter of near-best scores under
+#: rounding-level perturbations (< 2e-6 at :data:`SVR_SOLVER_TOL`) and far below any
+#: difference a cross-validation over a few experiments can resolve.
+SVR_TIE_RTOL = 1e-3
+
+class StandardisedSVR(RegressorMixin, BaseEstimator):
+    """scikit-learn's :class:`~sklearn.svm.SVR` on standardised inputs and target.
+
+    The same model as ``TransformedTargetRegressor(Pipeline([StandardScaler(), SVR()]),
+    transformer=StandardScaler())`` (a constant column keeps scale 1, as there), in one
+    estimator: :class:`~sklearn.model_selection.GridSearchCV` clones, validates and scores
+    every candidate in every fold, and with four nested estimators that overhead, not libsvm,
+    took most of the search's time (this one estimator halves it).  Standardising is two
+    lines, so it is written here.
+
+    Parameters
+    ----------
+    kernel, C, gamma, epsilon, tol
+        As :class:`sklearn.svm.SVR` (gamma and epsilon in standardised units); ``tol``
+        default :data:`SVR_SOLVER_TOL`.
+
+    Attributes
+    ----------
+    x_mean_, x_scale_ : arrays (p,)
+        Input means and standard deviations (1 for a constant input).
+    y_mean_, y_scale_ : float
+        Target mean and standard deviation (1 for a constant target).
+    svr_ : sklearn.svm.SVR
+        The SVR fitted on the standardised data.
+    """
+
+    def __init__(self, kernel="rbf", C=1.0, gamma="scale", epsilon=0.1, tol=SVR_SOLVER_TOL):
+        self.kernel = kernel
+        self.C = C
+        self.gamma = gamma
+        self.epsilon = epsilon
+        self.tol = tol
+
+    def fit(self, X, y):
+        """Fit ``X`` (n, p) to ``y`` (n,), both standardised first."""
+        X, y = validate_data(self, X, y, y_numeric=True, dtype=np.float64)
+        self.x_mean_, sx = X.mean(axis=0), X.std(axis=0)
+        self.x_scale_ = np.where(sx > 0, sx, 1.0)
+        self.y_mean_, sy = float(y.mean()), float(y.std())
+        self.y_scale_ = sy if sy > 0 else 1.0
+        self.svr_ = SVR(kernel=self.kernel, C=self.C, gamma=self.gamma, epsilon=self.epsilon,
+                        tol=self.tol).fit((X - self.x_mean_) / self.x_scale_,
+                                          (y - self.y_mean_) / self.y_scale_)
+        return self
+
+    def predict(self, X):
+        """Predictions (n,) in the target's units."""
+        check_is_fitted(self)
+        z = (validate_data(self, X, reset=False, dtype=np.float64) - self.x_mean_) / self.x_scale_
+        return self.svr_.predict(z) * self.y_scale_ + self.y_mean_
+
+
+def _svr_params(params: dict) -> dict:
+    return {key.rsplit("__", 1)[-1]: v for key, v in params.items()}
+
+
+def svr_simplicity(params: dict) -> tuple:
+    """The canonical order among tied SVR candidates, simplest first: a linear kernel before
+    RBF, then the smaller C (stronger regularisation), the smaller gamma (smoother), the
+    larger epsilon (a wider tube, fewer support vectors)."""
+    p = _svr_params(params)
+    gamma = p.get("gamma", 0.0)
+    gamma = float(gamma) if isinstance(gamma, int | float) else np.inf
+    return (p.get("kernel") != "linear", float(p.get("C", 1.0)), gamma,
+            -float(p.get("epsilon", 0.1)))
+
+
+def canonical_best(cv_results: dict, rtol: float = SVR_TIE_RTOL) -> int:
+    """Index of the chosen candidate: among those whose mean cross-validated RMSE is within
+    ``rtol`` (relative) of the best, the simplest by :func:`svr_simplicity`.  Used as
+    ``GridSearchCV(refit=...)``, so that the choice is a property of the scores, not of
+    rounding noise or of the grid's order."""
+    rmse = -np.asarray(cv_results["mean_test_score"], dtype=float)
+    if not np.isfinite(rmse).any():
+        raise ValueError("every SVR candidate failed in cross-validation")
+    best = np.nanmin(rmse)
+    tied = np.flatnonzero(rmse <= best * (1.0 + rtol))
+    return int(min(tied, key=lambda i: (svr_simplicity(cv_results["params"][i]), i)))
+
+
+def tie_margin(cv_results: dict, rtol: float = SVR_TIE_RTOL) -> tuple[int, float]:
+    """(number of tied candidates, the best included; distance of the nearest other candidate
+    to the tie window's edge, relative to the best RMSE): how far the choice is from flipping.
+    The distance is NaN when there is no other candidate."""
+    rmse = -np.asarray(cv_results["mean_test_score"], dtype=float)
+    rmse = rmse[np.isfinite(rmse)]
+    gap = rmse / rmse.min() - 1.0
+    others = np.delete(gap, np.argmin(gap))
+    return int((gap <= rtol).sum()), float(np.abs(others - rtol).min()) if others.size else np.nan
+
+
+def svr_search(x: np.ndarray, y: np.ndarray, groups=None, grid=None,
+               tie_rtol: float = SVR_TIE_RTOL):
+    """Choose SVR hyperparameters by grouped cross-validation on the training data only.
+
+    The folds leave one training experiment out at a time (``GroupKFold`` with one fold per
+    experiment), the score is the RMSE of the held-out experiment, the winner is the simplest
+    candidate within ``tie_rtol`` of the best score (:func:`canonical_best`), and it is
+    refitted on all training data.  Deterministic: no random state is involved.
+
+    Parameters
+    ----------
+    x : array (n, p)
+        Inputs (temperatures or rises, degC).
+    y : array (n,)
+        Target (k in um/m, b in um, or an error in um).
+    groups : array (n,), optional
+        Experiment of each row; one fold per experiment.  None: ``KFold(min(5, n))``,
+        unshuffled.
+    grid : list of dict, optional
+        Parameter grid of :class:`StandardisedSVR`; default :data:`SVR_GRID`.
+    tie_rtol : float
+        Relative RMSE window of ties (:data:`SVR_TIE_RTOL`).
+
+    Returns
+    -------
+    GridSearchCV
+        Fitted; its ``best_score_`` is not set: use
+        ``cv_results_["mean_test_score"][best_index_]``.
+    """
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if len(y) < 2:
+        raise ValueError(f"n_samples = {len(y)}: cross-validation needs at least 2 samples")
+    if groups is None:
+        cv = KFold(n_splits=min(5, len(y)))
+    else:
+        n_groups = len(np.unique(groups))
+        if n_groups < 2:
+            raise ValueError("SVR cross-validation needs at least 2 training experiments")
+        cv = GroupKFold(n_splits=n_groups)
+    if not (np.isfinite(x).all() and np.isfinite(y).all()):
+        raise ValueError("SVR inputs and target must be finite")
+    refit = canonical_best if tie_rtol == SVR_TIE_RTOL else functools.partial(
+        canonical_best, rtol=tie_rtol)
+    search = GridSearchCV(StandardisedSVR(), grid or SVR_GRID, cv=cv,
+                          scoring="neg_root_mean_squared_error", n_jobs=1, refit=refit)
+    # checked above, and the grid is fixed: skip scikit-learn's per-fit re-validation (a fifth
+    # of the search's time)
+    with config_context(assume_finite=True, skip_parameter_validation=True):
+        search.fit(x, y, groups=groups)
+    return search
+
+
+def _fit_with_groups(estimator, X, y, groups):
+    """Fit ``estimator``, passing ``groups`` when its ``fit`` takes them."""
+    if groups is not None and "groups" in inspect.signature(estimator.fit).parameters:
+        return estimator.fit(X, y, groups=groups)
+    return estimator.fit(X, y)
+
+
+class GroupedSVR(RegressorMixin, BaseEstimator):
+    """SVR whose hyperparameters are chosen by grouped cross-validation at ``fit``.
+
+    The estimator form of :func:`svr_search`: ``fit(X, y, groups)`` searches ``grid`` with one
+    fold per group (an experiment held out at a time, Xu et al. 2022 train on experiments and
+    test on another), takes the simplest candidate within ``tie_rtol`` of the best RMSE and
+    refits it on all of ``X``.  Without ``groups`` the folds are ``KFold(5)`` (unshuffled).
+
+    Parameters
+    ----------
+    grid : list of dict, optional
+        ``GridSearchCV`` parameter grid of :class:`StandardisedSVR`; default :data:`SVR_GRID`.
+    tie_rtol : float
+        Relative RMSE window of ties (:data:`SVR_TIE_RTOL`).
+
+    Attributes
+    ----------
+    search_ : GridSearchCV
+        The fitted search (``cv_results_``, ``best_params_``, ``best_index_``).
+    best_estimator_ : StandardisedSVR
+        The chosen candidate refitted on all data.
+    n_features_in_ : int
+        Number of inputs.
+    """
+
+    def __init__(self, grid=None, tie_rtol=SVR_TIE_RTOL):
+        self.grid = grid
+        self.tie_rtol = tie_rtol
+
+    def fit(self, X, y, groups=None):
+        """Search the grid on ``X`` (n, p), ``y`` (n,) with folds by ``groups`` (n,)."""
+        X, y = validate_data(self, X, y, y_numeric=True)
+        self.search_ = svr_search(X, y, groups, self.grid, self.tie_rtol)
+        self.best_estimator_ = self.search_.best_estimator_
+        return self
+
+    def predict(self, X):
+        """Predictions (n,) of the chosen candidate."""
+        check_is_fitted(self)
+        X = validate_data(self, X, reset=False)
+        return self.best_estimator_.predict(X)
+
+
+class PointByPointRegressor(RegressorMixin, BaseEstimator):
+    """One regression per target position: the point-by-point model (Xu et al. 2022, Eqs. 5, 8).
+
+    Parameters
+    ----------
+    estimator : regressor, optional
+        Cloned once per column of ``y``; default ``LinearRegression()`` (the paper's MLR).
+
+    Attributes
+    ----------
+    estimators_ : list
+        The fitted clones, one per target position.
+    n_features_in_ : int
+        Number of inputs (temperature rises of the chosen sensors, degC).
+
+    Notes
+    -----
+    The same model as scikit-learn's ``MultiOutputRegressor``, with ``groups`` passed to an
+    inner estimator that takes them (:class:`GroupedSVR`) and a 1-D ``y`` kept 1-D.
+    """
+
+    def __init__(self, estimator=None):
+        self.estimator = estimator
+
+    def fit(self, X, y, groups=None):
+        """Fit ``X`` (n, p) to ``y`` (n, P) errors (um) at P positions, or (n,) for one."""
+        X, y = validate_data(self, X, y, multi_output=True, y_numeric=True)
+        self._single = y.ndim == 1
+        y2 = y[:, None] if self._single else y
+        base = LinearRegression() if self.estimator is None else self.estimator
+        self.estimators_ = [_fit_with_groups(clone(base), X, y2[:, i], groups)
+                            for i in range(y2.shape[1])]
+        return self
+
+    def predict(self, X):
+        """Predicted errors (n, P), or (n,) when fitted on a 1-D ``y``."""
+        check_is_fitted(self)
+        X = validate_data(self, X, reset=False)
+        out = np.column_stack([m.predict(X) for m in self.estimators_])
+        return out[:, 0] if self._single else out
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.multi_output = True
+        return tags
+
+
+class DecoupledRegressor(RegressorMixin, BaseEstimator):
+    """The decoupled model (Xu et al. 2022, Eqs. 6, 7, 9): error = k x + b.
+
+    ``fit`` splits every measured error profile into its least-squares slope k (um/m) and
+    intercept b (um) (:func:`decouple`, Eq. 6), regresses k on the columns ``k_columns`` of
+    ``X`` and b on ``b_columns`` (the paper: k on absolute temperatures, b on temperature rises,
+    Eq. 9), and ``predict`` composes k x + b at every position (Eq. 7).
+
+    Parameters
+    ----------
+    offsets_mm : array (P,)
+        Target positions measured from the first target (mm); at least two distinct.
+    k_columns, b_columns : sequence of int
+        Columns of ``X`` that are the inputs of k and of b.
+    k_estimator, b_estimator : regressor, optional
+        Cloned for k and for b; default ``LinearRegression()`` (the paper's MLR).
+
+    Attributes
+    ----------
+    k_estimator_, b_estimator_ : regressor
+        The fitted clones.
+    n_features_in_ : int
+        Number of columns of ``X``.
+
+    Notes
+    -----
+    scikit-learn's ``check_estimator`` does not apply: its regressor checks fit a 1-D target,
+    and this model's target is an error profile over at least two positions.  The tests check
+    ``clone``, ``get_params``/``set_params`` and use in ``GridSearchCV`` with ``GroupKFold``.
+    """
+
+    def __init__(self, offsets_mm, k_columns, b_columns, k_estimator=None, b_estimator=None):
+        self.offsets_mm = offsets_mm
+        self.k_columns = k_columns
+        self.b_columns = b_columns
+        self.k_estimator = k_estimator
+        self.b_estimator = b_estimator
+
+    def _split(self, X):
+        return X[:, list(self.k_columns)], X[:, list(self.b_columns)]
+
+    def fit(self, X, y, groups=None):
+        """Fit ``X`` (n, p) to the error profiles ``y`` (n, P) in um."""
+        X, y = validate_data(self, X, y, multi_output=True, y_numeric=True)
+        if y.ndim != 2 or y.shape[1] != len(self.offsets_mm):
+            raise ValueError(f"y must be (n, {len(self.offsets_mm)}): one error per position "
+                             f"of offsets_mm; got shape {y.shape}")
+        k, b = decouple(self.offsets_mm, y)
+        xk, xb = self._split(X)
+        self.k_estimator_ = _fit_with_groups(
+            clone(LinearRegression() if self.k_estimator is None else self.k_estimator),
+            xk, k, groups)
+        self.b_estimator_ = _fit_with_groups(
+            clone(LinearRegression() if self.b_estimator is None else self.b_estimator),
+            xb, b, groups)
+        return self
+
+    def predict_kb(self, X):
+        """Predicted slope k (n,) in um/m and intercept b (n,) in um."""
+        check_is_fitted(self)
+        X = validate_data(self, X, reset=False)
+        xk, xb = self._split(X)
+        return self.k_estimator_.predict(xk), self.b_estimator_.predict(xb)
+
+    def predict(self, X):
+        """Predicted errors (n, P) in um: k x + b at every offset (Eq. 7)."""
+        return compose(*self.predict_kb(X), self.offsets_mm)
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.multi_output = True
+        tags.target_tags.single_output = False
+        return tags
+
+
+def fit_linear(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least squares with an intercept on a stack of problems: ``x`` (R, n, p), ``y`` (R, n)
+    or (R, n, q); returns the coefficients (R, 1 + p) or (R, 1 + p, q), intercept first.  The
+    batched twin of scikit-learn's ``LinearRegression`` (the tests check they agree), so that
+    many replicates are fitted at once."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    a = np.concatenate([np.ones(x.shape[:-1] + (1,)), x], axis=-1)
+    single = y.ndim == x.ndim - 1
+    c = np.linalg.pinv(a) @ (y[..., None] if single else y)
+    return c[..., 0] if single else c
+
+
+def predict_linear(coef: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``intercept + x @ slopes`` for the coefficients of :func:`fit_linear`."""
+    coef, x = np.asarray(coef, dtype=float), np.asarray(x, dtype=float)
+    if coef.ndim == x.ndim - 1:
+        return coef[..., :1] + np.einsum("rnp,rp->rn", x, coef[..., 1:])
+    return coef[..., :1, :] + x @ coef[..., 1:, :]

@@ -1,0 +1,324 @@
+"""Validating thermal error models (Xu et al. 2022, Section 5): metrics, splits, replicates.
+
+* :func:`metrics`, :func:`batch_metrics`: RMSE, largest absolute residual (the paper's
+  delta_max) and MAE.
+* :func:`evaluate_split`: sensitive points chosen on the training experiments only, the
+  point-by-point MLR and the decoupled MLR / SVR fitted there, the held-out experiments
+  predicted from their temperatures; :func:`leave_one_experiment_out` does it for every
+  experiment in turn.
+* :func:`replicate_split`: the same fits with fixed inputs on a stack of noise replicates at once.
+* :func:`design`, :func:`eq8_table`, :func:`eq9_table`, :func:`svr_hyperparameters`: the
+  inputs of a model from a :class:`ThermalData` and its fitted coefficients as tables.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from sklearn.linear_model import LinearRegression
+
+from .clustering import Selection, most_frequent, select_sensitive_points
+from .io import ThermalData, rises_of
+from .models import (
+    DecoupledRegressor,
+    GroupedSVR,
+    PointByPointRegressor,
+    StandardisedSVR,
+    _svr_params,
+    compose,
+    decouple,
+    fit_linear,
+    predict_linear,
+    tie_margin,
+)
+
+__all__ = [
+    "metrics", "batch_metrics", "design", "point_by_point", "decoupled", "eq8_table",
+    "eq9_table", "svr_hyperparameters", "SplitResult", "evaluate_split",
+    "leave_one_experiment_out", "replicate_split",
+]
+
+
+def metrics(residuals) -> dict:
+    """RMSE, largest absolute residual (the paper's delta_max) and MAE of ``residuals`` (any
+    shape, um or um/m); ``{"rmse", "max_residual", "mae"}`` as floats."""
+    return {k: float(v[0]) for k, v in batch_metrics(np.asarray(residuals)[None]).items()}
+
+
+def design(data: ThermalData, inputs: dict, model: str) -> np.ndarray:
+    """The input matrix of a model on ``data``.
+
+    Parameters
+    ----------
+    data : ThermalData
+        n measurements.
+    inputs : dict
+        ``{"point": [...], "k": [...], "b": [...]}`` sensor names.
+    model : {"point", "decoupled"}
+        ``"point"``: the temperature rises (degC) of ``inputs["point"]``, (n, p).
+        ``"decoupled"``: the absolute temperatures of ``inputs["k"]`` then the rises of
+        ``inputs["b"]`` (Eq. 9), (n, len(k) + len(b)).
+
+    Returns
+    -------
+    array (n, p)
+    """
+    if model == "point":
+        return data.rises()[list(inputs["point"])].to_numpy()
+    if model == "decoupled":
+        return np.column_stack([data.temperatures[list(inputs["k"])].to_numpy(),
+                                data.rises()[list(inputs["b"])].to_numpy()])
+    raise ValueError(f"model must be 'point' or 'decoupled', got {model!r}")
+
+
+def point_by_point(data: ThermalData, inputs: dict) -> PointByPointRegressor:
+    """The point-by-point MLR (Eq. 8) fitted on ``data``'s rises of ``inputs["point"]``."""
+    return PointByPointRegressor(LinearRegression()).fit(design(data, inputs, "point"),
+                                                         data.errors)
+
+
+def decoupled(data: ThermalData, inputs: dict, kind: str = "mlr") -> DecoupledRegressor:
+    """The decoupled model (Eq. 9) fitted on ``data``: ``kind`` "mlr" (``LinearRegression``)
+    or "svr" (:class:`GroupedSVR`, folds by experiment)."""
+    if kind not in ("mlr", "svr"):
+        raise ValueError(f"unknown model kind {kind!r}; use 'mlr' or 'svr'")
+    nk, nb = len(inputs["k"]), len(inputs["b"])
+    est = LinearRegression() if kind == "mlr" else GroupedSVR()
+    model = DecoupledRegressor(data.offsets_mm(), list(range(nk)), list(range(nk, nk + nb)),
+                               k_estimator=est, b_estimator=est)
+    return model.fit(design(data, inputs, "decoupled"), data.errors, groups=data.groups)
+
+
+def eq8_table(model: PointByPointRegressor, sensors, positions_mm) -> pd.DataFrame:
+    """Eq. 8 as a table: position_mm, intercept and one coefficient per sensor (MLR only)."""
+    rows = [{"position_mm": p, "intercept": m.intercept_,
+             **dict(zip(sensors, m.coef_, strict=True))}
+            for p, m in zip(positions_mm, model.estimators_, strict=True)]
+    return pd.DataFrame(rows)
+
+
+def eq9_table(model: DecoupledRegressor, inputs: dict) -> pd.DataFrame:
+    """Eq. 9 as a table: target, term, coefficient (MLR only); b's terms are rises ``dT``."""
+    rows = []
+    for target, m, names, pre in (("k (um/m)", model.k_estimator_, inputs["k"], ""),
+                                  ("b (um)", model.b_estimator_, inputs["b"], "d")):
+        rows.append({"target": target, "term": "intercept", "coefficient": m.intercept_})
+        rows += [{"target": target, "term": pre + s, "coefficient": c}
+                 for s, c in zip(names, m.coef_, strict=True)]
+    return pd.DataFrame(rows)
+
+
+def svr_hyperparameters(model: DecoupledRegressor) -> pd.DataFrame:
+    """The cross-validated SVR hyperparameters for k and b of a decoupled SVR: the chosen
+    candidate, its mean CV RMSE, how many candidates tied with the best (``SVR_TIE_RTOL``)
+    and the distance of the nearest one to the tie window's edge."""
+    rows = []
+    for target, est in (("k", model.k_estimator_), ("b", model.b_estimator_)):
+        s = est.search_
+        p = _svr_params(s.best_params_)
+        tied, margin = tie_margin(s.cv_results_, est.tie_rtol)
+        rows.append({"target": target, "kernel": p["kernel"], "C": p["C"],
+                     "gamma": p.get("gamma", ""), "epsilon": p["epsilon"],
+                     "cv_rmse": -s.cv_results_["mean_test_score"][s.best_index_],
+                     "candidates": len(s.cv_results_["params"]), "tied": tied,
+                     "tie_window_margin": margin})
+    return pd.DataFrame(rows)
+
+
+# --------------------------------------------------------------------------------------------
+# One split, and every experiment held out in turn
+# --------------------------------------------------------------------------------------------
+
+@dataclass
+class SplitResult:
+    """Everything :func:`evaluate_split` computed for one train/test split."""
+
+    train: list[int]
+    test: list[int]
+    position_selections: list[Selection]
+    selected: dict
+    inputs: dict
+    k_selection: Selection
+    b_selection: Selection
+    models: dict
+    predictions: dict
+    kb_predictions: dict
+    measured: np.ndarray
+    measured_kb: tuple
+    table: pd.DataFrame
+    settings: dict = field(default_factory=dict)
+
+
+def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: float = 0.5,
+                   kinds=("mlr", "svr"), sensors: dict | None = None) -> SplitResult:
+    """Select sensitive points on ``train`` only, fit point-by-point MLR and the decoupled
+    models, predict ``test`` from its temperatures; returns predictions and metrics.
+
+    ``sensors`` may fix the inputs instead of selecting them:
+    ``{"point": [...], "k": [...], "b": [...]}``; the selection is still computed and returned.
+    """
+    missing = sorted({s for v in (sensors or {}).values() for s in v} - set(data.sensors))
+    if missing:
+        raise ValueError(f"the data have no sensor(s) {missing}; they have {data.sensors}")
+    tr, te = data.subset(train), data.subset(test)
+    offsets = data.offsets_mm()
+    k_tr, b_tr = decouple(offsets, tr.errors)
+    rises = tr.rises()
+    pos_sel = [select_sensitive_points(rises, tr.errors[:, i], n_clusters, rho)
+               for i in range(tr.errors.shape[1])]
+    k_sel = select_sensitive_points(tr.temperatures, k_tr, n_clusters, rho)
+    b_sel = select_sensitive_points(rises, b_tr, n_clusters, rho)
+    selected = {"point": most_frequent([s.selected for s in pos_sel], n_clusters,
+                                       order=data.sensors),
+                "k": k_sel.selected, "b": b_sel.selected}
+    chosen = {**selected, **(sensors or {})}
+    models = {"point_by_point_mlr": point_by_point(tr, chosen)}
+    for kind in kinds:
+        models[f"decoupled_{kind}"] = decoupled(tr, chosen, kind)
+    measured = te.errors
+    measured_kb = decouple(offsets, measured)
+    preds, kb_preds, rows = {}, {}, []
+    for name, m in models.items():
+        x = design(te, chosen, "decoupled" if isinstance(m, DecoupledRegressor) else "point")
+        preds[name] = m.predict(x)
+        rows.append({"method": name, "target": "thermal positioning error", "unit": "um",
+                     **metrics(measured - preds[name])})
+        if isinstance(m, DecoupledRegressor):
+            kb_preds[name] = m.predict_kb(x)
+            for target, unit, meas, pred in (("slope k", "um/m", measured_kb[0],
+                                              kb_preds[name][0]),
+                                             ("intercept b", "um", measured_kb[1],
+                                              kb_preds[name][1])):
+                rows.append({"method": name, "target": target, "unit": unit,
+                             **metrics(meas - pred)})
+    table = pd.DataFrame(rows)[["method", "target", "rmse", "max_residual", "mae", "unit"]]
+    return SplitResult(list(tr.experiments), list(te.experiments), pos_sel, selected, chosen,
+                       k_sel, b_sel, models, preds, kb_preds, measured, measured_kb, table,
+                       _settings(data, train, test, n_clusters, rho, kinds, sensors))
+
+
+def _settings(data, train, test, n_clusters, rho, kinds, sensors) -> dict:
+    """What determines a split's result: compared to reuse a result."""
+    h = hashlib.sha256()
+    for a in (data.index.to_numpy(dtype=float), data.temperatures.to_numpy(dtype=float),
+              data.errors, data.positions_mm):
+        h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    h.update(repr(data.sensors).encode())
+    return {"data": h.hexdigest(), "train": sorted(int(e) for e in np.atleast_1d(train)),
+            "test": sorted(int(e) for e in np.atleast_1d(test)), "n_clusters": int(n_clusters),
+            "rho": float(rho), "kinds": tuple(kinds),
+            "sensors": {k: list(v) for k, v in sorted((sensors or {}).items())}}
+
+
+def leave_one_experiment_out(data: ThermalData, n_clusters: int = 3, rho: float = 0.5,
+                             kinds=("mlr", "svr"), sensors: dict | None = None,
+                             reuse=()) -> pd.DataFrame:
+    """:func:`evaluate_split` with each experiment held out in turn (selection redone on the
+    remaining ones every time); one row per held-out experiment, method and target.
+
+    ``reuse``: results of :func:`evaluate_split`; one computed on the same data (compared by
+    content hash) with the same settings is taken as is instead of being computed again (it
+    is deterministic, so the table is the same, only faster)."""
+    frames = []
+    for e in data.experiments:
+        train = [x for x in data.experiments if x != e]
+        want = _settings(data, train, [e], n_clusters, rho, kinds, sensors)
+        r = next((r for r in reuse if r.settings == want), None) or \
+            evaluate_split(data, train, [e], n_clusters, rho, kinds, sensors)
+        t = r.table.copy()
+        t.insert(0, "held_out", e)
+        for i, key in enumerate(("point", "k", "b"), 1):
+            t.insert(i, f"{key}_sensors", " ".join(r.inputs[key]))
+        frames.append(t)
+    return pd.concat(frames, ignore_index=True)
+
+
+# --------------------------------------------------------------------------------------------
+# Noise replicates: the same fits on a stack of datasets (leading replicate axis)
+# --------------------------------------------------------------------------------------------
+
+
+def batch_metrics(residuals) -> dict:
+    """:func:`metrics` of every replicate (its one implementation): ``residuals`` (R, ...) ->
+    {name: (R,)}."""
+    r = np.asarray(residuals, dtype=float)
+    r = r.reshape(len(r), -1)
+    return {"rmse": np.sqrt(np.mean(r**2, axis=1)), "max_residual": np.abs(r).max(axis=1),
+            "mae": np.abs(r).mean(axis=1)}
+
+
+def replicate_split(replicates, train, test, inputs: dict, svr_params: dict | None = None
+                    ) -> pd.DataFrame:
+    """The fits of :func:`evaluate_split` with fixed inputs, on every replicate at once.
+
+    ``replicates`` has ``index``, ``sensors``, ``temperatures`` (R, n, S), ``errors``
+    (R, n, P) and ``positions_mm`` (:func:`mtaccuracy.thermal.synthetic.noise_replicates`);
+    ``inputs`` is ``{"point": [...], "k": [...], "b": [...]}``.  The MLRs are fitted batched
+    (:func:`fit_linear`); the SVRs, when ``svr_params = {"k": params, "b": params}`` fixes
+    their hyperparameters, one replicate at a time (libsvm solves one problem per call).
+    Sensitive points and hyperparameters are not chosen again: the spread over the replicates
+    is that of the fits and metrics for the given choices.
+
+    Returns one row per replicate; the columns are 3-tuples: (method, target, metric) for
+    the metrics of :func:`metrics`; ``("eq8", position, term)`` and ``("eq9", target, term)``
+    for the MLR coefficients; ``(method, "residual of the error", "lowest" | "highest")``;
+    ``("point_by_point_mlr", "largest residual at", position)``; and
+    ``("test", "largest |error|", "")``.
+    """
+    exp = replicates.index.experiment.to_numpy()
+    tr, te = np.isin(exp, list(train)), np.isin(exp, list(test))
+    col = {s: i for i, s in enumerate(replicates.sensors)}
+    missing = sorted({s for v in inputs.values() for s in v} - set(col))
+    if missing:
+        raise ValueError(f"the replicates have no sensor(s) {missing}")
+    t = np.asarray(replicates.temperatures, dtype=float)
+    e = np.asarray(replicates.errors, dtype=float)
+    rises = rises_of(t, exp)
+    offsets = np.asarray(replicates.positions_mm, dtype=float)
+    offsets = offsets - offsets[0]
+    k, b = decouple(offsets, e)                                           # (R, n)
+    pick = {key: [col[s] for s in v] for key, v in inputs.items()}
+    out, residuals = {}, {}
+
+    x_p = rises[..., pick["point"]]
+    c8 = fit_linear(x_p[:, tr], e[:, tr])                                # (R, 1 + p, P)
+    residuals["point_by_point_mlr"] = e[:, te] - predict_linear(c8, x_p[:, te])
+    for j, pos in enumerate(replicates.positions_mm):
+        for i, term in enumerate(["intercept", *inputs["point"]]):
+            out[("eq8", f"{pos:g}", term)] = c8[:, i, j]
+    x_k, x_b = t[..., pick["k"]], rises[..., pick["b"]]
+    kb = {}
+    ck, cb = fit_linear(x_k[:, tr], k[:, tr]), fit_linear(x_b[:, tr], b[:, tr])
+    for target, c, names in (("k (um/m)", ck, ["intercept", *inputs["k"]]),
+                             ("b (um)", cb, ["intercept", *("d" + s for s in inputs["b"])])):
+        for i, term in enumerate(names):
+            out[("eq9", target, term)] = c[:, i]
+    kb["decoupled_mlr"] = (predict_linear(ck, x_k[:, te]), predict_linear(cb, x_b[:, te]))
+    if svr_params is not None:
+        preds = []
+        for r in range(len(t)):
+            mk = StandardisedSVR(**_svr_params(svr_params["k"])).fit(x_k[r, tr], k[r, tr])
+            mb = StandardisedSVR(**_svr_params(svr_params["b"])).fit(x_b[r, tr], b[r, tr])
+            preds.append((mk.predict(x_k[r, te]), mb.predict(x_b[r, te])))
+        kb["decoupled_svr"] = tuple(np.array(p) for p in zip(*preds, strict=True))
+    for name, (kp, bp) in kb.items():
+        residuals[name] = e[:, te] - compose(kp, bp, offsets)
+        for target, meas, pred in (("slope k", k[:, te], kp), ("intercept b", b[:, te], bp)):
+            for m, v in batch_metrics(meas - pred).items():
+                out[(name, target, m)] = v
+    for name, res in residuals.items():
+        for m, v in batch_metrics(res).items():
+            out[(name, "thermal positioning error", m)] = v
+        flat = res.reshape(len(res), -1)
+        out[(name, "residual of the error", "lowest")] = flat.min(axis=1)
+        out[(name, "residual of the error", "highest")] = flat.max(axis=1)
+    by_pos = np.abs(residuals["point_by_point_mlr"]).max(axis=1)          # (R, P)
+    for j, pos in enumerate(replicates.positions_mm):
+        out[("point_by_point_mlr", "largest residual at", f"{pos:g}")] = by_pos[:, j]
+    out[("test", "largest |error|", "")] = np.abs(e[:, te]).reshape(len(e), -1).max(axis=1)
+    frame = pd.DataFrame(out)
+    frame.index.name = "replicate"
+    return frame
