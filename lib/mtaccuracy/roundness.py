@@ -15,7 +15,23 @@ TWO_PI = 2.0 * np.pi
 
 
 def harmonic_coefficients(signal, harmonics) -> tuple[np.ndarray, np.ndarray]:
-    """``A_k, B_k`` with ``signal = A_0 + sum A_k cos k theta + B_k sin k theta`` (Eq. 12)."""
+    """Fourier coefficients of a profile sampled uniformly over a turn (Yang et al. 2021, Eq. 12).
+
+    ``signal = A_0 + sum_k A_k cos k theta + B_k sin k theta`` with ``theta_i = 2 pi i / n``;
+    computed with the FFT.
+
+    Parameters
+    ----------
+    signal : array (..., n)
+        Samples over one turn (any length unit).
+    harmonics : array of int (m,)
+        Harmonic orders, each in ``1 <= k < n / 2``.
+
+    Returns
+    -------
+    A, B : arrays (..., m)
+        Cosine and sine coefficients, in the unit of ``signal``.
+    """
     x = np.asarray(signal, dtype=float)
     n = x.shape[-1]
     k = np.asarray(harmonics)
@@ -26,7 +42,20 @@ def harmonic_coefficients(signal, harmonics) -> tuple[np.ndarray, np.ndarray]:
 
 
 def lowpass(signals, max_harmonic: int) -> np.ndarray:
-    """Low-pass FFT filter along the last axis: harmonics above ``max_harmonic`` set to zero."""
+    """Low-pass FFT filter along the last axis: harmonics above ``max_harmonic`` set to zero.
+
+    Parameters
+    ----------
+    signals : array (..., n)
+        Samples over one turn.
+    max_harmonic : int
+        Highest harmonic kept, an integer in ``1..n // 2``.
+
+    Returns
+    -------
+    array (..., n)
+        The filtered signals.
+    """
     x = np.asarray(signals, dtype=float)
     n = x.shape[-1]
     if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
@@ -46,11 +75,23 @@ def _profile(profile):
 
 
 def lsc_roundness(profile):
-    """Least-squares circle roundness of radial deviations sampled uniformly over a turn.
+    """Least-squares circle (LSC) roundness of radial deviations sampled uniformly over a turn.
 
     The limacon model ``r(theta) ~ R0 + a cos theta + b sin theta`` (deviations small against
-    the radius), fitted with ``scipy.linalg.lstsq``; batched over leading axes.  Returns
-    ``(roundness, (R0, a, b))``: roundness is the peak-to-valley of the residual.
+    the radius; ISO 12181-1's least-squares reference circle), fitted with ``scipy.linalg.lstsq``;
+    batched over leading axes.
+
+    Parameters
+    ----------
+    profile : array (..., n)
+        Radial deviations, n >= 8, finite (any length unit).
+
+    Returns
+    -------
+    roundness : array (...)
+        Peak-to-valley of the residual to the circle, in the unit of ``profile``.
+    coefficients : array (..., 3)
+        ``R0, a, b`` of the limacon.
     """
     r = _profile(profile)
     n = r.shape[-1]
@@ -63,11 +104,24 @@ def lsc_roundness(profile):
 
 
 def mz_roundness(profile):
-    """Minimum-zone roundness (limacon model) by linear programming (``scipy.optimize.linprog``).
+    """Minimum-zone (MZC) roundness, limacon model, by linear programming.
 
     Minimise ``t_out - t_in`` over ``(a, b, t_in, t_out)`` subject to
-    ``t_in <= r_i - a cos theta_i - b sin theta_i <= t_out``.  One LP per profile (leading axes
-    looped).  Returns ``(roundness, (a, b))``.
+    ``t_in <= r_i - a cos theta_i - b sin theta_i <= t_out`` (``scipy.optimize.linprog``; the
+    minimum-zone reference of ISO 12181-1).  One LP per profile (leading axes looped).
+
+    Parameters
+    ----------
+    profile : array (..., n)
+        Radial deviations, n >= 8, finite (any length unit).
+
+    Returns
+    -------
+    roundness : array (...)
+        Width of the narrowest annulus holding the profile, in the unit of ``profile``; never
+        more than :func:`lsc_roundness`.
+    centre : array (..., 2)
+        ``a, b``: the annulus centre.
     """
     r = _profile(profile)
     n = r.shape[-1]

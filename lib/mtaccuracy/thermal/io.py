@@ -66,9 +66,20 @@ class DataFormatError(ValueError):
 class ThermalData:
     """Measurements of one axis: rows are measurements (experiment, measurement number, time).
 
-    ``temperatures`` has one column per sensor (degC), ``errors`` one row per measurement and one
-    column per target position (``positions_mm``), in um.  ``feeds`` maps experiment -> feed
-    (mm/min) when ``experiments.csv`` gives it.
+    Attributes
+    ----------
+    index : DataFrame (n, 3)
+        ``experiment``, ``measurement``, ``time_min`` of each measurement.
+    temperatures : DataFrame (n, S)
+        One column per sensor (degC).
+    errors : array (n, P)
+        Positioning error (um) at each target position.
+    positions_mm : array (P,)
+        Target positions (mm).
+    feeds : dict
+        Experiment -> feed (mm/min), when ``experiments.csv`` gives it.
+    source : str
+        Where the data came from (a folder, or ``"reconstructed"``).
     """
 
     index: pd.DataFrame
@@ -403,8 +414,19 @@ def _check_zeroing(path, experiments: np.ndarray, errors: np.ndarray, positions)
 
 
 def save_csv(df: pd.DataFrame, path, float_format: str = "%.6g") -> None:
-    """Write ``df`` as CSV with fixed bytes: no index, ``float_format``, ``\\n`` line ends, UTF-8;
-    the file is replaced (atomically) only when its bytes change."""
+    """Write a table as CSV with fixed bytes; rewrite the file only when its bytes change.
+
+    No index, ``float_format``, Unix line ends, UTF-8; the file is replaced atomically.
+
+    Parameters
+    ----------
+    df : DataFrame
+        The table.
+    path : path
+        The file; its folder is created if missing.
+    float_format : str
+        printf-style format of floats.
+    """
     path = Path(path)
     data = df.to_csv(index=False, float_format=float_format, lineterminator="\n").encode("utf-8")
     if not path.exists() or path.read_bytes() != data:
@@ -469,8 +491,22 @@ def write_measurements(data: ThermalData, folder, temperature_decimals: int = 2,
 
 
 def rises_of(temperatures: np.ndarray, experiments) -> np.ndarray:
-    """Temperatures (R, n, S) relative to the first row of each experiment (the one
-    implementation of :meth:`ThermalData.rises`, batched)."""
+    """Temperatures relative to the first measurement of each experiment, batched.
+
+    The one implementation of :meth:`ThermalData.rises` (the inputs of Eqs. 8 and 9's b).
+
+    Parameters
+    ----------
+    temperatures : array (R, n, S)
+        R stacked datasets of n measurements of S sensors (degC).
+    experiments : array (n,)
+        Experiment of each measurement.
+
+    Returns
+    -------
+    array (R, n, S)
+        Rises (degC).
+    """
     experiments = np.asarray(experiments)
     first = pd.Series(np.arange(len(experiments))).groupby(experiments).transform("first")
     t = np.asarray(temperatures, dtype=float)

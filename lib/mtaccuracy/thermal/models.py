@@ -43,11 +43,24 @@ __all__ = [
 # --------------------------------------------------------------------------------------------
 
 def decouple(offsets_mm: np.ndarray, errors_um: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Eq. 6: least-squares line through every measurement; returns k (um/m) and b (um).
+    """Split error profiles into their least-squares slope and intercept (Xu et al. 2022, Eq. 6).
 
-    ``offsets_mm`` (n_positions,) are the positions from the first target (0..260 mm), so b is
-    the line's value at the first target; ``errors_um`` is (..., n_positions).  Written out (not
-    ``np.polyfit``) because it *is* the paper's Eq. 6.
+    Written out (not ``np.polyfit``) because it *is* the paper's Eq. 6.
+
+    Parameters
+    ----------
+    offsets_mm : array (P,)
+        Target positions from the first target (0..260 mm in the paper), so b is the line's
+        value at the first target; at least two distinct.
+    errors_um : array (..., P)
+        Positioning errors (um).
+
+    Returns
+    -------
+    k : array (...)
+        Slopes (um/m).
+    b : array (...)
+        Intercepts (um).
     """
     x = np.asarray(offsets_mm, dtype=float)
     y = np.asarray(errors_um, dtype=float)
@@ -61,7 +74,22 @@ def decouple(offsets_mm: np.ndarray, errors_um: np.ndarray) -> tuple[np.ndarray,
 
 
 def compose(k_um_per_m, b_um, offsets_mm) -> np.ndarray:
-    """Eq. 7: y(x) = k x + b at every offset; returns (n_measurements, n_positions) in um."""
+    """Error profiles from slopes and intercepts: ``y(x) = k x + b`` (Xu et al. 2022, Eq. 7).
+
+    Parameters
+    ----------
+    k_um_per_m : array (n,)
+        Slopes (um/m).
+    b_um : array (n,)
+        Intercepts (um).
+    offsets_mm : array (P,)
+        Positions from the first target (mm).
+
+    Returns
+    -------
+    array (n, P)
+        Errors (um).
+    """
     k = np.asarray(k_um_per_m, dtype=float)[..., None]
     b = np.asarray(b_um, dtype=float)[..., None]
     return k * np.asarray(offsets_mm, dtype=float) / 1000.0 + b
@@ -153,9 +181,21 @@ def _svr_params(params: dict) -> dict:
 
 
 def svr_simplicity(params: dict) -> tuple:
-    """The canonical order among tied SVR candidates, simplest first: a linear kernel before
-    RBF, then the smaller C (stronger regularisation), the smaller gamma (smoother), the
-    larger epsilon (a wider tube, fewer support vectors)."""
+    """The canonical order among tied SVR candidates, simplest first.
+
+    A linear kernel before RBF, then the smaller C (stronger regularisation), the smaller gamma
+    (smoother), the larger epsilon (a wider tube, fewer support vectors).
+
+    Parameters
+    ----------
+    params : dict
+        A candidate of the grid (keys may carry an estimator prefix ``...__``).
+
+    Returns
+    -------
+    tuple
+        Sort key.
+    """
     p = _svr_params(params)
     gamma = p.get("gamma", 0.0)
     gamma = float(gamma) if isinstance(gamma, int | float) else np.inf
@@ -164,10 +204,28 @@ def svr_simplicity(params: dict) -> tuple:
 
 
 def canonical_best(cv_results: dict, rtol: float = SVR_TIE_RTOL) -> int:
-    """Index of the chosen candidate: among those whose mean cross-validated RMSE is within
-    ``rtol`` (relative) of the best, the simplest by :func:`svr_simplicity`.  Used as
-    ``GridSearchCV(refit=...)``, so that the choice is a property of the scores, not of
-    rounding noise or of the grid's order."""
+    """Index of the chosen SVR candidate: the simplest within ``rtol`` of the best RMSE.
+
+    Used as ``GridSearchCV(refit=...)``, so that the choice is a property of the scores, not of
+    rounding noise or of the grid's order.
+
+    Parameters
+    ----------
+    cv_results : dict
+        ``GridSearchCV.cv_results_`` scored with ``neg_root_mean_squared_error``.
+    rtol : float
+        Mean cross-validated RMSEs within this relative distance of the best are ties.
+
+    Returns
+    -------
+    int
+        Index into ``cv_results["params"]``.
+
+    Raises
+    ------
+    ValueError
+        When every candidate failed.
+    """
     rmse = -np.asarray(cv_results["mean_test_score"], dtype=float)
     if not np.isfinite(rmse).any():
         raise ValueError("every SVR candidate failed in cross-validation")
@@ -177,9 +235,23 @@ def canonical_best(cv_results: dict, rtol: float = SVR_TIE_RTOL) -> int:
 
 
 def tie_margin(cv_results: dict, rtol: float = SVR_TIE_RTOL) -> tuple[int, float]:
-    """(number of tied candidates, the best included; distance of the nearest other candidate
-    to the tie window's edge, relative to the best RMSE): how far the choice is from flipping.
-    The distance is NaN when there is no other candidate."""
+    """How far the SVR choice is from flipping.
+
+    Parameters
+    ----------
+    cv_results : dict
+        ``GridSearchCV.cv_results_`` scored with ``neg_root_mean_squared_error``.
+    rtol : float
+        The tie window (:data:`SVR_TIE_RTOL`).
+
+    Returns
+    -------
+    tied : int
+        Candidates within the window, the best included.
+    margin : float
+        Distance of the nearest other candidate to the window's edge, relative to the best
+        RMSE; NaN when there is no other candidate.
+    """
     rmse = -np.asarray(cv_results["mean_test_score"], dtype=float)
     rmse = rmse[np.isfinite(rmse)]
     gap = rmse / rmse.min() - 1.0
@@ -412,10 +484,23 @@ class DecoupledRegressor(RegressorMixin, BaseEstimator):
 
 
 def fit_linear(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Least squares with an intercept on a stack of problems: ``x`` (R, n, p), ``y`` (R, n)
-    or (R, n, q); returns the coefficients (R, 1 + p) or (R, 1 + p, q), intercept first.  The
-    batched twin of scikit-learn's ``LinearRegression`` (the tests check they agree), so that
-    many replicates are fitted at once."""
+    """Least squares with an intercept on a stack of problems at once.
+
+    The batched twin of scikit-learn's ``LinearRegression`` (the tests check they agree), so
+    that many noise replicates are fitted in one call.
+
+    Parameters
+    ----------
+    x : array (R, n, p)
+        Inputs of R problems.
+    y : array (R, n) or (R, n, q)
+        Targets.
+
+    Returns
+    -------
+    array (R, 1 + p) or (R, 1 + p, q)
+        Coefficients, intercept first.
+    """
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     a = np.concatenate([np.ones(x.shape[:-1] + (1,)), x], axis=-1)
     single = y.ndim == x.ndim - 1
@@ -424,7 +509,19 @@ def fit_linear(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def predict_linear(coef: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """``intercept + x @ slopes`` for the coefficients of :func:`fit_linear`."""
+    """``intercept + x @ slopes`` for the coefficients of :func:`fit_linear`.
+
+    Parameters
+    ----------
+    coef : array (R, 1 + p) or (R, 1 + p, q)
+        Coefficients, intercept first.
+    x : array (R, n, p)
+        Inputs.
+
+    Returns
+    -------
+    array (R, n) or (R, n, q)
+    """
     coef, x = np.asarray(coef, dtype=float), np.asarray(x, dtype=float)
     if coef.ndim == x.ndim - 1:
         return coef[..., :1] + np.einsum("rnp,rp->rn", x, coef[..., 1:])

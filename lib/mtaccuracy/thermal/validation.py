@@ -43,8 +43,18 @@ __all__ = [
 
 
 def metrics(residuals) -> dict:
-    """RMSE, largest absolute residual (the paper's delta_max) and MAE of ``residuals`` (any
-    shape, um or um/m); ``{"rmse", "max_residual", "mae"}`` as floats."""
+    """RMSE, largest absolute residual (delta_max) and MAE (Xu et al. 2022, Tables 4, 7, 8).
+
+    Parameters
+    ----------
+    residuals : array (any shape)
+        Measured minus predicted (um or um/m).
+
+    Returns
+    -------
+    dict
+        ``{"rmse", "max_residual", "mae"}`` as floats, in the unit of ``residuals``.
+    """
     return {k: float(v[0]) for k, v in batch_metrics(np.asarray(residuals)[None]).items()}
 
 
@@ -75,14 +85,42 @@ def design(data: ThermalData, inputs: dict, model: str) -> np.ndarray:
 
 
 def point_by_point(data: ThermalData, inputs: dict) -> PointByPointRegressor:
-    """The point-by-point MLR (Eq. 8) fitted on ``data``'s rises of ``inputs["point"]``."""
+    """The point-by-point MLR (Xu et al. 2022, Eq. 8) fitted on a dataset.
+
+    Parameters
+    ----------
+    data : ThermalData
+        Training measurements.
+    inputs : dict
+        ``inputs["point"]``: the sensors whose temperature rises are the inputs.
+
+    Returns
+    -------
+    PointByPointRegressor
+        Fitted, one ``LinearRegression`` per target position.
+    """
     return PointByPointRegressor(LinearRegression()).fit(design(data, inputs, "point"),
                                                          data.errors)
 
 
 def decoupled(data: ThermalData, inputs: dict, kind: str = "mlr") -> DecoupledRegressor:
-    """The decoupled model (Eq. 9) fitted on ``data``: ``kind`` "mlr" (``LinearRegression``)
-    or "svr" (:class:`GroupedSVR`, folds by experiment)."""
+    """The decoupled model (Xu et al. 2022, Eq. 9) fitted on a dataset.
+
+    Parameters
+    ----------
+    data : ThermalData
+        Training measurements.
+    inputs : dict
+        ``inputs["k"]``: sensors whose absolute temperatures are k's inputs; ``inputs["b"]``:
+        sensors whose rises are b's inputs.
+    kind : {"mlr", "svr"}
+        ``LinearRegression``, or :class:`GroupedSVR` with one fold per experiment.
+
+    Returns
+    -------
+    DecoupledRegressor
+        Fitted on :func:`design` ``(data, inputs, "decoupled")``.
+    """
     if kind not in ("mlr", "svr"):
         raise ValueError(f"unknown model kind {kind!r}; use 'mlr' or 'svr'")
     nk, nb = len(inputs["k"]), len(inputs["b"])
@@ -93,7 +131,22 @@ def decoupled(data: ThermalData, inputs: dict, kind: str = "mlr") -> DecoupledRe
 
 
 def eq8_table(model: PointByPointRegressor, sensors, positions_mm) -> pd.DataFrame:
-    """Eq. 8 as a table: position_mm, intercept and one coefficient per sensor (MLR only)."""
+    """Eq. 8 as a table: intercept and one coefficient per sensor at every position (MLR only).
+
+    Parameters
+    ----------
+    model : PointByPointRegressor
+        Fitted with linear estimators.
+    sensors : list of str
+        Names of the model's inputs, in order.
+    positions_mm : array (P,)
+        Target positions (mm).
+
+    Returns
+    -------
+    DataFrame (P, 2 + len(sensors))
+        ``position_mm``, ``intercept`` (um), one column per sensor (um/degC).
+    """
     rows = [{"position_mm": p, "intercept": m.intercept_,
              **dict(zip(sensors, m.coef_, strict=True))}
             for p, m in zip(positions_mm, model.estimators_, strict=True)]
@@ -101,7 +154,20 @@ def eq8_table(model: PointByPointRegressor, sensors, positions_mm) -> pd.DataFra
 
 
 def eq9_table(model: DecoupledRegressor, inputs: dict) -> pd.DataFrame:
-    """Eq. 9 as a table: target, term, coefficient (MLR only); b's terms are rises ``dT``."""
+    """Eq. 9 as a table: target, term, coefficient (MLR only); b's terms are rises ``dT``.
+
+    Parameters
+    ----------
+    model : DecoupledRegressor
+        Fitted with linear estimators.
+    inputs : dict
+        ``{"k": [...], "b": [...]}``: the sensors of k and of b, in order.
+
+    Returns
+    -------
+    DataFrame
+        One row per term: ``target`` ("k (um/m)" or "b (um)"), ``term``, ``coefficient``.
+    """
     rows = []
     for target, m, names, pre in (("k (um/m)", model.k_estimator_, inputs["k"], ""),
                                   ("b (um)", model.b_estimator_, inputs["b"], "d")):
@@ -112,9 +178,20 @@ def eq9_table(model: DecoupledRegressor, inputs: dict) -> pd.DataFrame:
 
 
 def svr_hyperparameters(model: DecoupledRegressor) -> pd.DataFrame:
-    """The cross-validated SVR hyperparameters for k and b of a decoupled SVR: the chosen
-    candidate, its mean CV RMSE, how many candidates tied with the best (``SVR_TIE_RTOL``)
-    and the distance of the nearest one to the tie window's edge."""
+    """The cross-validated SVR hyperparameters of k and b of a decoupled SVR.
+
+    Parameters
+    ----------
+    model : DecoupledRegressor
+        Fitted with :class:`GroupedSVR` for k and b.
+
+    Returns
+    -------
+    DataFrame (2, 9)
+        Per target: ``kernel``, ``C``, ``gamma``, ``epsilon`` of the chosen candidate, its mean
+        CV RMSE, the number of candidates, how many tied with the best (within its
+        ``tie_rtol``) and the distance of the nearest other one to the tie window's edge.
+    """
     rows = []
     for target, est in (("k", model.k_estimator_), ("b", model.b_estimator_)):
         s = est.search_
@@ -134,7 +211,34 @@ def svr_hyperparameters(model: DecoupledRegressor) -> pd.DataFrame:
 
 @dataclass
 class SplitResult:
-    """Everything :func:`evaluate_split` computed for one train/test split."""
+    """Everything :func:`evaluate_split` computed for one train/test split.
+
+    Attributes
+    ----------
+    train, test : list of int
+        The experiments.
+    position_selections : list of Selection
+        The sensitive-point selection at every position (training data).
+    selected : dict
+        The selected sensors ``{"point", "k", "b"}``; ``inputs`` the ones used (``sensors``
+        may fix them).
+    inputs : dict
+        The sensors the models used.
+    k_selection, b_selection : Selection
+        The selections for k (absolute temperatures) and b (rises).
+    models : dict
+        Fitted estimators: ``point_by_point_mlr``, ``decoupled_mlr``, ``decoupled_svr``.
+    predictions, kb_predictions : dict
+        Per model: predicted errors (n_test, P) in um; (k, b) of the decoupled models.
+    measured : array (n_test, P)
+        Measured errors (um) of the test experiments.
+    measured_kb : tuple
+        Their decoupled (k, b).
+    table : DataFrame
+        method, target, rmse, max_residual, mae, unit.
+    settings : dict
+        What determines the result (compared to reuse it).
+    """
 
     train: list[int]
     test: list[int]
@@ -154,11 +258,30 @@ class SplitResult:
 
 def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: float = 0.5,
                    kinds=("mlr", "svr"), sensors: dict | None = None) -> SplitResult:
-    """Select sensitive points on ``train`` only, fit point-by-point MLR and the decoupled
-    models, predict ``test`` from its temperatures; returns predictions and metrics.
+    """One train/test split: sensitive points, models, held-out metrics (Xu et al. 2022, Sec. 5).
 
-    ``sensors`` may fix the inputs instead of selecting them:
-    ``{"point": [...], "k": [...], "b": [...]}``; the selection is still computed and returned.
+    Selects sensitive points on ``train`` only (:func:`select_sensitive_points`), fits the
+    point-by-point MLR and the decoupled models there, predicts ``test`` from its temperatures.
+
+    Parameters
+    ----------
+    data : ThermalData
+        All measurements.
+    train, test : int or list of int
+        Experiments to fit on and to predict.
+    n_clusters : int
+        Clusters of the fuzzy clustering, so sensors per model.
+    rho : float
+        Distinguishing coefficient of the grey relational grade (Eq. 4).
+    kinds : tuple of {"mlr", "svr"}
+        Decoupled models fitted.
+    sensors : dict, optional
+        ``{"point": [...], "k": [...], "b": [...]}`` fixes the inputs instead of selecting
+        them; the selection is still computed and returned.
+
+    Returns
+    -------
+    SplitResult
     """
     missing = sorted({s for v in (sensors or {}).values() for s in v} - set(data.sensors))
     if missing:
@@ -216,12 +339,24 @@ def _settings(data, train, test, n_clusters, rho, kinds, sensors) -> dict:
 def leave_one_experiment_out(data: ThermalData, n_clusters: int = 3, rho: float = 0.5,
                              kinds=("mlr", "svr"), sensors: dict | None = None,
                              reuse=()) -> pd.DataFrame:
-    """:func:`evaluate_split` with each experiment held out in turn (selection redone on the
-    remaining ones every time); one row per held-out experiment, method and target.
+    """:func:`evaluate_split` with each experiment held out in turn (selection redone each time).
 
-    ``reuse``: results of :func:`evaluate_split`; one computed on the same data (compared by
-    content hash) with the same settings is taken as is instead of being computed again (it
-    is deterministic, so the table is the same, only faster)."""
+    Parameters
+    ----------
+    data : ThermalData
+        All measurements.
+    n_clusters, rho, kinds, sensors
+        As :func:`evaluate_split`.
+    reuse : sequence of SplitResult
+        Results computed on the same data (compared by content hash) with the same settings are
+        taken as they are instead of being computed again.
+
+    Returns
+    -------
+    DataFrame
+        One row per held-out experiment, method and target: ``held_out``, the sensors used and
+        the columns of :attr:`SplitResult.table`.
+    """
     frames = []
     for e in data.experiments:
         train = [x for x in data.experiments if x != e]
@@ -242,8 +377,18 @@ def leave_one_experiment_out(data: ThermalData, n_clusters: int = 3, rho: float 
 
 
 def batch_metrics(residuals) -> dict:
-    """:func:`metrics` of every replicate (its one implementation): ``residuals`` (R, ...) ->
-    {name: (R,)}."""
+    """:func:`metrics` of every replicate at once (its one implementation).
+
+    Parameters
+    ----------
+    residuals : array (R, ...)
+        Residuals of R replicates.
+
+    Returns
+    -------
+    dict
+        ``{"rmse", "max_residual", "mae"}``, each an array (R,).
+    """
     r = np.asarray(residuals, dtype=float)
     r = r.reshape(len(r), -1)
     return {"rmse": np.sqrt(np.mean(r**2, axis=1)), "max_residual": np.abs(r).max(axis=1),
@@ -252,21 +397,33 @@ def batch_metrics(residuals) -> dict:
 
 def replicate_split(replicates, train, test, inputs: dict, svr_params: dict | None = None
                     ) -> pd.DataFrame:
-    """The fits of :func:`evaluate_split` with fixed inputs, on every replicate at once.
+    """The fits of :func:`evaluate_split` with fixed inputs, on every noise replicate at once.
 
-    ``replicates`` has ``index``, ``sensors``, ``temperatures`` (R, n, S), ``errors``
-    (R, n, P) and ``positions_mm`` (:func:`mtaccuracy.thermal.synthetic.noise_replicates`);
-    ``inputs`` is ``{"point": [...], "k": [...], "b": [...]}``.  The MLRs are fitted batched
-    (:func:`fit_linear`); the SVRs, when ``svr_params = {"k": params, "b": params}`` fixes
-    their hyperparameters, one replicate at a time (libsvm solves one problem per call).
-    Sensitive points and hyperparameters are not chosen again: the spread over the replicates
-    is that of the fits and metrics for the given choices.
+    The MLRs are fitted batched (:func:`fit_linear`); the SVRs, when ``svr_params`` fixes their
+    hyperparameters, one replicate at a time (libsvm solves one problem per call).  Sensitive
+    points and hyperparameters are not chosen again: the spread over the replicates is that of
+    the fits and metrics for the given choices.
 
-    Returns one row per replicate; the columns are 3-tuples: (method, target, metric) for
-    the metrics of :func:`metrics`; ``("eq8", position, term)`` and ``("eq9", target, term)``
-    for the MLR coefficients; ``(method, "residual of the error", "lowest" | "highest")``;
-    ``("point_by_point_mlr", "largest residual at", position)``; and
-    ``("test", "largest |error|", "")``.
+    Parameters
+    ----------
+    replicates : Replicates
+        ``index``, ``sensors``, ``temperatures`` (R, n, S), ``errors`` (R, n, P),
+        ``positions_mm`` (:func:`mtaccuracy.thermal.synthetic.noise_replicates`).
+    train, test : list of int
+        Experiments to fit on and to predict.
+    inputs : dict
+        ``{"point": [...], "k": [...], "b": [...]}`` sensor names.
+    svr_params : dict, optional
+        ``{"k": params, "b": params}`` of :class:`StandardisedSVR`; None skips the SVR.
+
+    Returns
+    -------
+    DataFrame (R, ...)
+        One row per replicate; the columns are 3-tuples: (method, target, metric) for the
+        metrics of :func:`metrics`; ``("eq8", position, term)`` and ``("eq9", target, term)``
+        for the MLR coefficients; ``(method, "residual of the error", "lowest" | "highest")``;
+        ``("point_by_point_mlr", "largest residual at", position)``; and
+        ``("test", "largest |error|", "")``.
     """
     exp = replicates.index.experiment.to_numpy()
     tr, te = np.isin(exp, list(train)), np.isin(exp, list(test))
