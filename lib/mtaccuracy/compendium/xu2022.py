@@ -123,3 +123,131 @@ def prepare(data_dir: str = DEFAULT_DIR, regenerate: bool = True,
             + (f"{len(changed)} file(s) rewritten ({', '.join(p.name for p in changed)})"
                if changed else "every file byte-identical, nothing rewritten"))
     return folder, changed, what
+
+
+# ------------------------------------------------------------------------------------------
+# Notebook 04's checks, scorecard helpers and figures
+# ------------------------------------------------------------------------------------------
+
+#: The scorecard rows that score what a figure shows, where its name is not their item.
+FIGURE_ROWS = {"fig03_ambient_temperature": ["Table 1"],
+               **{f: ["Table 5", "Eq. 8", "Section 3.2: largest error*"]
+                  for f in ("fig05_error_vs_position", "fig06_error_vs_time", "fig07_error_surface",
+                            "fig08_error_zeroed", "fig09_error_other_experiments")},
+               "fig10_temperatures": ["Table 3", "Table 6", "Section 3.1"],
+               "fig11_point_by_point_prediction": ["Table 4", "Section 3.1"],
+               "fig12_slope_intercept": ["Table 5"],
+               "fig14_mlr_slope_intercept": ["Eq. 9", "Table 7: decoupled_mlr, slope k*",
+                                             "Table 7: decoupled_mlr, intercept b*"],
+               "fig15_mlr_error_prediction": ["Table 7", "Section 3.2: decoupled_mlr*"],
+               "fig16_svr_slope_intercept": ["Table 8: decoupled_svr, slope k*",
+                                             "Table 8: decoupled_svr, intercept b*"],
+               "fig17_svr_error_prediction": ["Table 8", "Section 3.2: decoupled_svr*",
+                                              "Section 5"]}
+RECONSTRUCTED_LABEL = "reconstructed data, not the paper's measurements"
+ERROR = "thermal positioning error"
+METRIC_NAMES = {"rmse": "RMSE", "max_residual": "largest residual", "mae": "MAE"}
+
+
+def check_experiments(stem: str, train, test) -> None:
+    """Refuse a split whose test experiment is also trained on, or with < 2 training
+    experiments (the SVR's cross-validation leaves one out)."""
+    from .runner import ParameterError
+
+    if test in train:
+        raise ParameterError(f"{stem}: test_experiment {test} is also a training experiment")
+    if len(set(train)) < 2:
+        raise ParameterError(f"{stem}: train_experiments needs at least 2 experiments (SVR "
+                             f"cross-validation leaves one out), got {train}")
+
+
+def check_data(stem: str, data, folder, train, test, n_clusters: int, inputs: str,
+               paper_inputs: dict) -> list[str]:
+    """Refuse parameters the data cannot serve; returns the paper's sensors the data lack."""
+    from .runner import ParameterError
+
+    absent = sorted(set(train + [test]) - set(data.experiments))
+    if absent:
+        raise ParameterError(f"{stem}: experiment(s) {absent} are not in {folder}; "
+                             f"it has {data.experiments}")
+    if n_clusters > len(data.sensors):
+        raise ParameterError(f"{stem}: n_clusters = {n_clusters} exceeds the "
+                             f"{len(data.sensors)} sensors")
+    lacking = sorted({s for v in paper_inputs.values() for s in v} - set(data.sensors))
+    if inputs == "published" and lacking:
+        raise ParameterError(f"{stem}: inputs = 'published' needs the paper's sensors, and "
+                             f"{folder} lacks {lacking}; use inputs = 'selected'")
+    return lacking
+
+
+def sampling_se(rep_se, *key):
+    """Sampling standard error of one of our numbers (notebook 04, Section 8): ``rep_se``
+    indexed by ``key``; None without replicates or for a number they do not cover."""
+    return None if rep_se is None or key not in rep_se.index else float(rep_se[key])
+
+
+def stated(ours, method: str, col: str) -> tuple[str, bool]:
+    """The paper's conclusion about one error metric of ``method`` (Sections 3.1, 3.3) and
+    whether our metrics (``split.table`` indexed by method, target) keep it."""
+    pbp, mlr, svr = (ours.loc[(m, ERROR), col] for m in
+                     ("point_by_point_mlr", "decoupled_mlr", "decoupled_svr"))
+    name = METRIC_NAMES[col]
+    return {"point_by_point_mlr": (f"point-by-point has the largest {name} of the three models "
+                                   f"(Sections 3.1, 3.3: 'prediction accuracy is poor')",
+                                   pbp > max(mlr, svr)),
+            "decoupled_mlr": (f"decoupled MLR has a smaller {name} than point-by-point "
+                              f"(Table 7 against Table 4)", mlr < pbp),
+            "decoupled_svr": (f"decoupled SVR has a smaller {name} than decoupled MLR and "
+                              f"point-by-point (Table 8 against Tables 7 and 4)",
+                              svr < min(mlr, pbp))}[method]
+
+
+def beats(result) -> tuple[dict, object]:
+    """Whether each decoupled model's largest residual is below point-by-point's (Section 5),
+    and the largest residuals by (method, target)."""
+    t = result.table.set_index(["method", "target"]).max_residual
+    pbp = t[("point_by_point_mlr", ERROR)]
+    return {m: t[(m, ERROR)] < pbp for m in ("decoupled_mlr", "decoupled_svr")}, t
+
+
+def prediction_figure(positions_mm, index, measured, predicted, title: str):
+    """Measured (solid) and predicted (dashed) errors along the axis, and the residuals."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    resid = measured - predicted
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    cm = plt.get_cmap("plasma")(np.linspace(0, 0.85, len(index)))
+    for c, (_, r), y, yp in zip(cm, index.iterrows(), measured, predicted, strict=True):
+        axes[0].plot(positions_mm, y, "o-", ms=3, color=c, label=f"{r.time_min:g} min")
+        axes[0].plot(positions_mm, yp, "--", color=c)
+        axes[1].plot(positions_mm, y - yp, "o-", ms=3, color=c)
+    axes[0].set_title("measured (solid) and predicted (dashed)")
+    axes[1].set_title(f"residual: {resid.min():.1f} .. {resid.max():.1f} um")
+    for ax in axes:
+        ax.set_xlabel("position (mm)")
+        ax.set_ylabel("error (um)")
+    axes[0].legend(fontsize=6, ncol=2)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def kb_figure(measurement, measured_kb, predicted_kb, title: str, colour):
+    """Slope k and intercept b of every test measurement: decoupled from the data and
+    predicted from the temperatures."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
+    for ax, meas, pred, lab in ((axes[0], measured_kb[0], predicted_kb[0], "slope k (um/m)"),
+                                (axes[1], measured_kb[1], predicted_kb[1], "intercept b (um)")):
+        ax.plot(measurement, meas, "o-", color=colour, label="decoupled from the data")
+        ax.plot(measurement, pred, "s--", color="k", label="predicted from temperatures")
+        ax.set_xlabel("measurement")
+        ax.set_ylabel(lab)
+        ax.set_title(f"largest residual {np.abs(meas - pred).max():.2f}")
+    axes[0].legend(fontsize=7)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig

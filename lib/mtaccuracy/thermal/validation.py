@@ -38,7 +38,7 @@ from .models import (
 __all__ = [
     "metrics", "batch_metrics", "design", "point_by_point", "decoupled", "eq8_table",
     "eq9_table", "svr_hyperparameters", "SplitResult", "evaluate_split",
-    "leave_one_experiment_out", "replicate_split",
+    "leave_one_experiment_out", "replicate_split", "metrics_by_experiment",
 ]
 
 
@@ -479,3 +479,22 @@ def replicate_split(replicates, train, test, inputs: dict, svr_params: dict | No
     frame = pd.DataFrame(out)
     frame.index.name = "replicate"
     return frame
+
+
+def metrics_by_experiment(frame: pd.DataFrame, column: str) -> pd.DataFrame:
+    """RMSE and largest residual of ``frame[column]`` per experiment.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        With an ``experiment`` column and the residual column.
+    column : str
+        The residuals (um or um/m).
+
+    Returns
+    -------
+    DataFrame (n_experiments, 2)
+        ``rmse``, ``max_residual``, indexed by experiment.
+    """
+    return pd.DataFrame({e: metrics(g[column]) for e, g in frame.groupby("experiment")}
+                        ).T[["rmse", "max_residual"]]
