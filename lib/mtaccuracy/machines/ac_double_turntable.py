@@ -260,35 +260,6 @@ def rank_poses(candidates, misfit: str = "misfit", rtol: float = 1e-6,
     return minima.iloc[ranked].reset_index(drop=True)
 
 
-def _least_squares_fits(residuals, starts, lo, hi, scale, ftol, xtol, max_nfev) -> list:
-    """scipy's ``least_squares`` (trust-region reflective, bounds ``lo``/``hi``) from each
-    start, with a central-difference Jacobian (steps ``1e-6 * scale``) evaluated in one batched
-    call of ``residuals`` ((B, n) -> (B, m)); BLAS single-threaded (small matrices: threads only
-    cost time, and the result is then the same for any thread count).  Returns
-    ``[(x, rms misfit, status)]``, one per start."""
-    from scipy.optimize import least_squares
-    from threadpoolctl import threadpool_limits
-
-    n, step = len(scale), 1e-6 * scale
-
-    def fun(v):
-        return residuals(v[None])[0]
-
-    def jac(v):
-        e = np.eye(n) * step
-        r = residuals(np.concatenate([v + e, v - e]))
-        return ((r[:n] - r[n:]) / (2 * step[:, None])).T
-
-    out = []
-    with threadpool_limits(limits=1, user_api="blas"):
-        for v0 in starts:
-            r = least_squares(fun, np.clip(v0, lo, hi), jac=jac, bounds=(lo, hi),
-                              x_scale=scale, ftol=ftol, xtol=xtol, gtol=None,
-                              max_nfev=max_nfev, method="trf")
-            out.append((r.x, float(np.sqrt(np.mean(fun(r.x) ** 2))), int(r.status)))
-    return out
-
-
 def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, starts,
                         free=AXES, fixed: Mapping | None = None, ftol: float = 1e-15,
                         xtol: float = 1e-15, max_nfev: int = 500):
@@ -305,37 +276,23 @@ def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, star
     single-threaded (small matrices: threads only cost time, and the result is then the same
     for any thread count).
     """
-    import pandas as pd
-
     from ..sensitivity.linear import linear_indices
+    from ..sensitivity.posefit import fit_pose
 
     free = tuple(free)
     fixed = dict(fixed or {})
     if set(free) | set(fixed) != set(AXES) or set(free) & set(fixed):
         raise ValueError(f"free {free} and fixed {tuple(fixed)} must split the axes {AXES}")
-    starts = np.atleast_2d(np.asarray(starts, dtype=float))
-    if starts.shape[1] != len(free):
-        raise ValueError(f"starts must have {len(free)} columns ({free}), got {starts.shape}")
-    target = np.asarray(target, dtype=float)
-    rows, cols = np.asarray(rows), np.asarray(cols)
-    scale = np.array([100.0 if a in "xyz" else 1.0 for a in free])
-    lo = np.array([TRAVELS[a][0] if a != "C" else -np.inf for a in free])
-    hi = np.array([TRAVELS[a][1] if a != "C" else np.inf for a in free])
-
-    def residuals(v):  # v: (P, len(free)) -> (P, len(target))
-        pose = {a: v[:, i] for i, a in enumerate(free)}
-        pose.update({a: np.full(v.shape[0], float(fixed[a])) for a in fixed})
-        return linear_indices(machine.linear_jacobian(pose), sd)[:, rows, cols] - target
-
-    out = []
-    for x, misfit, status in _least_squares_fits(residuals, starts, lo, hi, scale, ftol, xtol,
-                                                 max_nfev):
-        row = {a: float(fixed[a]) for a in fixed}
-        row.update({a: float(x[i]) for i, a in enumerate(free)})
-        row["C"] = float(np.mod(row["C"], 2 * np.pi))
-        row["misfit"], row["status"] = misfit, status
-        out.append({k: row[k] for k in (*AXES, "misfit", "status")})
-    return pd.DataFrame(out)
+    bounds = (np.array([TRAVELS[a][0] if a != "C" else -np.inf for a in free]),
+              np.array([TRAVELS[a][1] if a != "C" else np.inf for a in free]))
+    fits = fit_pose(lambda pose: linear_indices(machine.linear_jacobian(pose), sd), target,
+                    (rows, cols), starts, free, fixed=fixed, bounds=bounds,
+                    scale=np.array([100.0 if a in "xyz" else 1.0 for a in free]),
+                    ftol=ftol, xtol=xtol, max_nfev=max_nfev)
+    for a in fixed:
+        fits[a] = float(fixed[a])
+    fits["C"] = np.mod(fits["C"].to_numpy(dtype=float), 2 * np.pi)
+    return fits[[*AXES, "misfit", "status"]]
 
 
 # --------------------------------------------------------------------------------------
@@ -431,6 +388,7 @@ def fit_pose_average_to_indices(machine: ACDoubleTurntable, sd, target, rows, co
     import pandas as pd
 
     from ..sensitivity.linear import linear_indices
+    from ..sensitivity.posefit import least_squares_starts
 
     starts = np.asarray(starts, dtype=float)
     if starts.ndim != 3 or starts.shape[2] != 5:
@@ -449,8 +407,8 @@ def fit_pose_average_to_indices(machine: ACDoubleTurntable, sd, target, rows, co
         return s.reshape(v.shape[0], m, -1).mean(axis=1) - target
 
     out = []
-    fits = _least_squares_fits(residuals, starts.reshape(len(starts), -1), lo, hi, scale, ftol,
-                               xtol, max_nfev)
+    fits = least_squares_starts(residuals, starts.reshape(len(starts), -1), lo, hi, scale, ftol,
+                                xtol, max_nfev)
     for k, (x, misfit, status) in enumerate(fits):
         poses = [canonical_pose(dict(zip(AXES, p, strict=True))) for p in x.reshape(m, 5)]
         poses.sort(key=lambda p: -p["A"])

@@ -15,12 +15,15 @@ One submodule per method; everything is re-exported here, so notebooks write
   Sobol indices from its coefficients (Zheng et al.) |
 | ``benchmarks`` | Ishigami, G function, interaction polynomial: exact indices for tests and bench |
 | ``screening`` | key-error selection rules and reduced models (Rong et al.) |
+| ``posefit`` | which pose explains a published table: candidate screening and least-squares or
+  Powell refinement for any statistic (notebooks 01 and 03) |
 """
 
 from . import benchmarks  # noqa: F401
 from .checks import *  # noqa: F403
 from .linear import *  # noqa: F403
 from .pce import *  # noqa: F403
+from .posefit import *  # noqa: F403
 from .screening import *  # noqa: F403
 from .sobol import *  # noqa: F403
 from .spearman import *  # noqa: F403
