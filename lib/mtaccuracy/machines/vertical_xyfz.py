@@ -219,3 +219,25 @@ def closed_form_typos():
             rows.append(dict(equation=eq, component=comp, term=str(term), degree=sum(mono),
                              printed=str(cp), derived=str(cd), kind=kind))
     return rows
+
+
+def describe_typos(typos, equation: str) -> str:
+    """Every difference of one printed equation (Guo et al. 2016, Eqs. 11-13), in words.
+
+    Parameters
+    ----------
+    typos : DataFrame
+        The rows of :func:`closed_form_typos`.
+    equation : str
+        Which equation.
+
+    Returns
+    -------
+    str
+        ``kind term (printed ..., derived ...)`` per difference, joined by "; " (a bracket
+        left open is named without its coefficients).
+    """
+    d = typos[typos.equation == equation]
+    return "; ".join(f"{r.kind} {r.term}" + ("" if r.kind == "bracket"
+                                               else f" (printed {r.printed}, derived {r.derived})")
+                     for r in d.itertuples())
