@@ -19,7 +19,7 @@ MAX_HELPER = 15
 PLOT_HELPER = re.compile(r"^(plot|draw)_")
 NOTEBOOKS = runner.all_notebooks()
 #: notebooks still being thinned (issue 15 item 4); the test fails when one listed here passes
-PENDING = {"01", "02", "05"}
+PENDING = {"01", "05"}
 
 
 def _code_cells(path):

@@ -254,3 +254,52 @@ def linear_indices_at_poses(machine: Horizontal3Axis, bounds, poses: Mapping,
 
     _, var = _linear.uniform_moments(bounds, machine.n_errors)
     return _linear.indices_at_poses(machine.first_order_jacobian(poses)[:, :components], var)
+
+
+def errors_and_pose_model(machine: Horizontal3Axis, tool: Mapping):
+    """The model of Rong et al.'s Sobol' study: errors and tool-tip position as inputs.
+
+    Parameters
+    ----------
+    machine : Horizontal3Axis
+        The machine (D errors).
+    tool : mapping
+        Tool offsets ``{name: value}`` (mm), the same for every run.
+
+    Returns
+    -------
+    callable
+        ``model(X)``: ``X`` (m, D + 3), the D errors (mm, rad) then the pose x, y, z (mm), to
+        the tool-tip position error ``Ex, Ey, Ez`` (m, 3) in mm.
+    """
+    d = machine.n_errors
+
+    def model(x):
+        return machine.position_error(x[:, :d], dict(x=x[:, d], y=x[:, d + 1], z=x[:, d + 2],
+                                                     **tool))
+    return model
+
+
+def errors_at_poses_model(machine: Horizontal3Axis, poses_xyz, tool: Mapping):
+    """The model of the errors alone, each row at its own pose (the poses of a design kept).
+
+    Parameters
+    ----------
+    machine : Horizontal3Axis
+        The machine (D errors).
+    poses_xyz : array (m, 3)
+        The pose x, y, z (mm) of each row.
+    tool : mapping
+        Tool offsets (mm).
+
+    Returns
+    -------
+    callable
+        ``model(E)``: errors ``E`` (m, D) to ``Ex, Ey, Ez`` (m, 3) in mm.
+    """
+    full = errors_and_pose_model(machine, tool)
+    poses_xyz = np.asarray(poses_xyz, dtype=float)
+
+    def model(e):
+        return full(np.c_[e, poses_xyz])
+    return model
