@@ -12,7 +12,9 @@ optimisation at a time, looping over the population in Python, and hundreds of r
 from __future__ import annotations
 
 __all__ = ["PC_MAX", "PC_MIN", "PM_MAX", "PM_MIN", "GAResult", "adaptive_probabilities", "run_ga",
-           "run_de", "convergence_generation", "reference_optimum", "reference_optima"]
+           "run_de", "convergence_generation", "convergence_statistics", "speedup",
+           "bootstrap_se", "reference_optimum",
+           "reference_optima"]
 
 import numpy as np
 from scipy.optimize import minimize
@@ -291,3 +293,85 @@ def reference_optimum(k: int, bounds=PAPER_BOX, n_starts: int = 4, seed: int = 0
     harmonic).  Returns ``(H, genes)``, the genes canonical (:func:`canonical_genes`)."""
     h, g = reference_optima([k], bounds, n_starts=n_starts, seed=seed, maxiter=maxiter)
     return float(h[0]), g[0]
+
+
+def convergence_statistics(name: str, result, h_ref: float, rel_tol: float) -> dict:
+    """How a set of GA (or DE) runs converged (Yang et al. 2021, Figs. 8-9, over many seeds).
+
+    Parameters
+    ----------
+    name : str
+        The algorithm's name in the table.
+    result : GAResult
+        ``history`` (generations + 1, runs) of best-so-far H, ``best_h`` (runs,), ``label``,
+        ``evaluations_per_generation``.
+    h_ref : float
+        The best known H (:func:`reference_optimum`).
+    rel_tol : float
+        "Reached" means within this relative distance of ``h_ref``.
+
+    Returns
+    -------
+    dict
+        ``reached_fraction`` and the quartiles of the generation at which the runs that reach
+        ``h_ref`` do so (``reached_*``), the quartiles of the generation at which each run comes
+        within 1e-3 of its own final value (``plateau_*``), and the median, best and worst final
+        H.  Quartiles of an empty set are NaN.
+    """
+    reach = convergence_generation(result.history, h_ref, rel_tol)
+    plateau = convergence_generation(result.history, result.history[-1], 1e-3)
+    ok = reach >= 0
+
+    def q(v, p):
+        return float(np.percentile(v, p)) if len(v) else np.nan
+    return dict(algorithm=name, label=result.label, runs=result.history.shape[1],
+                evaluations_per_generation=result.evaluations_per_generation,
+                reached_fraction=ok.mean(), reached_median=q(reach[ok], 50),
+                reached_q25=q(reach[ok], 25), reached_q75=q(reach[ok], 75),
+                plateau_median=q(plateau, 50), plateau_q25=q(plateau, 25),
+                plateau_q75=q(plateau, 75), final_H_median=np.median(result.best_h),
+                final_H_best=result.best_h.min(), final_H_worst=result.best_h.max())
+
+
+def speedup(improved, traditional, axis=-1):
+    """Speed-up of one algorithm over another, in percent: ``1 - median(improved) /
+    median(traditional)`` of their convergence generations.
+
+    Parameters
+    ----------
+    improved, traditional : arrays (..., runs)
+        Convergence generations of independent runs.
+    axis : int
+        The runs' axis.
+
+    Returns
+    -------
+    array (...)
+        Percent; positive when the improved algorithm converges earlier.
+    """
+    return 100 * (1 - np.median(improved, axis=axis) / np.median(traditional, axis=axis))
+
+
+def bootstrap_se(statistic, *samples, rng, n_resamples: int = 2000) -> float:
+    """Bootstrap standard error of a statistic of independent samples of runs.
+
+    Parameters
+    ----------
+    statistic : callable
+        ``statistic(*samples, axis)``, vectorised as ``scipy.stats.bootstrap`` expects.
+    *samples : arrays (runs,)
+        Independent samples (resampled separately).
+    rng : numpy.random.Generator
+        The resampling's generator.
+    n_resamples : int
+        Bootstrap resamples.
+
+    Returns
+    -------
+    float
+        The standard deviation of the statistic over the resamples (percentile bootstrap).
+    """
+    from scipy.stats import bootstrap
+
+    return bootstrap(samples, statistic, n_resamples=n_resamples, vectorized=True,
+                     method="percentile", rng=rng).standard_error

@@ -33,7 +33,7 @@ __all__ = ["Separation", "CancelledHarmonicsWarning", "probe_angles", "weights",
            "eigenvalues", "transfer", "circulant_matrix", "probe_signals", "separate",
            "separate_details", "separate_least_squares", "least_squares_transfer",
            "rotation_error", "motion_from_scalar", "MAPPINGS",
-           "cancelled_harmonics"]
+           "cancelled_harmonics", "rank_check"]
 
 import warnings
 from dataclasses import dataclass, field
@@ -562,3 +562,68 @@ def cancelled_harmonics(phi, w, n_samples: int, rcond: float = 1e-9) -> list[int
     n = _check_n(n_samples)
     lam = np.abs(eigenvalues(phi, w, np.arange(n)))
     return [k for k in range(2, n // 2 + 1) if lam[k] <= rcond * lam.max()]
+
+
+def rank_check(positions, phi, w, test_profile, rtol: float, roundoff: float):
+    """The rank of Eq. 6's matrix for one layout, and the separation checked against it.
+
+    Builds the circulant matrix of the layout (:func:`circulant_matrix`), counts its singular
+    values above ``rtol`` times the largest, separates a test profile through the FFT with the
+    cancelled harmonics set aside (:func:`separate_details`, ``allow_cancelled=True``) and
+    checks three things to round-off: the pseudo-inverse recovers the profile without the
+    set-aside harmonics, least squares on the matrix agrees with the FFT solution, and the
+    discarded singular values are zero.
+
+    Parameters
+    ----------
+    positions : sequence of int (4,)
+        Probe positions (sample indices, the first 0).
+    phi : array (3,)
+        Probe angles (rad) of probes 1-3 (:func:`probe_angles`).
+    w : array (4,)
+        Weights of the four probes (:func:`full_weights`).
+    test_profile : array (n,)
+        A profile to separate (any unit).
+    rtol : float
+        Relative singular-value threshold of the numerical rank (the ``rcond`` of the
+        separation).
+    roundoff : float
+        What separates round-off from a result, relative to max |test_profile|.
+
+    Returns
+    -------
+    rank : int
+        The numerical rank.
+    sv : array (n,)
+        Singular values, descending.
+    separation : Separation
+        Of the test profile.
+    warned : list of str
+        The :class:`CancelledHarmonicsWarning` messages.
+
+    Raises
+    ------
+    RuntimeError
+        When a check exceeds ``roundoff``.
+    """
+    n = len(test_profile)
+    a_mat = circulant_matrix(positions, w, n)
+    sv = scipy.linalg.svdvals(a_mat)                                   # descending
+    rank = int((sv > rtol * sv[0]).sum())
+    zero = np.zeros(n)
+    y_t = probe_signals(test_profile, zero, zero, positions)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", CancelledHarmonicsWarning)
+        s_t = separate_details(y_t, phi, w, rcond=rtol, allow_cancelled=True)
+    keep = np.abs(s_t.eigen) > rtol * np.abs(s_t.eigen).max()
+    keep[[1, n - 1]] = False
+    r_kept = np.fft.ifft(np.fft.fft(test_profile) * keep).real   # without the set-aside harmonics
+    ls = scipy.linalg.lstsq(a_mat, w @ y_t, cond=rtol)[0]
+    scale = np.abs(test_profile).max()
+    errs = {"pinv_error_rel": np.abs(s_t.profile_no_first - r_kept).max() / scale,
+            "lstsq_vs_fft_rel": np.abs(ls - s_t.profile_no_first).max() / scale,
+            "discarded_sv_rel": sv[rank:].max() / sv[0] if rank < n else 0.0}
+    bad = {k: v for k, v in errs.items() if not v < roundoff}
+    if bad:
+        raise RuntimeError(f"expected round-off below {roundoff:g}, got {bad}")
+    return rank, sv, s_t, [str(c.message) for c in caught]

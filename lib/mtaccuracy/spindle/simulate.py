@@ -5,11 +5,12 @@ probe signals with asynchronous error motion and noise sampled over several revo
 
 from __future__ import annotations
 
-__all__ = ["random_profile", "simulate_measurements", "coincidence_ratio", "measure_separated"]
+__all__ = ["random_profile", "simulate_measurements", "coincidence_ratio", "measure_separated",
+           "separation_statistics"]
 
 import numpy as np
 
-from ..roundness import _profile, lowpass, mz_roundness
+from ..roundness import _profile, lowpass, lsc_roundness, mz_roundness
 from .separation import TWO_PI, _check_n, probe_angles, probe_signals, separate_details
 
 
@@ -127,3 +128,28 @@ def measure_separated(profile, dx, dy, positions, phi, w, *, speed_rpm: float, d
     s = separate_details(lowpass(y, lowpass_harmonic), phi, w, first_harmonic=first_harmonic,
                          max_harmonic=lowpass_harmonic)
     return s, n_rev
+
+
+def separation_statistics(separated, to_error) -> dict:
+    """Roundness and rotation error over repeated separations (Yang et al. 2021, Table 2).
+
+    Parameters
+    ----------
+    separated : Separation
+        ``profile`` (m, n), ``dx``, ``dy`` (m, n) of m repeated measurements, in mm.
+    to_error : callable
+        ``to_error(dx, dy)``: the scalar rotation error (mm) the notebook compares.
+
+    Returns
+    -------
+    dict
+        Minimum-zone roundness mean and standard deviation (um), the repeatability (its
+        standard deviation over its mean, percent), the least-squares roundness mean and
+        standard deviation (um) and the mean peak-to-valley rotation error (um).
+    """
+    mz = mz_roundness(separated.profile)[0] * 1e3
+    lsc = lsc_roundness(separated.profile)[0] * 1e3
+    err = to_error(separated.dx, separated.dy) * 1e3
+    return dict(mz_mean_um=mz.mean(), mz_std_um=mz.std(ddof=1),
+                repeatability_percent=100 * mz.std(ddof=1) / mz.mean(), lsc_mean_um=lsc.mean(),
+                lsc_std_um=lsc.std(ddof=1), rotation_error_pv_mean_um=np.ptp(err, axis=-1).mean())

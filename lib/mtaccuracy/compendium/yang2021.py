@@ -1,0 +1,166 @@
+"""The compendium's side of notebook 05 (Yang et al. 2021): checks of its parameters."""
+
+from __future__ import annotations
+
+__all__ = ["check_run"]
+
+
+def check_run(stem: str, probe_positions, n_samples: int, lowpass_harmonic: int,
+              exp_n_samples: int, interleave: int, worst_k: int, harmonic_k: int,
+              k_sweep_max: int, pop_size: int) -> None:
+    """Refuse parameters that contradict each other (each with a clear message)."""
+    if len(probe_positions) != 4 or probe_positions[0] != 0 \
+            or max(probe_positions) >= n_samples or len(set(probe_positions)) != 4:
+        raise ValueError(f"{stem}: probe_positions must be 4 distinct sample indices in "
+                         f"0..{n_samples - 1} starting with 0, got {probe_positions}")
+    if lowpass_harmonic > exp_n_samples // 2 or exp_n_samples % interleave:
+        raise ValueError(f"{stem}: need lowpass_harmonic <= exp_n_samples / 2 and interleave "
+                         f"dividing exp_n_samples, got {lowpass_harmonic}, {interleave}, "
+                         f"{exp_n_samples}")
+    if worst_k >= min(n_samples, exp_n_samples) // 2:
+        raise ValueError(f"{stem}: worst_k must stay below N/2 = "
+                         f"{min(n_samples, exp_n_samples) // 2}")
+    if harmonic_k > k_sweep_max or pop_size % 2:
+        raise ValueError(f"{stem}: need harmonic_k <= k_sweep_max (the sweep supplies the GA's "
+                         f"best run at harmonic_k) and an even pop_size (parents are paired), got "
+                         f"{harmonic_k}, {k_sweep_max}, {pop_size}")
+
+
+def convergence_figure(result, h_ref: float, harmonic_k: int, generations: int,
+                       converge_tol: float, published_generation: float, title: str,
+                       colours: tuple):
+    """Figs. 8-9 over many seeds: the best-so-far H of every run (percentile bands, the median
+    and three single runs) beside the histogram of convergence generations."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from ..spindle import convergence_generation
+
+    reproduced, published = colours
+    gens = np.arange(generations + 1)
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 3.8), gridspec_kw=dict(width_ratios=[1.6, 1]))
+    hst = result.history
+    ax.fill_between(gens, np.percentile(hst, 10, axis=1), np.percentile(hst, 90, axis=1),
+                    color=reproduced, alpha=0.15, label="10-90 % of runs")
+    ax.fill_between(gens, np.percentile(hst, 25, axis=1), np.percentile(hst, 75, axis=1),
+                    color=reproduced, alpha=0.3, label="25-75 %")
+    ax.plot(gens, np.median(hst, axis=1), color=reproduced, label="median")
+    for j in range(3):
+        ax.plot(gens, hst[:, j], color="0.4", lw=0.6, alpha=0.7,
+                label="single runs" if j == 0 else None)
+    ax.axhline(h_ref, color="k", ls=":", lw=1, label=f"best known H {h_ref:.4f}")
+    ax.axhline(0.25, color="k", ls="--", lw=0.8, label="lower bound 1/4")
+    ax.axvline(published_generation, color=published, lw=1.2,
+               label=f"published: ~{published_generation:.0f}")
+    ax.set_ylim(0.248, max(0.30, float(np.percentile(hst[5], 90))))
+    ax.set_xlabel("generation")
+    ax.set_ylabel("best-so-far H")
+    ax.set_title(f"{title} ({result.label}), k = {harmonic_k}, {hst.shape[1]} runs")
+    ax.legend(fontsize=7, ncol=2)
+    reach = convergence_generation(hst, h_ref, converge_tol)
+    plateau = convergence_generation(hst, hst[-1], 1e-3)
+    bins = np.linspace(0, generations, 21)
+    ax2.hist(plateau, bins=bins, color="0.6", alpha=0.7, label="plateau generation")
+    ax2.hist(reach[reach >= 0], bins=bins, color=reproduced, alpha=0.7,
+             label=f"reached within {converge_tol:.0%} ({(reach >= 0).mean():.0%} of runs)")
+    ax2.axvline(published_generation, color=published, lw=1.2, label="published")
+    ax2.set_xlabel("convergence generation")
+    ax2.set_ylabel("runs")
+    ax2.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def table1_consistency(t1, sweep):
+    """Table 1 against Eqs. 15, 20 and our optimum: for every printed row, H and the weights of
+    every parameter set that rounds to the printed one (a 21^4 grid over half a unit of the last
+    printed digit), the weights-only bound of H, and our GA and best known optima at that k.
+    ``t1``: the published table (strings); ``sweep``: the optimum per harmonic order."""
+    import numpy as np
+    import pandas as pd
+
+    from .. import spindle as sp
+    from .reproduction import printed_half_unit as half_unit
+
+    rows = []
+    g = np.linspace(-1, 1, 21)
+    grid = np.stack(np.meshgrid(g, g, g, g, indexing="ij"), -1).reshape(-1, 4)
+    for _, r in t1.iterrows():
+        k = int(r.k)
+        cols = ["phi1_rad", "phi2_rad", "phi3_rad", "a3"]
+        centre = np.array([float(r[c]) for c in cols])
+        half = np.array([half_unit(r[c]) for c in cols])
+        x = centre + grid * half                            # every value that rounds to the printed
+        h = sp.objective_H(x, k)
+        a1_, a2_ = sp.weights(x[:, :3], x[:, 3])
+        w_pr = np.array([float(r[c]) for c in ("a1", "a2", "a3")])
+        w_bound = float(sp.weights_bound_H(w_pr, [half_unit(r[c]) for c in ("a1", "a2", "a3")]))
+        ours = sweep.set_index("k").loc[k]
+        rows.append(dict(k=k, published_H=float(r.H),
+                         H_of_printed_parameters=float(sp.objective_H(centre, k)),
+                         H_min_within_rounding=h.min(), H_max_within_rounding=h.max(),
+                         H_weights_only_bound=w_bound,
+                         published_a1=float(r.a1), eq15_a1_min=a1_.min(), eq15_a1_max=a1_.max(),
+                         published_a2=float(r.a2), eq15_a2_min=a2_.min(), eq15_a2_max=a2_.max(),
+                         ours_H_ga=ours.H_ga_best, ours_H_best_known=ours.H_best_known,
+                         ours_phi1=ours.phi1, ours_phi2=ours.phi2, ours_phi3=ours.phi3,
+                         ours_a1=ours.a1, ours_a2=ours.a2, ours_a3=ours.a3))
+    table1 = pd.DataFrame(rows)
+    table1["H_consistent"] = (table1.published_H >= table1.H_min_within_rounding - 5e-4) & \
+                             (table1.published_H <= table1.H_max_within_rounding + 5e-4)
+    table1["a1_consistent"] = (table1.published_a1 >= table1.eq15_a1_min - 5e-4) & \
+                              (table1.published_a1 <= table1.eq15_a1_max + 5e-4)
+    table1["abs_a1_consistent"] = (table1.published_a1 >= -table1.eq15_a1_max - 5e-4) & \
+                                  (table1.published_a1 <= -table1.eq15_a1_min + 5e-4)
+    table1["a2_consistent"] = (table1.published_a2 >= table1.eq15_a2_min - 5e-3) & \
+                              (table1.published_a2 <= table1.eq15_a2_max + 5e-3)
+    # possible for the printed weights with some angles: the printed H (+ half its last digit)
+    # reaches the bound
+    table1["H_possible_for_the_weights"] = (table1.published_H + t1.H.map(half_unit).to_numpy()
+                                            >= table1.H_weights_only_bound)
+    return table1
+
+
+def fig21_figure(theta, layouts, rotation_errors, profiles, true_profile, d600, true_mz_um: float,
+                 published: tuple, colours):
+    """Fig. 21 (simulated): one run's separated rotation error and profile for every layout at
+    600 r/min (polar), and the separated roundness of each layout beside the published values.
+
+    ``rotation_errors``, ``profiles``: per layout, one run's curves (um, offsets added);
+    ``true_profile`` (um, offset added); ``d600``: the 600 r/min rows by layout;
+    ``published``: (optimised value, [random values]); ``colours``: (colormap, published)."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    cmap, published_colour = colours
+    pub_opt, pub_rand = published
+    closed = np.r_[theta, theta[:1]]
+    fig = plt.figure(figsize=(12, 4.2))
+    ax = fig.add_subplot(1, 3, 1, projection="polar")
+    for i, name in enumerate(layouts):
+        v = rotation_errors[name]
+        ax.plot(closed, np.r_[v, v[:1]], lw=1.2 if i == 0 else 0.7, color=cmap(i), label=name)
+    ax.set_title("separated rotation error, one run (um, offset 2)", fontsize=9, pad=18)
+    ax.tick_params(labelsize=6)
+    ax.legend(fontsize=6, loc="lower left", bbox_to_anchor=(-0.3, -0.25))
+    ax2 = fig.add_subplot(1, 3, 2, projection="polar")
+    for i, name in enumerate(layouts):
+        v = profiles[name]
+        ax2.plot(closed, np.r_[v, v[:1]], lw=1.2 if i == 0 else 0.7, color=cmap(i))
+    ax2.plot(closed, np.r_[true_profile, true_profile[:1]], color="k", lw=2, alpha=0.3,
+             label="true")
+    ax2.set_title("separated profile, one run (um, offset 5)", fontsize=9, pad=18)
+    ax2.tick_params(labelsize=6)
+    ax3 = fig.add_subplot(1, 3, 3)
+    ax3.bar(range(len(d600)), d600.mz_mean_um, yerr=d600.mz_std_um,
+            color=[cmap(i) for i in range(len(d600))], capsize=3)
+    ax3.axhline(true_mz_um, color="k", ls="--", lw=0.8, label="true (minimum zone)")
+    ax3.scatter([0] + list(range(1, 1 + len(pub_rand))), [pub_opt] + list(pub_rand), marker="D",
+                color=published_colour, zorder=3, label="published (Fig. 21)")
+    ax3.set_xticks(range(len(d600)), list(d600.index), rotation=30, ha="right", fontsize=7)
+    ax3.set_ylabel("separated roundness, mean +- sd (um)")
+    ax3.legend(fontsize=7)
+    fig.suptitle("Fig. 21 (SIMULATION): optimised against random probe angles at 600 r/min",
+                 y=1.04)
+    fig.tight_layout()
+    return fig
