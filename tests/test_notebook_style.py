@@ -1,9 +1,10 @@
 """Notebooks are narrative (issue 15 item 4): the maths and searches live in the library.
 
-Each notebook's code cells (the parameters cell apart: one line per parameter) are short (at most ``MAX_LINES`` source lines, blank lines and
-comments included, so a reader sees a step at a glance), a ``def`` appears only for a small plot
-helper (a name starting with ``plot_`` or ``draw_``, at most ``MAX_HELPER`` lines), and one alias
-stands for one module across all notebooks (``S`` is ``mtaccuracy.sensitivity`` everywhere).
+Each notebook's code cells (the parameters cell apart: one line per parameter) are short (at
+most ``MAX_LINES`` source lines, blank lines and comments included, so a reader sees a step at a
+glance), a ``def`` appears only for a small plot helper (a name starting with ``plot_`` or
+``draw_``, at most ``MAX_HELPER`` lines), and one alias stands for one module across all
+notebooks (``S`` is ``mtaccuracy.sensitivity`` everywhere).
 """
 
 import ast
@@ -18,8 +19,6 @@ MAX_LINES = 25
 MAX_HELPER = 15
 PLOT_HELPER = re.compile(r"^(plot|draw)_")
 NOTEBOOKS = runner.all_notebooks()
-#: notebooks still being thinned (issue 15 item 4); the test fails when one listed here passes
-PENDING = {"01"}
 
 
 def _code_cells(path):
@@ -65,9 +64,6 @@ def _aliases(src: str) -> dict[str, str]:
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem[:2] for p in NOTEBOOKS])
 def test_notebook_cells_are_short_and_define_no_maths(path):
     problems = [p for i, src in _code_cells(path) for p in cell_problems(i, src)]
-    if path.stem[:2] in PENDING:
-        assert problems, f"{path.name} keeps the rules: remove it from PENDING"
-        return
     assert not problems, f"{path.name}:\n  " + "\n  ".join(problems)
 
 
