@@ -23,16 +23,11 @@ import mtaccuracy
 #: modules whose docstrings are still terse prose, with the count of names that fail; the
 #: test fails when a listed module passes (remove it then) or fails on more names than listed
 PENDING = {
-    "mtaccuracy.errors": 7,
-    "mtaccuracy.machines": 2,
     "mtaccuracy.machines.ac_double_turntable": 10,
-    "mtaccuracy.machines.chain": 5,
     "mtaccuracy.machines.horizontal_3axis": 8,
     "mtaccuracy.machines.vertical_xyfz": 8,
-    "mtaccuracy.optimise.ga": 4,
     "mtaccuracy.sensitivity.benchmarks": 4,
     "mtaccuracy.sensitivity.checks": 5,
-    "mtaccuracy.sensitivity.linear": 6,
     "mtaccuracy.sensitivity.pce": 19,
     "mtaccuracy.sensitivity.screening": 13,
     "mtaccuracy.sensitivity.sobol": 12,
@@ -41,8 +36,6 @@ PENDING = {
     "mtaccuracy.spindle.optimise": 6,
     "mtaccuracy.spindle.separation": 13,
     "mtaccuracy.spindle.simulate": 4,
-    "mtaccuracy.thermal.clustering": 13,
-    "mtaccuracy.thermal.synthetic": 12,
 }
 
 _SECTION = re.compile(r"^(Parameters|Returns|Yields|Raises|Attributes|Notes|References|"

@@ -27,15 +27,26 @@ _ROT = {"x": "A", "y": "B", "z": "C"}
 
 @dataclass(frozen=True)
 class ErrorSpec:
-    """One geometric error.
+    """One geometric error (ISO 230-1 vocabulary).
 
-    symbol: the paper's symbol in ASCII (``dx(z)``: x-direction error of the Z axis);
-    iso_code: ISO 230-1 code (``EXZ``); kind: positioning, straightness, angular or squareness;
-    axis: the moving axis it belongs to (for squareness: the pair, e.g. ``xy``);
-    direction: the coordinate it acts along (translations) or about (rotations);
-    translational: True for a displacement (mm), False for an angle (rad);
-    position_dependent: True for error motions, False for location errors (squareness);
-    paper_unit: the unit of the paper's ranges for this error.
+    Attributes
+    ----------
+    symbol : str
+        The paper's symbol in ASCII (``dx(z)``: x-direction error of the Z axis).
+    iso_code : str
+        ISO 230-1 code (``EXZ``).
+    kind : str
+        positioning, straightness, angular, squareness or location.
+    axis : str
+        The moving axis it belongs to (for squareness: the pair, e.g. ``xy``).
+    direction : str
+        The coordinate it acts along (translations) or about (rotations).
+    translational : bool
+        True for a displacement (mm), False for an angle (rad).
+    position_dependent : bool
+        True for error motions, False for location errors (squareness).
+    paper_unit : str
+        The unit of the paper's ranges for this error.
     """
 
     symbol: str
@@ -67,6 +78,15 @@ def three_axis_catalogue(angular_unit: str = "rad") -> tuple[ErrorSpec, ...]:
     3 positioning, 6 straightness, 9 angular error motions, 3 squareness errors.  Squareness
     ``S_ij`` is the out-of-squareness of axes i and j, as an angle in um/m; its ISO 230-1 code
     follows ../iso230-names.csv (``S_xy`` -> EC0Y: Y to X about Z, X the reference).
+
+    Parameters
+    ----------
+    angular_unit : str
+        The unit recorded as ``paper_unit`` of the angular errors.
+
+    Returns
+    -------
+    tuple of ErrorSpec (21,)
     """
     cat = [_motion("positioning", a, a, angular_unit) for a in "xyz"]
     cat += [_motion("straightness", d, a, angular_unit)
@@ -81,7 +101,16 @@ def three_axis_catalogue(angular_unit: str = "rad") -> tuple[ErrorSpec, ...]:
 
 
 def symbols(catalogue: tuple[ErrorSpec, ...]) -> list[str]:
-    """Paper symbols of a catalogue, in order."""
+    """Paper symbols of a catalogue, in order.
+
+    Parameters
+    ----------
+    catalogue : tuple of ErrorSpec
+
+    Returns
+    -------
+    list of str
+    """
     return [e.symbol for e in catalogue]
 
 
@@ -90,6 +119,16 @@ def iso_names(path=None) -> dict[str, str]:
 
     That file writes the symbols as ``d_xz`` (x error of Z) and ``e_zx``; this returns them
     as given there.
+
+    Parameters
+    ----------
+    path : path, optional
+        Another map file (default the repository's).
+
+    Returns
+    -------
+    dict
+        Paper symbol -> ISO 230-1 code.
     """
     path = path or ISO230_NAMES
     with open(path, newline="", encoding="utf-8") as fh:
@@ -106,6 +145,18 @@ def uniform_bounds(catalogue: tuple[ErrorSpec, ...],
 
     ``ranges`` maps each kind present in the catalogue (positioning, straightness, angular,
     squareness) to ``(low, high)`` in the paper's unit of that kind.
+
+    Parameters
+    ----------
+    catalogue : tuple of ErrorSpec (d,)
+        The errors.
+    ranges : dict
+        Kind -> (low, high) in the paper's unit.
+
+    Returns
+    -------
+    array (2, d)
+        Lower and upper bounds in mm and rad.
     """
     kinds = {e.kind for e in catalogue}
     unknown = set(ranges) - kinds
@@ -124,7 +175,19 @@ def uniform_bounds(catalogue: tuple[ErrorSpec, ...],
 
 
 def select(catalogue: tuple[ErrorSpec, ...], names) -> list[int]:
-    """Column indices of the named errors; an unknown name raises with the allowed ones."""
+    """Column indices of the named errors; an unknown name raises with the allowed ones.
+
+    Parameters
+    ----------
+    catalogue : tuple of ErrorSpec
+        The errors.
+    names : iterable of str
+        Symbols wanted.
+
+    Returns
+    -------
+    list of int
+    """
     syms = symbols(catalogue)
     bad = [n for n in names if n not in syms]
     if bad:
@@ -140,6 +203,10 @@ def five_axis_ac_catalogue() -> tuple[ErrorSpec, ...]:
     ``data/papers/zheng2024_table1_errors.csv`` (``d_xc``: x error motion of C; ``a_AM``,
     ``b_AM``, ``g_AM``: alpha, beta, gamma of A); ISO 230-1 codes from ``data/iso230``.
     Translational errors are in um, angular ones in arcsec (the paper's ranges).
+
+    Returns
+    -------
+    tuple of ErrorSpec (41,)
     """
     iso = iso_names()
     cat = []

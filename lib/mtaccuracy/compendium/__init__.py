@@ -16,5 +16,10 @@ direction, so they can be taken into other work without this repository's runner
 ``plotting``       the house style and byte-stable figure files
 ``bench``          ``make bench``: the speed targets of the issues, measured
 ``lab``            ``make lab``: JupyterLab on the notebooks
+``zheng2024``      notebook 01's paper-specific checks, references and figures
+``rong``           notebook 02's parameter checks and the tool-length figure
+``xu2022``         notebook 04: published tables, the reconstruction's folders, tolerances,
+                   scorecard helpers and figures
+``yang2021``       notebook 05's parameter checks, Table 1's consistency check and figures
 =================  ====================================================================
 """

@@ -34,12 +34,29 @@ def _available() -> dict[str, tuple[str, str]]:
 
 
 def names() -> list[str]:
-    """Names accepted by :func:`build`."""
+    """Names accepted by :func:`build`.
+
+    Returns
+    -------
+    list of str
+    """
     return sorted(_available())
 
 
 def build(name: str, **options) -> Machine:
-    """Build the machine called ``name`` (see :func:`names`)."""
+    """Build the machine called ``name`` (see :func:`names`).
+
+    Parameters
+    ----------
+    name : str
+        One of :func:`names`.
+    **options
+        Passed to the machine's constructor (e.g. ``layout`` of the horizontal machine).
+
+    Returns
+    -------
+    Machine
+    """
     if name not in _available():
         raise ValueError(f"unknown machine {name!r}; allowed: {', '.join(names())}")
     module, cls = _REGISTRY[name]

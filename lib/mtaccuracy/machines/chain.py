@@ -93,7 +93,15 @@ ORIENTATIONS = {"rotation_vector": ("Px", "Py", "Pz", "Rx", "Ry", "Rz"),
 
 @dataclass(frozen=True)
 class Topology:
-    """A parsed topology: ``work`` and ``tool`` axes, each listed from the bed outwards."""
+    """A parsed topology: ``work`` and ``tool`` axes, each listed from the bed outwards.
+
+    Attributes
+    ----------
+    text : str
+        The topology as given.
+    work, tool : tuple of str
+        Axes on the workpiece side and on the tool side, each from the bed outwards.
+    """
 
     text: str
     work: tuple[str, ...]
@@ -177,7 +185,19 @@ class Placement:
     """Where one error column enters: ``axis``, ``slot`` (``motion``: the axis' error-motion
     block; ``pre``/``post``: its location block before/after the motion; ``tilt``: a rotation
     of its direction of motion), ``component`` (0-2 translation along x, y, z; 3-5 rotation
-    about x, y, z) and ``sign`` (+1, or -1 where a paper defines the error the other way)."""
+    about x, y, z) and ``sign`` (+1, or -1 where a paper defines the error the other way).
+
+    Attributes
+    ----------
+    axis : str
+        The axis whose block the error enters.
+    slot : {"motion", "pre", "post", "tilt"}
+        Which block.
+    component : int
+        0-2 translation along x, y, z (mm); 3-5 rotation about x, y, z (rad).
+    sign : float
+        +1 or -1.
+    """
 
     axis: str
     slot: str
@@ -789,7 +809,20 @@ def iso_catalogue(topology: str):
     second tilted about the normal of their plane, e.g. EC0Y; the third about both others,
     e.g. EA0Z, EB0Z); per rotary axis K its four location errors (ISO 230-7): the two
     positions and two orientations of its axis line perpendicular to k (e.g. for C: EX0C,
-    EY0C, EA0C, EB0C), as a block before its motion.  Returns ``(catalogue, placements)``."""
+    EY0C, EA0C, EB0C), as a block before its motion.  Returns ``(catalogue, placements)``.
+
+    Parameters
+    ----------
+    topology : str
+        The chain (:func:`parse_topology`).
+
+    Returns
+    -------
+    catalogue : tuple of ErrorSpec
+        Every error, in chain order.
+    placements : dict of str to Placement
+        Where each enters the chain.
+    """
     topo = parse_topology(topology)
     specs = []
     for a in topo.axes:
@@ -826,7 +859,24 @@ def redundant_location_errors(machine: ChainMachine, n_poses: int = 64, seed=0,
     rigid shift of the workpiece, a constant offset of the tool) and of the location errors
     before them: they cannot be told apart from those and are not separate errors.  Returns
     (symbol, reason) pairs, in catalogue order.  The test is a rank test of the stacked
-    Jacobian columns (least-squares residual of the unit column below ``rtol``)."""
+    Jacobian columns (least-squares residual of the unit column below ``rtol``).
+
+    Parameters
+    ----------
+    machine : ChainMachine
+        A machine with its full catalogue (:func:`iso_catalogue`).
+    n_poses : int
+        Random poses stacked in the rank test.
+    seed : int
+        Seed of the poses.
+    rtol : float
+        Relative least-squares residual below which a column is a combination of others.
+
+    Returns
+    -------
+    list of (str, str)
+        (symbol, reason) of every redundant location error.
+    """
     rng = np.random.default_rng(seed)
     pose = {}
     for a, name in machine._axis_pose.items():
@@ -1115,7 +1165,21 @@ _SLOT_TEXT = {"motion": "error motion (after the motion)", "pre": "location (bef
 def catalogue_table(machine: ChainMachine, bounds=None):
     """A machine's errors as a table: symbol, kind, the axis it belongs to, where it enters the
     chain and its component (``X Y Z`` translations, ``A B C`` rotations), with the ``bounds``
-    (2, n) of uniform ranges in um and urad when given.  A pandas DataFrame."""
+    (2, n) of uniform ranges in um and urad when given.  A pandas DataFrame.
+
+    Parameters
+    ----------
+    machine : ChainMachine
+        The machine.
+    bounds : array (2, n), optional
+        Uniform ranges (mm, rad) of its errors.
+
+    Returns
+    -------
+    DataFrame (n, 5 or 8)
+        symbol, kind, axis, enters (where in the chain), component and, with ``bounds``, low,
+        high and unit (um, urad).
+    """
     import pandas as pd
 
     table = pd.DataFrame({

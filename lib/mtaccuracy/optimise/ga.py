@@ -32,7 +32,23 @@ import numpy as np
 
 @dataclass
 class GAResult:
-    """Runs of a genetic algorithm (or of differential evolution), batched over runs."""
+    """Runs of a genetic algorithm (or of differential evolution), batched over runs.
+
+    Attributes
+    ----------
+    best_x : array (runs, d)
+        Best genes found (decoded).
+    best_h : array (runs,)
+        Best objective.
+    history : array (generations + 1, runs)
+        Best-so-far objective; row 0 is the initial population.
+    pc, pm : arrays (generations + 1,)
+        Mean crossover and mutation probabilities used.
+    evaluations_per_generation : int
+        Objective evaluations per generation and run.
+    label : str
+        A name for tables and legends.
+    """
 
     best_x: np.ndarray      # (runs, d) best genes found (decoded)
     best_h: np.ndarray      # (runs,) best objective
@@ -62,7 +78,15 @@ class RealEncoding:
 
     Crossover: arithmetic, ``c1 = b x1 + (1 - b) x2``, ``c2 = (1 - b) x1 + b x2`` with
     ``b ~ U(0, 1)`` per gene.  Mutation: a Gaussian step of ``mutation_scale`` x the gene's range,
-    reflected into the box."""
+    reflected into the box.
+
+    Parameters
+    ----------
+    lo, hi : arrays (d,)
+        The box.
+    mutation_scale : float
+        Standard deviation of a mutation step, as a share of the gene's range.
+    """
 
     def __init__(self, lo, hi, mutation_scale: float = 0.1):
         self.lo, self.hi = _box(lo, hi)
@@ -97,7 +121,15 @@ class BinaryEncoding:
     genes one string of ``d * bits`` bits, most significant first.  Crossover: single point on
     the string.  Mutation: each bit flipped with probability ``Pm``.  Genes are stored as the
     integers (runs, pop, d); random bits are drawn as the string and packed exactly (sums of
-    powers of two below 2**53)."""
+    powers of two below 2**53).
+
+    Parameters
+    ----------
+    lo, hi : arrays (d,)
+        The box.
+    bits : int
+        Bits per gene.
+    """
 
     def __init__(self, lo, hi, bits: int = 16):
         self.lo, self.hi = _box(lo, hi)
@@ -145,7 +177,26 @@ def adaptive_rates(f, f_mean, generation, max_generation, *, pc_max, pc_min, pm_
     ``Pm_min - (Pm_max - Pm_min) alpha / alpha_max`` (falling, and negative late in a run), or
     corrected (default) ``Pm_min + (Pm_max - Pm_min) alpha / alpha_max``, rising as the paper's
     text describes.  ``alpha`` = ``generation``, ``alpha_max`` = ``max_generation``.  Returns the
-    raw values (:func:`run_ga` clips ``Pm`` to [0, 1])."""
+    raw values (:func:`run_ga` clips ``Pm`` to [0, 1]).
+
+    Parameters
+    ----------
+    f : array
+        Fitness of each individual (any shape).
+    f_mean : array
+        Mean fitness of its population, broadcasting against ``f``.
+    generation, max_generation : int
+        alpha and alpha_max.
+    pc_max, pc_min, pm_max, pm_min : float
+        The probability bounds.
+    eq23 : {"corrected", "printed"}
+        Which Eq. 23.
+
+    Returns
+    -------
+    pc, pm : arrays, the broadcast shape of ``f`` and ``f_mean``
+        Crossover and mutation probabilities.
+    """
     if eq23 not in ("corrected", "printed"):
         raise ValueError(f"eq23 must be 'corrected' or 'printed', got {eq23!r}")
     if not 0 <= generation <= max_generation or max_generation < 1:

@@ -44,6 +44,24 @@ def linear_indices(jacobian: np.ndarray, sd: np.ndarray) -> np.ndarray:
     ``J_ki^2 sd_i^2 / sum_j J_kj^2 sd_j^2`` (first-order = total; any distribution).
 
     ``jacobian`` (..., q, d), ``sd`` (d,).  An output with zero variance gets zeros.
+
+    Parameters
+    ----------
+    jacobian : array (..., q, d)
+        Output sensitivities (e.g. ``machine.linear_jacobian(pose)``: mm or rad per error unit).
+    sd : array (d,)
+        Standard deviations of the inputs (mm, rad).
+
+    Returns
+    -------
+    array (..., q, d)
+        Indices; each output's row sums to 1 (0 for a zero-variance output).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> linear_indices(np.array([[1.0, 2.0]]), np.array([2.0, 1.0])).tolist()
+    [[0.5, 0.5]]
     """
     return _shares((np.asarray(jacobian, dtype=float) * np.asarray(sd, dtype=float)) ** 2)
 
@@ -52,7 +70,19 @@ def uniform_moments(bounds, d: int | None = None) -> tuple[np.ndarray, np.ndarra
     """Means and variances ``((low + high) / 2, (high - low)^2 / 12)``, each (d,), of
     independent uniforms on ``bounds`` (2, d).  ``d``, when given, is the required width.
 
-    Raises ValueError unless ``bounds`` is (2, d), finite, with high > low in every column."""
+    Raises ValueError unless ``bounds`` is (2, d), finite, with high > low in every column.
+
+    Parameters
+    ----------
+    bounds : array (2, d)
+        Lower and upper bounds (mm, rad).
+    d : int, optional
+        The required number of inputs.
+
+    Returns
+    -------
+    mean, var : arrays (d,)
+    """
     b = np.asarray(bounds, dtype=float)
     want = d if d is not None else (b.shape[1] if b.ndim == 2 else "d")
     if (b.ndim != 2 or b.shape[0] != 2 or (d is not None and b.shape[1] != d)
@@ -67,7 +97,17 @@ def gauss_legendre_unit(nodes: int) -> tuple[np.ndarray, np.ndarray]:
 
     Exact for polynomials of degree <= 2 nodes - 1.  The 2-point rule is written in closed
     form, ``1/2 -+ 1/(2 sqrt 3)`` with weights 1/2 (numpy's ``leggauss(2)`` is one ulp off
-    at one node), so its points are symmetric to the last bit; the others are numpy's."""
+    at one node), so its points are symmetric to the last bit; the others are numpy's.
+
+    Parameters
+    ----------
+    nodes : int
+        Points of the rule (>= 1).
+
+    Returns
+    -------
+    points, weights : arrays (nodes,)
+    """
     if isinstance(nodes, bool) or not isinstance(nodes, int | np.integer) or nodes < 1:
         raise ValueError(f"nodes must be an integer >= 1, got {nodes!r}")
     if nodes == 2:
@@ -137,6 +177,32 @@ def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
     chosen by checking that doubling it does not change the indices at the precision wanted.
     With 2 nodes the weights are powers of two, so equal-coefficient inputs get bitwise-equal
     indices and the sums equal plain means to the bit.
+
+    Parameters
+    ----------
+    jacobian_fn : callable
+        ``flat_poses -> (M, q_all, d)`` Jacobians.
+    mean, var : arrays (d,)
+        Means and variances of the inputs (mm, rad and their squares).
+    poses : mapping, optional
+        Pose name -> scalar or (T,) array (mm, rad).
+    pose_bounds : mapping, optional
+        Pose name -> (low, high): uniform over the box.
+    components : int or sequence of int, optional
+        Output rows kept.
+    nodes : int
+        Gauss-Legendre points per box coordinate.
+    names : iterable of str, optional
+        Allowed pose names.
+    required : iterable of str
+        Pose names that must be given.
+
+    Returns
+    -------
+    S1, ST : arrays (T, d, q)
+        First-order and total indices.
+    V : array (T, q)
+        Output variance, pooled over the box.
     """
     mean, var = _moments(mean, var)
     u, w = gauss_legendre_unit(nodes)
@@ -209,7 +275,17 @@ def indices_at_poses(jacobian: np.ndarray, var) -> np.ndarray:
 
 
 class Remainder(NamedTuple):
-    """What the first-order model misses at one pose, per output (q,)."""
+    """What the first-order model misses at one pose, per output (q,).
+
+    Attributes
+    ----------
+    ratio : array (q,)
+        RMS of ``model(e) - model(0) - J e`` over the samples, divided by the std of model(e).
+    centred_ratio : array (q,)
+        The same with the remainder centred (its mean moves no index): <= ``ratio``.
+    max_abs : array (q,)
+        Largest absolute remainder over the samples (output units).
+    """
 
     #: RMS of ``model(e) - model(0) - J e`` over the samples, divided by the std of model(e)
     ratio: np.ndarray
@@ -235,6 +311,19 @@ def nonlinear_remainder(model: Callable[[np.ndarray], np.ndarray], jacobian: np.
     of this module by about twice ``centred_ratio`` (at most) beyond their sampling noise;
     ``ratio`` (which also counts the mean of ``r``, moving no index) is a looser bound.  An
     output with zero spread gets ratio 0 when its remainder is zero too, else inf.
+
+    Parameters
+    ----------
+    model : callable
+        ``(n, d) -> (n, q)`` (or (n,)): the exact chain at the pose.
+    jacobian : array (q, d)
+        Its first-order Jacobian there.
+    errors : array (n, d)
+        Samples of the inputs (mm, rad).
+
+    Returns
+    -------
+    Remainder
     """
     e = np.asarray(errors, dtype=float)
     jac = np.asarray(jacobian, dtype=float)

@@ -24,11 +24,22 @@ __all__ = [
 # --------------------------------------------------------------------------------------------
 
 def similarity_matrix(x: np.ndarray) -> np.ndarray:
-    """Eq. 1: r_ij = sum_k |x_i(k) - m_i| |x_j(k) - m_j| / (||x_i - m_i|| ||x_j - m_j||).
+    """Similarity of the temperature sequences (Xu et al. 2022, Eq. 1).
 
-    ``x`` is (n_samples, n_variables).  As printed, the numerator takes absolute deviations, so
-    r_ij is in [0, 1] and blind to sign (a falling and a rising sensor can be similar).  The
-    printed denominator has ``x_i(k) - mean_j`` under the second root, a typo for ``x_j(k)``.
+    ``r_ij = sum_k |x_i(k) - m_i| |x_j(k) - m_j| / (||x_i - m_i|| ||x_j - m_j||)``.  As printed,
+    the numerator takes absolute deviations, so r_ij is in [0, 1] and blind to sign (a falling
+    and a rising sensor can be similar).  The printed denominator has ``x_i(k) - mean_j`` under
+    the second root, a typo for ``x_j(k)``.
+
+    Parameters
+    ----------
+    x : array (n_samples, n_variables)
+        The sequences, one per column (degC).
+
+    Returns
+    -------
+    array (n_variables, n_variables)
+        Symmetric, ones on the diagonal.
     """
     x = np.asarray(x, dtype=float)
     if x.ndim != 2 or x.shape[0] < 2:
@@ -48,15 +59,42 @@ def similarity_matrix(x: np.ndarray) -> np.ndarray:
 
 
 def max_min_compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Fuzzy (max-min) composition: (a o b)_ij = max_k min(a_ik, b_kj)."""
+    """Fuzzy (max-min) composition: ``(a o b)_ij = max_k min(a_ik, b_kj)``.
+
+    Parameters
+    ----------
+    a : array (n, m)
+        A fuzzy relation.
+    b : array (m, p)
+        Another.
+
+    Returns
+    -------
+    array (n, p)
+    """
     return np.minimum(a[:, :, None], b[None, :, :]).max(axis=1)
 
 
 def transitive_closure(r: np.ndarray, max_squarings: int = 64) -> tuple[np.ndarray, int]:
-    """Eq. 2: square R by max-min composition until R^(2^k) = R^(2^(k+1)); returns (t(R), k).
+    """Transitive closure of a fuzzy similarity relation (Xu et al. 2022, Eq. 2).
 
-    Max-min composition only ever picks existing entries, so the fixed point is reached exactly
-    (at most ceil(log2 n) squarings for a reflexive n x n relation).
+    Squares R by max-min composition until ``R^(2^k) = R^(2^(k+1))``.  Max-min composition only
+    ever picks existing entries, so the fixed point is reached exactly (at most ceil(log2 n)
+    squarings for a reflexive n x n relation).
+
+    Parameters
+    ----------
+    r : array (n, n)
+        Reflexive, symmetric similarity (:func:`similarity_matrix`).
+    max_squarings : int
+        Give up (RuntimeError) after this many squarings.
+
+    Returns
+    -------
+    closure : array (n, n)
+        t(R), a fuzzy equivalence relation.
+    squarings : int
+        k.
     """
     r = np.asarray(r, dtype=float)
     for k in range(max_squarings + 1):
@@ -68,7 +106,20 @@ def transitive_closure(r: np.ndarray, max_squarings: int = 64) -> tuple[np.ndarr
 
 
 def lambda_cut(t: np.ndarray, lam: float) -> np.ndarray:
-    """Eq. 3: classes of the Boolean relation t_ij >= lam; labels 0, 1, ... by first member."""
+    """Classes of the Boolean relation ``t_ij >= lam`` (Xu et al. 2022, Eq. 3).
+
+    Parameters
+    ----------
+    t : array (n, n)
+        A fuzzy equivalence relation (:func:`transitive_closure`).
+    lam : float
+        The cut level.
+
+    Returns
+    -------
+    array of int (n,)
+        Class labels 0, 1, ... numbered by first member.
+    """
     n = len(t)
     labels = np.full(n, -1)
     nxt = 0
@@ -81,7 +132,23 @@ def lambda_cut(t: np.ndarray, lam: float) -> np.ndarray:
 
 @dataclass
 class Clustering:
-    """Result of :func:`fuzzy_clusters`: ``groups`` of variable names at the cut ``lam``."""
+    """Result of :func:`fuzzy_clusters`.
+
+    Attributes
+    ----------
+    groups : list of list of str
+        Variable names of each class at the cut.
+    lam : float
+        The cut level.
+    labels : array of int (n,)
+        Class of each variable.
+    closure : array (n, n)
+        t(R).
+    squarings : int
+        Squarings the closure took.
+    gap : float
+        Relative distance of the cut to the nearest other level (NaN if none).
+    """
 
     groups: list[list[str]]
     lam: float
@@ -100,18 +167,51 @@ LEVEL_RTOL = 1e-9
 
 
 def cut_levels(t: np.ndarray, rtol: float = LEVEL_RTOL) -> np.ndarray:
-    """The distinct levels of t(R), highest first, where a run of levels closer than ``rtol``
-    (relative) counts once, at its lowest member (a cut there keeps the run together)."""
+    """The distinct levels of a fuzzy equivalence relation, highest first.
+
+    A run of levels closer than ``rtol`` (relative) counts once, at its lowest member (a cut
+    there keeps the run together).
+
+    Parameters
+    ----------
+    t : array (n, n)
+        t(R).
+    rtol : float
+        Relative tolerance of equal levels (:data:`LEVEL_RTOL`).
+
+    Returns
+    -------
+    array (m,)
+    """
     levels = np.unique(t)[::-1]
     last_of_run = np.append(levels[:-1] - levels[1:] > rtol * np.abs(levels[:-1]), True)
     return levels[last_of_run]
 
 
 def cut_for(t: np.ndarray, n_clusters: int, rtol: float = LEVEL_RTOL):
-    """(lam, labels): the highest cut of t(R) (levels from :func:`cut_levels`) with exactly
-    ``n_clusters`` classes, or, where ties merge several classes at one level, the cut with
-    the fewest classes above ``n_clusters``; where even the highest level has fewer classes
-    (variables that are equal up to scale cannot be told apart), that level."""
+    """The cut of t(R) that gives ``n_clusters`` classes.
+
+    The highest cut (levels from :func:`cut_levels`) with exactly ``n_clusters`` classes, or,
+    where ties merge several classes at one level, the cut with the fewest classes above
+    ``n_clusters``; where even the highest level has fewer classes (variables equal up to scale
+    cannot be told apart), that level.
+
+    Parameters
+    ----------
+    t : array (n, n)
+        t(R).
+    n_clusters : int
+        Classes wanted.
+    rtol : float
+        Relative tolerance of equal levels.
+
+    Returns
+    -------
+    lam : float
+        The cut.
+    labels : array of int (n,)
+        Classes at that cut (:func:`lambda_cut`).
+    """
     levels = cut_levels(t, rtol)
     best = (levels[0], lambda_cut(t, levels[0]))
     for lam in levels:  # from the highest level down, classes merge
@@ -125,12 +225,25 @@ def cut_for(t: np.ndarray, n_clusters: int, rtol: float = LEVEL_RTOL):
 
 
 def fuzzy_clusters(x: np.ndarray, names, n_clusters: int = 3) -> Clustering:
-    """Fuzzy equivalence clustering (Eqs. 1-3) of the columns of ``x`` into ``n_clusters``.
+    """Fuzzy equivalence clustering of the columns of ``x`` (Xu et al. 2022, Eqs. 1-3).
 
     The cut ``lam`` is the largest level of t(R) at which the classes number exactly
-    ``n_clusters`` (levels closer than :data:`LEVEL_RTOL` count as one, :func:`cut_for`).
-    Were that impossible (ties merging several classes at one level), the cut with the fewest
-    classes above ``n_clusters`` is used, and ``len(groups)`` says so.
+    ``n_clusters`` (levels closer than :data:`LEVEL_RTOL` count as one, :func:`cut_for`).  Were
+    that impossible (ties merging several classes at one level), the cut with the fewest classes
+    above ``n_clusters`` is used, and ``len(groups)`` says so.
+
+    Parameters
+    ----------
+    x : array (n_samples, n_variables)
+        Sequences (degC).
+    names : sequence of str
+        Variable names, one per column.
+    n_clusters : int
+        Classes wanted (the paper: 3).
+
+    Returns
+    -------
+    Clustering
     """
     names = list(names)
     if not 1 <= n_clusters <= len(names):
@@ -150,18 +263,42 @@ def fuzzy_clusters(x: np.ndarray, names, n_clusters: int = 3) -> Clustering:
 
 
 def normalise_range(x: np.ndarray) -> np.ndarray:
-    """Scale every column to [0, 1] by its range (a constant column becomes 0)."""
+    """Scale every column to [0, 1] by its range (a constant column becomes 0).
+
+    Parameters
+    ----------
+    x : array (n,) or (n, m)
+
+    Returns
+    -------
+    array, the shape of ``x``
+    """
     x = np.asarray(x, dtype=float)
     lo, span = x.min(axis=0), np.ptp(x, axis=0)
     return np.divide(x - lo, span, out=np.zeros_like(x), where=span > 0)
 
 
 def grey_relational_grade(x0: np.ndarray, x: np.ndarray, rho: float = 0.5) -> np.ndarray:
-    """Eq. 4, Deng's grade of each column of ``x`` (n, m) to the reference ``x0`` (n,).
+    """Deng's grey relational grade of each column to a reference (Xu et al. 2022, Eq. 4).
 
-    xi_i(k) = (min_i min_k D + rho max_i max_k D) / (D_i(k) + rho max_i max_k D) with
-    D_i(k) = |x0(k) - x_i(k)|; the grade is the mean of xi_i over k.  The sequences must already
-    be comparable (normalised); the two-level min and max run over all m candidates together.
+    ``xi_i(k) = (min_i min_k D + rho max_i max_k D) / (D_i(k) + rho max_i max_k D)`` with
+    ``D_i(k) = |x0(k) - x_i(k)|``; the grade is the mean of xi_i over k.  The sequences must
+    already be comparable (normalised); the two-level min and max run over all m candidates
+    together.
+
+    Parameters
+    ----------
+    x0 : array (n,)
+        The reference sequence (normalised error, k or b).
+    x : array (n, m)
+        Candidate sequences (normalised temperatures).
+    rho : float
+        Distinguishing coefficient in (0, 1] (the paper: 0.5).
+
+    Returns
+    -------
+    array (m,)
+        Grades in (0, 1].
     """
     if not 0 < rho <= 1:
         raise ValueError(f"rho must be in (0, 1], got {rho}")
@@ -176,12 +313,26 @@ def grey_relational_grade(x0: np.ndarray, x: np.ndarray, rho: float = 0.5) -> np
 
 @dataclass
 class Selection:
-    """Sensitive points: the clusters, every sensor's grade, the chosen sensor per cluster (in
-    the order of the temperature columns), and how far each decision is from flipping:
-    ``margins["level"]`` the relative distance of the cut to the nearest other level of the
-    closure, ``margins["grade"]`` the smallest lead of a cluster's winner over its runner-up,
-    ``margins["correlation"]`` the smallest |correlation| that decided a mirroring (NaN where
-    there is nothing to decide)."""
+    """Sensitive points chosen by :func:`select_sensitive_points`.
+
+    Attributes
+    ----------
+    clusters : list of list of str
+        The sensors of every cluster.
+    grades : Series
+        Every sensor's grey relational grade to the target.
+    selected : list of str
+        The chosen sensor per cluster, in the order of the temperature columns.
+    lam : float
+        The clustering's cut.
+    mirrored : list of str
+        Sensors mirrored (1 - x) before grading (negatively correlated with the target).
+    margins : dict
+        How far each decision is from flipping: ``"level"`` the relative distance of the cut to
+        the nearest other level, ``"grade"`` the smallest lead of a cluster's winner over its
+        runner-up, ``"correlation"`` the smallest |correlation| that decided a mirroring (NaN
+        where there is nothing to decide).
+    """
 
     clusters: list[list[str]]
     grades: pd.Series
@@ -193,14 +344,30 @@ class Selection:
 
 def select_sensitive_points(temperatures: pd.DataFrame, target, n_clusters: int = 3,
                             rho: float = 0.5) -> Selection:
-    """Cluster the temperature sequences (Eqs. 1-3), then keep in every cluster the sensor with
-    the highest grey relational grade to ``target`` (Eq. 4).
+    """Temperature-sensitive points: one sensor per fuzzy cluster (Xu et al. 2022, Section 2).
 
-    Normalisation (the paper does not state one): every sequence, the target included, is
-    scaled to [0, 1] by its range; initial-value scaling is impossible for temperature rises,
-    which start at 0.  A sensor that correlates negatively with the target is mirrored
-    (1 - x) before grading: the grade compares shapes, and a heating that makes the error fall is
-    as informative as one that makes it rise (Eq. 1 is blind to sign in the same way).
+    Clusters the temperature sequences (Eqs. 1-3), then keeps in every cluster the sensor with
+    the highest grey relational grade to ``target`` (Eq. 4).  Normalisation (the paper does not
+    state one): every sequence, the target included, is scaled to [0, 1] by its range;
+    initial-value scaling is impossible for temperature rises, which start at 0.  A sensor that
+    correlates negatively with the target is mirrored (1 - x) before grading: the grade
+    compares shapes, and a heating that makes the error fall is as informative as one that makes
+    it rise (Eq. 1 is blind to sign in the same way).
+
+    Parameters
+    ----------
+    temperatures : DataFrame (n, S)
+        One column per sensor (degC, absolute or rises).
+    target : array (n,)
+        The error at one position (um), or k (um/m) or b (um).
+    n_clusters : int
+        Clusters, so sensors selected.
+    rho : float
+        Distinguishing coefficient of the grade.
+
+    Returns
+    -------
+    Selection
     """
     names = list(temperatures.columns)
     x = temperatures.to_numpy(dtype=float)
@@ -227,7 +394,22 @@ def select_sensitive_points(temperatures: pd.DataFrame, target, n_clusters: int 
 
 
 def most_frequent(selections, n: int = 3, order=None) -> list[str]:
-    """The ``n`` sensors chosen most often over several selections (ties: sensor order)."""
+    """The ``n`` sensors chosen most often over several selections (ties: sensor order).
+
+    Parameters
+    ----------
+    selections : iterable of list of str
+        The sensors chosen each time (one selection per position, Section 3.1).
+    n : int
+        How many to keep.
+    order : sequence of str, optional
+        Sensor order for ties and for the result; default sorted names.
+
+    Returns
+    -------
+    list of str
+        In ``order``.
+    """
     counts = Counter(s for sel in selections for s in sel)
     order = list(order) if order is not None else sorted(counts)
     return sorted(sorted(counts, key=lambda s: (-counts[s], order.index(s)))[:n], key=order.index)

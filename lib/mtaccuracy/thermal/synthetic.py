@@ -80,7 +80,23 @@ AMBIENT_TAU_MIN = 90.0
 @dataclass(frozen=True)
 class Sensor:
     """A first-order thermal node.  ``initial`` is the sensor's own initial offset (degC) per
-    experiment, added to its group's offset; ``bias`` a constant calibration offset."""
+    experiment, added to its group's offset; ``bias`` a constant calibration offset.
+
+    Attributes
+    ----------
+    group : str
+        Thermal group (Table 6's clusters): structure, slider, transmission, motor.
+    tau_min : float
+        Time constant (min).
+    rise_8000 : float
+        Steady rise above the air at 8000 mm/min (degC).
+    feed_exponent : float
+        The steady rise scales as ``(F / 8000) ** feed_exponent``.
+    bias : float
+        Constant calibration offset (degC).
+    initial : tuple of 4 floats
+        Own initial offset (degC) in experiments 1-4.
+    """
 
     group: str
     tau_min: float
@@ -122,7 +138,15 @@ INTERFEROMETER_NOISE_UM = 0.06
 class Targets:
     """What the reconstruction reproduces: Table 5's slope ``k`` (n_exp, n_meas) in um/m and
     intercept ``b`` (n_exp, n_meas) in um, and Table 1 ``t1`` (experiment, feed_mm_per_min,
-    ambient_min_C, ambient_max_C), one row per experiment."""
+    ambient_min_C, ambient_max_C), one row per experiment.
+
+    Attributes
+    ----------
+    k, b : arrays (n_exp, n_meas)
+        Table 5 (um/m, um).
+    t1 : DataFrame (n_exp, 4)
+        Table 1.
+    """
 
     k: np.ndarray
     b: np.ndarray
@@ -158,6 +182,18 @@ def ambient(t1: pd.DataFrame, minutes: np.ndarray) -> np.ndarray:
     """Workshop air (degC) of every experiment at ``minutes``: (n_exp, n_times).
 
     Monotone across Table 1's range, rising in experiments 1-2 and falling in 3-4 (cooling on).
+
+    Parameters
+    ----------
+    t1 : DataFrame (n_exp, 4)
+        Table 1 (ambient_min_C, ambient_max_C per experiment).
+    minutes : array (n_times,)
+        Times (min).
+
+    Returns
+    -------
+    array (n_exp, n_times)
+        degC.
     """
     s = (1 - np.exp(-minutes / AMBIENT_TAU_MIN)) / (1 - np.exp(-TIMES_MIN[-1] / AMBIENT_TAU_MIN))
     lo = t1.ambient_min_C.to_numpy()[:, None]
@@ -171,6 +207,20 @@ def simulate(sensors: dict[str, Sensor], group_offsets: dict, t1: pd.DataFrame) 
 
     Exact discretisation of dT/dt = (T_air + rise - T) / tau on a 1-minute grid (air linear
     within each minute); the calibration bias is added at the end.
+
+    Parameters
+    ----------
+    sensors : dict of str to Sensor
+        The thermal nodes.
+    group_offsets : dict of str to tuple of 4 floats
+        Initial offset of each group to the air in experiments 1-4 (degC).
+    t1 : DataFrame (n_exp, 4)
+        Table 1 (feeds, ambient ranges).
+
+    Returns
+    -------
+    array (n_exp, n_sensors, n_times)
+        degC, in the order of ``sensors``.
     """
     minutes = np.arange(0.0, TIMES_MIN[-1] + 1.0)
     air = ambient(t1, minutes)                                      # (E, M)
@@ -271,7 +321,21 @@ class Replicates:
     """``n`` realisations of the reconstruction's noise, stacked on a leading axis:
     ``temperatures`` (n, measurements, sensors) in the column order ``sensors``, ``errors``
     (n, measurements, positions); ``index`` and ``positions_mm`` as in :class:`ThermalData`.
-    Replicate 0 is :func:`reconstruct` with the same seed, value for value."""
+    Replicate 0 is :func:`reconstruct` with the same seed, value for value.
+
+    Attributes
+    ----------
+    index : DataFrame (m, 3)
+        experiment, measurement, time_min.
+    sensors : list of str
+        Column order of the temperatures.
+    temperatures : array (n, m, S)
+        degC.
+    errors : array (n, m, P)
+        um.
+    positions_mm : array (P,)
+        Target positions (mm).
+    """
 
     index: pd.DataFrame
     sensors: list[str]
@@ -289,7 +353,21 @@ def noise_replicates(targets: Targets, seed: int = DEFAULT_SEED, n: int = 40) ->
     nut's noisy rise) from one generator seeded by ``SeedSequence(seed).spawn(1)``, all at
     once.  The noise-free histories and Table 5's lines are the same in every replicate: the
     spread of a result over the replicates is the sampling uncertainty that the reconstruction's
-    noise gives it, not the uncertainty of the reconstruction's choices."""
+    noise gives it, not the uncertainty of the reconstruction's choices.
+
+    Parameters
+    ----------
+    targets : Targets
+        Table 5 and Table 1 (:func:`targets_from_tables`).
+    seed : int
+        Seed of the reconstruction (replicate 0).
+    n : int
+        Replicates, at least 2.
+
+    Returns
+    -------
+    Replicates
+    """
     if n < 2:
         raise ValueError(f"need at least 2 replicates for a spread, got {n}")
     k, b, t1 = targets.k, targets.b, targets.t1
@@ -303,7 +381,18 @@ def noise_replicates(targets: Targets, seed: int = DEFAULT_SEED, n: int = 40) ->
 
 
 def printed_eq9(models: pd.DataFrame) -> dict:
-    """Eq. 9's coefficients from ``xu2022_models.csv``: {"k": {term: c}, "b": {term: c}}."""
+    """Eq. 9's coefficients from ``xu2022_models.csv``: {"k": {term: c}, "b": {term: c}}.
+
+    Parameters
+    ----------
+    models : DataFrame
+        ``xu2022_models.csv``: model, target, term, coefficient.
+
+    Returns
+    -------
+    dict
+        ``{"k": {term: coefficient}, "b": {term: coefficient}}``.
+    """
     out = {}
     for key, target in (("k", "k (um/m)"), ("b", "b (um)")):
         m = models[(models.model == "decoupled_mlr") & (models.target == target)]
@@ -312,7 +401,18 @@ def printed_eq9(models: pd.DataFrame) -> dict:
 
 
 def printed_eq8(models: pd.DataFrame) -> dict:
-    """Eq. 8's printed rows from ``xu2022_models.csv``: {position_mm: {term: c}}."""
+    """Eq. 8's printed rows from ``xu2022_models.csv``: {position_mm: {term: c}}.
+
+    Parameters
+    ----------
+    models : DataFrame
+        ``xu2022_models.csv``.
+
+    Returns
+    -------
+    dict
+        ``{position_mm: {term: coefficient}}`` for every printed row.
+    """
     m = models[models.model == "point_by_point_mlr"]
     return {float(target.split("(")[1].split()[0]):
             dict(zip(g.term, g.coefficient.astype(float), strict=True))
@@ -321,7 +421,20 @@ def printed_eq8(models: pd.DataFrame) -> dict:
 
 def printed_model(coefficients: dict, values):
     """One printed regression: intercept + sum of coefficient x sensor.  ``values`` maps a sensor
-    to its temperatures (absolute or rises, as the model needs); a term ``dT2`` reads ``T2``."""
+    to its temperatures (absolute or rises, as the model needs); a term ``dT2`` reads ``T2``.
+
+    Parameters
+    ----------
+    coefficients : dict
+        ``{"intercept": c0, term: c, ...}``.
+    values : mapping of str to array (n,)
+        Temperatures (degC) by sensor.
+
+    Returns
+    -------
+    array (n,)
+        The model's prediction, in the target's unit.
+    """
     c = dict(coefficients)
     return c.pop("intercept") + sum(
         v * np.asarray(values[t[1:] if t.startswith("dT") else t]) for t, v in c.items())
@@ -329,7 +442,21 @@ def printed_model(coefficients: dict, values):
 
 def eq9_consistency(data: ThermalData, models: pd.DataFrame) -> pd.DataFrame:
     """The paper's Eq. 9 applied to ``data``'s temperatures, beside the k and b decoupled from
-    ``data``'s errors.  ``models`` is ``xu2022_models.csv``.  One row per measurement."""
+    ``data``'s errors.  ``models`` is ``xu2022_models.csv``.  One row per measurement.
+
+    Parameters
+    ----------
+    data : ThermalData
+        Measurements (or the reconstruction).
+    models : DataFrame
+        ``xu2022_models.csv``.
+
+    Returns
+    -------
+    DataFrame (n, 9)
+        The index columns, then ``k_decoupled``, ``k_eq9``, ``k_residual`` (um/m) and the same
+        for b (um).
+    """
     k_meas, b_meas = decouple(data.offsets_mm(), data.errors)
     eq9 = printed_eq9(models)
     out = data.index.copy()
@@ -343,7 +470,20 @@ def eq9_consistency(data: ThermalData, models: pd.DataFrame) -> pd.DataFrame:
 
 def eq8_residuals(data: ThermalData, models: pd.DataFrame) -> pd.DataFrame:
     """The paper's Eq. 8 rows (on temperature rises) applied to ``data``, minus the measured
-    error at those positions.  One row per measurement and printed position."""
+    error at those positions.  One row per measurement and printed position.
+
+    Parameters
+    ----------
+    data : ThermalData
+        Measurements (or the reconstruction).
+    models : DataFrame
+        ``xu2022_models.csv``.
+
+    Returns
+    -------
+    DataFrame
+        The index columns, ``position_mm`` and ``residual`` (um).
+    """
     rises = data.rises()
     frames = []
     for pos, coef in printed_eq8(models).items():
@@ -392,6 +532,26 @@ def calibrate(targets: Targets, models: pd.DataFrame, max_nfev: int = 20000,
     ``targets`` are Table 5 and Table 1 (:func:`targets_from_tables`), ``models`` the
     printed models (``xu2022_models.csv``: model, target, term, coefficient).
     Returns (sensors, group_offsets, scipy result).
+
+    Parameters
+    ----------
+    targets : Targets
+        Table 5 and Table 1.
+    models : DataFrame
+        The printed models.
+    max_nfev : int
+        Evaluations allowed.
+    eq8_weight : float
+        Weight of Eq. 8's terms.
+
+    Returns
+    -------
+    sensors : dict of str to Sensor
+        The six calibrated sensors.
+    group_offsets : dict
+        The groups' initial offsets.
+    fit : scipy.optimize.OptimizeResult
+        The least-squares result.
     """
     from scipy.optimize import least_squares
 
