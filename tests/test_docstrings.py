@@ -26,16 +26,8 @@ PENDING = {
     "mtaccuracy.machines.ac_double_turntable": 10,
     "mtaccuracy.machines.horizontal_3axis": 8,
     "mtaccuracy.machines.vertical_xyfz": 8,
-    "mtaccuracy.sensitivity.benchmarks": 4,
-    "mtaccuracy.sensitivity.checks": 5,
     "mtaccuracy.sensitivity.pce": 19,
-    "mtaccuracy.sensitivity.screening": 13,
-    "mtaccuracy.sensitivity.sobol": 12,
-    "mtaccuracy.sensitivity.spearman": 14,
     "mtaccuracy.spindle.design": 13,
-    "mtaccuracy.spindle.optimise": 6,
-    "mtaccuracy.spindle.separation": 13,
-    "mtaccuracy.spindle.simulate": 4,
 }
 
 _SECTION = re.compile(r"^(Parameters|Returns|Yields|Raises|Attributes|Notes|References|"

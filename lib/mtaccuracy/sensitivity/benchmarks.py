@@ -30,7 +30,20 @@ class Benchmark:
     ``model`` maps (n, d) inputs to (n,) outputs; ``marginals`` are the d input laws (frozen
     scipy distributions, as :class:`~mtaccuracy.sensitivity.pce.ChaosInputs` takes them);
     ``s1``, ``st`` (d,) the exact first-order and total indices; ``variance`` the exact output
-    variance."""
+    variance.
+
+    Attributes
+    ----------
+    name : str
+    model : callable
+        ``(n, d) -> (n,)``.
+    marginals : tuple
+        The d input laws (frozen scipy distributions).
+    s1, st : arrays (d,)
+        Exact first-order and total indices.
+    variance : float
+        Exact output variance.
+    """
 
     name: str
     model: Callable[[np.ndarray], np.ndarray]
@@ -60,7 +73,17 @@ def ishigami(a: float = 7.0, b: float = 0.1) -> Benchmark:
     Exact (Sudret 2008, Eqs. 53-55): V1 = 1/2 (1 + b pi^4/5)^2, V2 = a^2/8,
     V13 = b^2 pi^8 (1/18 - 1/50), V = a^2/8 + b pi^4/5 + b^2 pi^8/18 + 1/2; x3 acts only
     through its interaction with x1.  The classic a = 7, b = 0.1 gives S = (0.3139, 0.4424, 0)
-    and ST = (0.5576, 0.4424, 0.2437)."""
+    and ST = (0.5576, 0.4424, 0.2437).
+
+    Parameters
+    ----------
+    a, b : float
+        The coefficients.
+
+    Returns
+    -------
+    Benchmark
+    """
     def model(x):
         x = np.asarray(x, dtype=float)
         return np.sin(x[:, 0]) + a * np.sin(x[:, 1]) ** 2 + b * x[:, 2] ** 4 * np.sin(x[:, 0])
@@ -81,7 +104,17 @@ def g_function(a) -> Benchmark:
     V = prod (1 + V_i) - 1, S_i = V_i / V and ST_i = V_i prod_{j != i} (1 + V_j) / V.  A small
     a_i makes input i important, a large one (99) nearly inert: a dummy input with a tiny but
     exact index.  The kink of |4x - 2| at x = 1/2 makes it a hard case for polynomials, and every
-    factor is even about 1/2, so odd Legendre degrees carry nothing."""
+    factor is even about 1/2, so odd Legendre degrees carry nothing.
+
+    Parameters
+    ----------
+    a : sequence of float (d,)
+        The coefficients a_i >= 0.
+
+    Returns
+    -------
+    Benchmark
+    """
     a = np.asarray(a, dtype=float)
     if a.ndim != 1 or a.size < 1 or np.any(a < 0):
         raise ValueError(f"a must be a non-empty vector of non-negative numbers, got {a!r}")
@@ -103,7 +136,19 @@ def interaction_polynomial(linear, pairs) -> Benchmark:
     Every term is a product of distinct first-degree Legendre polynomials, so the terms are
     orthogonal: Var(x_i) = 1/3 and Var(x_i x_j) = 1/9.  Hence S_i = c_i^2/3 / V and
     ST_i = (c_i^2/3 + sum over the pairs holding i of c_ij^2/9) / V.  ``pairs`` maps (i, j),
-    i != j, to c_ij.  A PCE of degree >= 2 represents it exactly."""
+    i != j, to c_ij.  A PCE of degree >= 2 represents it exactly.
+
+    Parameters
+    ----------
+    linear : sequence of float (d,)
+        The c_i.
+    pairs : dict of (int, int) to float
+        The c_ij.
+
+    Returns
+    -------
+    Benchmark
+    """
     c = np.asarray(linear, dtype=float)
     d = c.size
     pairs = {tuple(int(v) for v in k): float(w) for k, w in dict(pairs).items()}

@@ -41,7 +41,19 @@ def first_order_outputs(jacobian: np.ndarray, var: np.ndarray) -> np.ndarray:
     """(..., q) True where the output has a first-order term: its linear variance
     ``sum_i J_ki^2 var_i`` above :data:`FIRST_ORDER_FLOOR` of the largest among the outputs of
     its kind at that pose (outputs in triples of one unit, positions then orientations, when q
-    is a multiple of 3; else all together)."""
+    is a multiple of 3; else all together).
+
+    Parameters
+    ----------
+    jacobian : array (..., q, d)
+        Jacobians.
+    var : array (d,)
+        Error variances.
+
+    Returns
+    -------
+    array of bool (..., q)
+    """
     v = (np.asarray(jacobian) ** 2 * var).sum(-1)                    # (..., q)
     q = v.shape[-1]
     g = v.reshape(v.shape[:-1] + ((q // 3, 3) if q % 3 == 0 else (1, q)))
@@ -53,7 +65,23 @@ def atlas_table(indices: np.ndarray, names: Sequence[str], outputs: Sequence[str
     """Per error and output, over P poses: the share of the poses where the error is key
     (index >= ``key_share``), its mean and its largest index.  ``indices`` (P, d, q) as
     :func:`~mtaccuracy.sensitivity.indices_at_poses` returns.  A pandas DataFrame with the
-    columns ``symbol, output, key_share, mean_index, max_index``, outputs outermost."""
+    columns ``symbol, output, key_share, mean_index, max_index``, outputs outermost.
+
+    Parameters
+    ----------
+    indices : array (P, d, q)
+        Indices at P poses.
+    names : sequence of str (d,)
+        Error names.
+    outputs : sequence of str (q,)
+        Output names.
+    key_share : float
+        The index from which an error counts as key.
+
+    Returns
+    -------
+    DataFrame (q d, 5)
+    """
     import pandas as pd
 
     idx = np.asarray(indices, dtype=float)
@@ -71,7 +99,19 @@ def dominant_errors(jacobian: np.ndarray, var) -> np.ndarray:
     """(P, q) the column of the error with the largest closed-form index at each pose and
     output, -1 where the output has no first-order term.  Errors whose indices are equal within
     the tie tolerance of :func:`~mtaccuracy.sensitivity.merge_ties` (errors that enter
-    identically) go to the first in the catalogue, so the answer does not depend on rounding."""
+    identically) go to the first in the catalogue, so the answer does not depend on rounding.
+
+    Parameters
+    ----------
+    jacobian : array (P, q, d)
+        Jacobians at P poses.
+    var : array (d,)
+        Error variances (mm^2, rad^2).
+
+    Returns
+    -------
+    array of int (P, q)
+    """
     jac = np.asarray(jacobian, dtype=float)
     var = np.asarray(var, dtype=float)
     idx = indices_at_poses(jac, var)                                  # (P, d, q)
@@ -84,7 +124,21 @@ def dominant_errors(jacobian: np.ndarray, var) -> np.ndarray:
 
 @dataclass
 class SampledIndices:
-    """Total indices of the exact model at one pose, sampled, beside the closed form."""
+    """Total indices of the exact model at one pose, sampled, beside the closed form.
+
+    Attributes
+    ----------
+    st : array (d, q)
+        Saltelli/Jansen estimate of the total indices.
+    half_width : array (d, q)
+        95 % bootstrap half-width.
+    closed_form : array (d, q)
+        Linear (closed-form) indices.
+    centred_remainder : array (q,)
+        Std of the nonlinear remainder over the std of the output.
+    first_order : array of bool (q,)
+        The output has a first-order term.
+    """
 
     st: np.ndarray                # (d, q) Saltelli/Jansen estimate
     half_width: np.ndarray        # (d, q) 95 % bootstrap half-width
@@ -98,7 +152,27 @@ def sample_at_pose(model: Callable[[np.ndarray], np.ndarray], jacobian: np.ndarr
     """Saltelli estimates of the total indices of ``model`` (errors (m, d) -> (m, q), the exact
     model at one pose) with independent uniform errors on ``bounds`` (2, d), N = ``n`` ("mc"
     design, ``seed``), their bootstrap half-widths (``n_boot`` resamples, ``seed + 10``), the
-    closed form from ``jacobian`` (q, d) and the nonlinear remainder on the A design."""
+    closed form from ``jacobian`` (q, d) and the nonlinear remainder on the A design.
+
+    Parameters
+    ----------
+    model : callable
+        ``(m, d) -> (m, q)``, the exact model at the pose.
+    jacobian : array (q, d)
+        Its first-order Jacobian there.
+    bounds : array (2, d)
+        Uniform error ranges (mm, rad).
+    n : int
+        Base rows N.
+    n_boot : int
+        Bootstrap resamples.
+    seed : int
+        Seed of the design (the bootstrap uses ``seed + 10``).
+
+    Returns
+    -------
+    SampledIndices
+    """
     bounds = np.asarray(bounds, dtype=float)
     d = bounds.shape[1]
     ua, ub = base_samples(n, d, "mc", seed)

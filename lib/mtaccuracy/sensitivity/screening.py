@@ -53,6 +53,22 @@ def rank_with_ties(values, keys=None, rtol: float = 0.0, atol: float = 0.0,
     compared lexicographically, two key entries counting as equal when they differ by at
     most ``key_tol`` (scalar or (p,)); then the original order.  Then the next group.  Returns
     the indices of the candidates in rank order.  NaN values are refused.
+
+    Parameters
+    ----------
+    values : array (m,)
+        What is ranked (e.g. misfits), ascending.
+    keys : array (m, p), optional
+        Tie-breaking keys, compared lexicographically.
+    rtol, atol : float
+        Values within ``max(atol, rtol |v0|)`` of the group's smallest are ties.
+    key_tol : float or array (p,)
+        Key entries this close count as equal.
+
+    Returns
+    -------
+    array of int (m,)
+        Candidate indices in rank order.
     """
     v = np.asarray(values, dtype=float)
     if v.ndim != 1:
@@ -92,6 +108,19 @@ class KeySet:
 
     ``names`` and ``index`` list the key errors in descending order of the index; ``share`` is
     their share of the sum of all indices; ``n_total`` the number of candidate errors.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The key errors, in descending order of the index.
+    index : tuple of int
+        Their positions among the candidates.
+    share : float
+        Their share of the sum of all indices.
+    threshold : float
+        The rule's share.
+    n_total : int
+        The number of candidate errors.
     """
 
     names: tuple[str, ...]
@@ -152,6 +181,21 @@ def key_errors(st, names: Sequence[str] | None = None, threshold: float = 0.9,
     errors that enter the model identically are kept or dropped together (``share`` is then the
     share of the enlarged set).  Raises ValueError for indices that sum to zero, a threshold
     outside (0, 1) or names that do not match.
+
+    Parameters
+    ----------
+    st : array (D,)
+        Total indices.
+    names : sequence of str, optional
+        Error names (default ``"0"``, ``"1"``, ...).
+    threshold : float
+        The share the key set must exceed (0.9: Rong et al.'s 90 % rule).
+    tie_tol : float, optional
+        Relative tolerance of indices kept together.
+
+    Returns
+    -------
+    KeySet
     """
     a = _check_indices(st, 1)
     t = _check_threshold(threshold)
@@ -177,7 +221,23 @@ def key_errors_by_output(st, names: Sequence[str] | None = None,
                          outputs: Sequence[str] | None = None,
                          threshold: float = 0.9, tie_tol: float | None = None
                          ) -> dict[str, KeySet]:
-    """:func:`key_errors` for every output column of ``st`` (D, q)."""
+    """:func:`key_errors` for every output column of ``st`` (D, q).
+
+    Parameters
+    ----------
+    st : array (D, q)
+        Total indices per output.
+    names : sequence of str, optional
+        Error names.
+    outputs : sequence of str, optional
+        Output names (default ``y0``, ...).
+    threshold, tie_tol
+        As :func:`key_errors`.
+
+    Returns
+    -------
+    dict of str to KeySet
+    """
     a = _check_indices(st, 2)
     outputs = list(outputs) if outputs is not None else [f"y{k}" for k in range(a.shape[1])]
     if len(outputs) != a.shape[1]:
@@ -186,7 +246,19 @@ def key_errors_by_output(st, names: Sequence[str] | None = None,
 
 
 def union_key_set(sets, names: Sequence[str]) -> tuple[str, ...]:
-    """Errors that are key for at least one output, in the order of ``names``."""
+    """Errors that are key for at least one output, in the order of ``names``.
+
+    Parameters
+    ----------
+    sets : dict of str to KeySet
+        Key sets per output.
+    names : sequence of str
+        Catalogue order.
+
+    Returns
+    -------
+    tuple of str
+    """
     sets = list(sets.values()) if isinstance(sets, dict) else list(sets)
     chosen = {n for s in sets for n in s.names}
     unknown = chosen - set(names)
@@ -196,7 +268,20 @@ def union_key_set(sets, names: Sequence[str]) -> tuple[str, ...]:
 
 
 def simplification_rate(n_key: int, n_total: int) -> float:
-    """Share of errors removed by the reduced model, ``(n_total - n_key) / n_total``."""
+    """Share of errors removed by the reduced model, ``(n_total - n_key) / n_total``.
+
+    Parameters
+    ----------
+    n_key : int
+        Errors kept.
+    n_total : int
+        Errors in the model.
+
+    Returns
+    -------
+    float
+        In [0, 1].
+    """
     if int(n_total) != n_total or n_total < 1:
         raise ValueError(f"n_total must be a positive integer, got {n_total!r}")
     if int(n_key) != n_key or not 0 <= n_key <= n_total:
@@ -211,6 +296,17 @@ def pooled_indices(indices, variances) -> np.ndarray:
     (..., D) ``sum_m V_m S_im / sum_m V_m``, the share of the summed variance that each error
     explains (for outputs: the indices of the squared-norm-like total; for poses: of the
     workspace-mean variance).
+
+    Parameters
+    ----------
+    indices : array (..., D, m)
+        Indices per output or pose.
+    variances : array (..., m)
+        Their output variances.
+
+    Returns
+    -------
+    array (..., D)
     """
     s = np.asarray(indices, dtype=float)
     v = np.asarray(variances, dtype=float)
@@ -243,6 +339,19 @@ def zero_non_key(x, keep, names: Sequence[str] | None = None) -> np.ndarray:
     """A copy of the samples ``x`` (n, D) with every column not in ``keep`` set to zero.
 
     ``keep``: a :class:`KeySet`, column indices, or error names (then ``names`` is needed).
+
+    Parameters
+    ----------
+    x : array (n, D)
+        Samples.
+    keep : KeySet, sequence of int or of str
+        The columns kept.
+    names : sequence of str, optional
+        Needed when ``keep`` names errors.
+
+    Returns
+    -------
+    array (n, D)
     """
     x = np.asarray(x, dtype=float)
     if x.ndim != 2:
@@ -255,7 +364,22 @@ def zero_non_key(x, keep, names: Sequence[str] | None = None) -> np.ndarray:
 
 def reduced_model(model: Callable[[np.ndarray], np.ndarray], keep,
                   names: Sequence[str] | None = None) -> Callable[[np.ndarray], np.ndarray]:
-    """The model with every non-key error set to zero: ``x -> model(zero_non_key(x, keep))``."""
+    """The model with every non-key error set to zero: ``x -> model(zero_non_key(x, keep))``.
+
+    Parameters
+    ----------
+    model : callable
+        ``(n, D) -> (n, q)``.
+    keep : KeySet, sequence of int or of str
+        The errors kept.
+    names : sequence of str, optional
+        Needed when ``keep`` names errors.
+
+    Returns
+    -------
+    callable
+        ``(n, D) -> (n, q)``.
+    """
     def reduced(x):
         return model(zero_non_key(x, keep, names))
     return reduced
@@ -263,7 +387,20 @@ def reduced_model(model: Callable[[np.ndarray], np.ndarray], keep,
 
 def residual_summary(full, reduced, outputs: Sequence[str] | None = None) -> pd.DataFrame:
     """Per output: ranges of the full and reduced predictions and of the residual
-    ``full - reduced``, its RMS, and the RMS and max-abs ratios to the full model."""
+    ``full - reduced``, its RMS, and the RMS and max-abs ratios to the full model.
+
+    Parameters
+    ----------
+    full, reduced : arrays (n, q)
+        Predictions of the full and the reduced model.
+    outputs : sequence of str, optional
+        Output names.
+
+    Returns
+    -------
+    DataFrame (q, ...)
+        One row per output.
+    """
     f = np.asarray(full, dtype=float)
     r = np.asarray(reduced, dtype=float)
     f = f[:, None] if f.ndim == 1 else f
@@ -292,7 +429,17 @@ def residual_summary(full, reduced, outputs: Sequence[str] | None = None) -> pd.
 def expected_rms_ratio(share) -> np.ndarray:
     """``sqrt(1 - share)``: the RMS of the reduced model's residual relative to the full model
     for a model additive in zero-mean errors, when the kept errors carry ``share`` of the sum of
-    the total indices (see the module docstring)."""
+    the total indices (see the module docstring).
+
+    Parameters
+    ----------
+    share : float or array
+        Share of the summed total indices the kept errors carry.
+
+    Returns
+    -------
+    array
+    """
     s = np.asarray(share, dtype=float)
     if np.any((s < 0) | (s > 1 + 1e-9)):
         raise ValueError("share must be in [0, 1]")
@@ -308,6 +455,27 @@ def threshold_sweep(st, thresholds, x, model: Callable[[np.ndarray], np.ndarray]
     model (non-union errors set to zero) on the samples ``x`` (n, D); per output the residual's
     max |.| and RMS, also relative to the full model.  ``full`` (n, q) may pass the full-model
     predictions if already computed.  One row per (threshold, output).
+
+    Parameters
+    ----------
+    st : array (D, q)
+        Total indices.
+    thresholds : array (t,)
+        Shares in (0, 1).
+    x : array (n, D)
+        Samples of the errors.
+    model : callable
+        ``(n, D) -> (n, q)``.
+    names : sequence of str (D,)
+        Error names.
+    outputs : sequence of str, optional
+        Output names.
+    full : array (n, q), optional
+        ``model(x)`` if already computed.
+
+    Returns
+    -------
+    DataFrame (t q, ...)
     """
     a = _check_indices(st, 2)
     names = _names(names, a.shape[0])
@@ -349,6 +517,29 @@ def key_set_bootstrap(ya, yb, yab, names: Sequence[str], n_boot: int, seed,
     left out of the rule).  Returns ``freq`` (one row per error: the share of resamples in which
     it is key for each output and for the union) and ``counts`` (one row per resample: the
     number of key errors per output and in the union).
+
+    Parameters
+    ----------
+    ya, yb : arrays (N, q)
+    yab : array (D, N, q)
+        As ``sobol_evaluate`` returns them.
+    names : sequence of str
+        The candidate inputs (the first ``len(names)``).
+    n_boot : int
+        Resamples.
+    seed : int
+        Seed of the resampling.
+    outputs : sequence of str, optional
+        Output names.
+    threshold : float
+        The rule's share.
+    chunk : int
+        Resamples per draw.
+
+    Returns
+    -------
+    freq : DataFrame
+    counts : DataFrame
     """
     names = list(names)
     if int(n_boot) != n_boot or n_boot < 1:

@@ -34,6 +34,22 @@ def base_samples(n: int, d: int, method: str, seed) -> tuple[np.ndarray, np.ndar
     method ``mc``: independent uniforms; ``lhs``: two independent Latin hypercubes
     (scipy.qmc); ``sobol``: one scrambled 2d-dimensional Sobol' sequence split in halves, as
     SALib's Saltelli sampler does (n should be a power of 2).
+
+    Parameters
+    ----------
+    n : int
+        Base rows N.
+    d : int
+        Inputs.
+    method : {"mc", "lhs", "sobol"}
+        The design.
+    seed : int or SeedSequence
+        Seed of ``numpy.random.default_rng``.
+
+    Returns
+    -------
+    a, b : arrays (n, d)
+        In [0, 1).
     """
     if int(n) != n or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
@@ -51,7 +67,19 @@ def base_samples(n: int, d: int, method: str, seed) -> tuple[np.ndarray, np.ndar
 
 
 def from_unit_uniform(u: np.ndarray, bounds: np.ndarray) -> np.ndarray:
-    """Map unit-cube samples to independent uniforms on ``bounds`` (2, d)."""
+    """Map unit-cube samples to independent uniforms on ``bounds`` (2, d).
+
+    Parameters
+    ----------
+    u : array (n, d)
+        Unit-cube samples.
+    bounds : array (2, d)
+        Lower and upper bounds (mm, rad).
+
+    Returns
+    -------
+    array (n, d)
+    """
     bounds = np.asarray(bounds, dtype=float)
     return bounds[0] + u * (bounds[1] - bounds[0])
 
@@ -60,7 +88,21 @@ def from_unit_normal(u: np.ndarray, sd: np.ndarray, mean: np.ndarray | float = 0
     """Map unit-cube samples to independent normals (inverse CDF), ``sd`` per column.
 
     ``scipy.special.ndtri`` is the function ``scipy.stats.norm.ppf`` evaluates, called
-    without the distribution machinery (five times faster; the same numbers)."""
+    without the distribution machinery (five times faster; the same numbers).
+
+    Parameters
+    ----------
+    u : array (n, d)
+        Unit-cube samples (in (0, 1)).
+    sd : array (d,)
+        Standard deviations.
+    mean : array (d,) or float
+        Means.
+
+    Returns
+    -------
+    array (n, d)
+    """
     return np.asarray(mean) + np.asarray(sd) * ndtri(u)
 
 
@@ -123,6 +165,22 @@ def sobol_evaluate(model: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: 
     N(D+2)/chunk calls.  ``progress(done, total)`` is called after each call with the number
     of runs done.  ``yab`` holds D N q floats: when only the indices are wanted,
     :func:`sobol_indices` gives them without it.
+
+    Parameters
+    ----------
+    model : callable
+        ``(m, D) -> (m, q)`` or ``(m,)``.
+    a, b : arrays (N, D)
+        The two designs.
+    chunk : int
+        Model runs per call.
+    progress : callable, optional
+        ``progress(done, total)`` after each call.
+
+    Returns
+    -------
+    ya, yb : arrays (N, q)
+    yab : array (D, N, q)
     """
     a, b = _check_ab(a, b)
     n, d = a.shape
@@ -145,7 +203,19 @@ def sobol_estimate(ya: np.ndarray, yb: np.ndarray, yab: np.ndarray
     (..., N, q), ``yab`` (..., D, N, q).
 
     The inputs are taken a few at a time, so the temporaries stay near ``_ESTIMATE_BLOCK``
-    floats whatever D and N (the estimate of every input is the same expression)."""
+    floats whatever D and N (the estimate of every input is the same expression).
+
+    Parameters
+    ----------
+    ya, yb : arrays (..., N, q)
+        Outputs on A and B.
+    yab : array (..., D, N, q)
+        Outputs on every AB_i.
+
+    Returns
+    -------
+    s1, st : arrays (..., D, q)
+    """
     ya, yb, yab = (np.asarray(v, dtype=float) for v in (ya, yb, yab))
     n, d = ya.shape[-2], yab.shape[-3]
     mu = (ya.sum(-2) + yb.sum(-2) + yab.sum((-3, -2))) / (n * (d + 2))
@@ -170,7 +240,26 @@ def bootstrap_counts(n: int, n_boot: int, seed, chunk: int = 20, block: int = 2*
 
     The draws are ``rng.integers(0, n, size=(k, n))`` for successive chunks of ``k <= chunk``
     resamples of one ``numpy.random.default_rng(seed)``: the resamples that
-    ``sobol_bootstrap`` and ``key_set_bootstrap`` have always used."""
+    ``sobol_bootstrap`` and ``key_set_bootstrap`` have always used.
+
+    Parameters
+    ----------
+    n : int
+        Rows.
+    n_boot : int
+        Resamples.
+    seed : int
+        Seed of ``numpy.random.default_rng``.
+    chunk : int
+        Resamples per draw.
+    block : int
+        Counts held at a time.
+
+    Yields
+    ------
+    array (k, n)
+        Counts of k resamples.
+    """
     if int(n_boot) != n_boot or n_boot < 1:
         raise ValueError(f"n_boot must be a positive integer, got {n_boot!r}")
     rng = np.random.default_rng(seed)
@@ -200,6 +289,22 @@ def sobol_bootstrap_samples(ya, yb, yab, n_boot: int, seed, chunk: int = 20, blo
     Memory: N x (3 + 3 D) q floats, and ``block`` counts at a time.  Sums in a different order
     than :func:`sobol_estimate`: equal to it within floating-point rounding (a test checks
     1e-12).
+
+    Parameters
+    ----------
+    ya, yb : arrays (N, q)
+    yab : array (D, N, q)
+        As :func:`sobol_evaluate` returns them.
+    n_boot : int
+        Resamples.
+    seed : int
+        Seed of the resampling.
+    chunk, block : int
+        As :func:`bootstrap_counts`.
+
+    Returns
+    -------
+    s1, st : arrays (n_boot, D, q)
     """
     ya, yb, yab = (np.asarray(v, dtype=float) for v in (ya, yb, yab))
     n, q = ya.shape
@@ -225,7 +330,19 @@ def sobol_bootstrap_samples(ya, yb, yab, n_boot: int, seed, chunk: int = 20, blo
 
 def ci_half_width(samples: np.ndarray, conf: float = 0.95) -> np.ndarray:
     """Half-width of the ``conf`` interval from bootstrap ``samples`` (leading axis): the
-    normal quantile times their standard deviation (ddof 1), as SALib reports it."""
+    normal quantile times their standard deviation (ddof 1), as SALib reports it.
+
+    Parameters
+    ----------
+    samples : array (n_boot, ...)
+        Bootstrap estimates.
+    conf : float
+        Confidence level.
+
+    Returns
+    -------
+    array (...)
+    """
     z = stats.norm.ppf(0.5 + conf / 2)
     return z * np.asarray(samples).std(axis=0, ddof=1)
 
@@ -233,7 +350,26 @@ def ci_half_width(samples: np.ndarray, conf: float = 0.95) -> np.ndarray:
 def sobol_bootstrap(ya, yb, yab, n_boot: int, seed, conf: float = 0.95, chunk: int = 20):
     """Bootstrap half-widths of the ``conf`` confidence intervals of S1 and ST (D, q) each,
     from ``n_boot`` resamples of the N base rows (as SALib: normal quantile times the
-    bootstrap standard deviation); see :func:`sobol_bootstrap_samples`."""
+    bootstrap standard deviation); see :func:`sobol_bootstrap_samples`.
+
+    Parameters
+    ----------
+    ya, yb : arrays (N, q)
+    yab : array (D, N, q)
+        As :func:`sobol_evaluate` returns them.
+    n_boot : int
+        Resamples.
+    seed : int
+        Seed of the resampling.
+    conf : float
+        Confidence level.
+    chunk : int
+        As :func:`bootstrap_counts`.
+
+    Returns
+    -------
+    s1_half, st_half : arrays (D, q)
+    """
     s1s, sts = sobol_bootstrap_samples(ya, yb, yab, n_boot, seed, chunk)
     return ci_half_width(s1s, conf), ci_half_width(sts, conf)
 
@@ -325,7 +461,19 @@ def merge_ties(values, rel: float = TIE_REL, abs_tol: float = TIE_ABS) -> np.nda
     most ``max(rel * |larger|, abs_tol)``.  Errors that enter the model identically have equal
     indices in exact arithmetic; this makes "equal" mean equal within the stated tolerance, so
     the 90 % rule and the rankings are the same on every machine.  Leading (bootstrap) axes
-    are allowed: ``values`` (..., D, q)."""
+    are allowed: ``values`` (..., D, q).
+
+    Parameters
+    ----------
+    values : array (..., D) or (..., D, q)
+        Indices.
+    rel, abs_tol : float
+        The tie tolerances.
+
+    Returns
+    -------
+    array, the shape of ``values``
+    """
     a = np.array(values, dtype=float)
     flat = a.ndim == 1
     if flat:
@@ -348,7 +496,19 @@ def cumulative_share_margin(values, threshold: float) -> np.ndarray:
     (D, q) (e.g. total indices), sort descending and take the cumulative shares; the rule
     stops at the first share above ``threshold``; the margin is the distance of the
     threshold from the nearer of that share and the one before.  A margin far above the
-    floating-point resolution of the shares means rounding cannot change the key set."""
+    floating-point resolution of the shares means rounding cannot change the key set.
+
+    Parameters
+    ----------
+    values : array (D, q)
+        Non-negative values (total indices).
+    threshold : float
+        The rule's share (0.9 in Rong et al.).
+
+    Returns
+    -------
+    array (q,)
+    """
     a = merge_ties(np.clip(np.asarray(values, dtype=float), 0, None))
     a = a[:, None] if a.ndim == 1 else a
     s = -np.sort(-a, axis=0)
@@ -366,7 +526,26 @@ def key_set_frequencies(st_samples, names, outputs, threshold: float = 0.9):
     ``len(names)`` inputs are candidates), after clipping at 0 and :func:`merge_ties`.
     Returns ``freq`` (per error: the share of resamples in which it is key, per output and
     for the union) and ``counts`` (per resample: the number of key errors per output and in
-    the union), as ``key_set_bootstrap`` of :mod:`.screening` (which resamples itself)."""
+    the union), as ``key_set_bootstrap`` of :mod:`.screening` (which resamples itself).
+
+    Parameters
+    ----------
+    st_samples : array (n_boot, >= D, q)
+        Re-estimated total indices.
+    names : sequence of str (D,)
+        The candidate inputs.
+    outputs : sequence of str (q,)
+        Output names.
+    threshold : float
+        The rule's share.
+
+    Returns
+    -------
+    freq : DataFrame (D, 2 + q)
+        symbol, the share of resamples in which it is key per output, and in the union.
+    counts : DataFrame (n_boot, q + 1)
+        Key errors per output and in the union, per resample.
+    """
     import pandas as pd
 
     from .screening import key_errors_by_output, union_key_set

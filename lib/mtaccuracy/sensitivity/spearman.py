@@ -18,7 +18,16 @@ from scipy.stats import qmc
 
 
 def as_generator(seed) -> np.random.Generator:
-    """A ``numpy.random.Generator`` from a seed, SeedSequence or Generator."""
+    """A ``numpy.random.Generator`` from a seed, SeedSequence or Generator.
+
+    Parameters
+    ----------
+    seed : int, SeedSequence or Generator
+
+    Returns
+    -------
+    numpy.random.Generator
+    """
     if isinstance(seed, np.random.Generator):
         return seed
     return np.random.default_rng(seed)
@@ -28,6 +37,18 @@ def latin_hypercube(n: int, bounds: np.ndarray, seed) -> np.ndarray:
     """``n`` Latin hypercube samples (n, d) of independent uniforms on ``bounds`` (2, d).
 
     Uses ``scipy.stats.qmc.LatinHypercube`` (random placement within strata).
+
+    Parameters
+    ----------
+    n : int
+        Samples.
+    bounds : array (2, d)
+        Lower and upper bounds (mm, rad).
+    seed : int, SeedSequence or Generator
+
+    Returns
+    -------
+    array (n, d)
     """
     bounds = np.asarray(bounds, dtype=float)
     if bounds.ndim != 2 or bounds.shape[0] != 2:
@@ -43,6 +64,21 @@ def repeated_latin_hypercube(n: int, bounds: np.ndarray, repeats: int, seed) -> 
 
     Each design gets its own child of ``numpy.random.SeedSequence(seed)``, so design ``r`` is
     the same whatever ``repeats`` is.
+
+    Parameters
+    ----------
+    n : int
+        Samples per design.
+    bounds : array (2, d)
+        Lower and upper bounds (mm, rad).
+    repeats : int
+        Designs.
+    seed : int
+        Seed of the parent ``SeedSequence``.
+
+    Returns
+    -------
+    array (repeats, n, d)
     """
     if int(repeats) != repeats or repeats < 1:
         raise ValueError(f"repeats must be an integer >= 1, got {repeats!r}")
@@ -54,7 +90,18 @@ def average_ranks(a: np.ndarray) -> np.ndarray:
     """Ranks 1..n along axis -2, ties getting their average rank (``scipy.stats.rankdata``).
 
     One stable argsort; only when some column has equal values does it fall back to scipy's
-    ``rankdata`` (continuous samples have none, so the fallback is rare)."""
+    ``rankdata`` (continuous samples have none, so the fallback is rare).
+
+    Parameters
+    ----------
+    a : array (..., n, k)
+        Samples along axis -2.
+
+    Returns
+    -------
+    array (..., n, k)
+        Ranks 1..n (floats).
+    """
     a = np.asarray(a, dtype=float)
     order = np.argsort(a, axis=-2, kind="stable")
     s = np.take_along_axis(a, order, axis=-2)
@@ -94,6 +141,17 @@ def spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     coefficients that are equal in exact arithmetic are equal to the bit, and a ranking of
     them (:func:`rank_by_magnitude`) breaks the tie by catalogue order on every machine.
     A column with a single value has no rank correlation: NaN.
+
+    Parameters
+    ----------
+    x : array (..., n, p)
+        Inputs.
+    y : array (..., n, q)
+        Outputs.
+
+    Returns
+    -------
+    array (..., p, q)
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -106,7 +164,19 @@ def rank_by_magnitude(values: np.ndarray, names: list[str]) -> list[tuple[str, f
     """(name, value) pairs sorted by decreasing ``|value|``, equal ``|value|`` in the order of
     ``names`` (catalogue order).  For Spearman coefficients equal means equal to the bit (see
     :func:`spearman`); distinct coefficients of n samples differ by at least 1/4 of a rank
-    product, about 3/n^3 of the denominator, far above rounding."""
+    product, about 3/n^3 of the denominator, far above rounding.
+
+    Parameters
+    ----------
+    values : array (p,)
+        Coefficients.
+    names : list of str (p,)
+        Input names, in catalogue order.
+
+    Returns
+    -------
+    list of (str, float)
+    """
     values = np.asarray(values, dtype=float)
     order = sorted(range(len(names)), key=lambda j: (-abs(values[j]), j))
     return [(names[j], float(values[j])) for j in order]
@@ -114,21 +184,52 @@ def rank_by_magnitude(values: np.ndarray, names: list[str]) -> list[tuple[str, f
 
 def below_group_mean(coefficients: np.ndarray) -> np.ndarray:
     """Guo et al.'s weak-error rule: True where ``|rho|`` is below the mean ``|rho|`` of its
-    output column for every output.  ``coefficients`` is (p, q); returns (p,) booleans."""
+    output column for every output.  ``coefficients`` is (p, q); returns (p,) booleans.
+
+    Parameters
+    ----------
+    coefficients : array (p, q)
+        Spearman coefficients.
+
+    Returns
+    -------
+    array of bool (p,)
+    """
     a = np.abs(np.asarray(coefficients, dtype=float))
     return np.all(a < a.mean(axis=0, keepdims=True), axis=1)
 
 
 def position_outputs(pose_error: np.ndarray) -> np.ndarray:
     """Ex, Ey, Ez and Et = sqrt(Ex^2 + Ey^2 + Ez^2) (Guo et al. Eq. 14) from (..., 6) pose
-    errors, as (..., 4)."""
+    errors, as (..., 4).
+
+    Parameters
+    ----------
+    pose_error : array (..., 6)
+        Px, Py, Pz (mm), Vx, Vy, Vz (rad).
+
+    Returns
+    -------
+    array (..., 4)
+        Ex, Ey, Ez, Et (mm).
+    """
     p = np.asarray(pose_error)[..., :3]
     return np.concatenate([p, np.linalg.norm(p, axis=-1, keepdims=True)], axis=-1)
 
 
 def centred_ranks(samples: np.ndarray) -> np.ndarray:
     """Average ranks along axis -2 minus their mean: what :func:`spearman_over_poses` needs of
-    the design, computed once for an optimiser that calls it many times."""
+    the design, computed once for an optimiser that calls it many times.
+
+    Parameters
+    ----------
+    samples : array (..., n, d)
+        The design.
+
+    Returns
+    -------
+    array (..., n, d)
+    """
     return _centred(average_ranks(samples))
 
 
@@ -140,6 +241,25 @@ def spearman_over_poses(machine, samples: np.ndarray, poses: dict, outputs=posit
     ``poses`` maps pose names to (P,) arrays.  Returns (P, d, q).  Poses are evaluated in
     chunks of ``chunk`` poses, each chunk as one batched model call over chunk * n rows.
     ``sample_ranks``: :func:`centred_ranks` of ``samples`` if already computed.
+
+    Parameters
+    ----------
+    machine : Machine
+        Has ``pose_error(errors, pose)``.
+    samples : array (n, d)
+        One error design (mm, rad).
+    poses : dict
+        Pose name -> (P,) array (mm, rad).
+    outputs : callable
+        ``(..., 6) -> (..., q)`` (default :func:`position_outputs`).
+    chunk : int
+        Poses per batched model call.
+    sample_ranks : array (n, d), optional
+        :func:`centred_ranks` of ``samples``.
+
+    Returns
+    -------
+    array (P, d, q)
     """
     samples = np.asarray(samples, dtype=float)
     n = samples.shape[0]
@@ -165,7 +285,18 @@ def rank_positions(coefficients: np.ndarray) -> np.ndarray:
 
     ``coefficients`` (..., p, q) as returned by :func:`spearman`; returns integer ranks of the
     same shape, equal ``|rho|`` ranked in input (catalogue) order as in
-    :func:`rank_by_magnitude`."""
+    :func:`rank_by_magnitude`.
+
+    Parameters
+    ----------
+    coefficients : array (..., p, q)
+        Spearman coefficients.
+
+    Returns
+    -------
+    array of int (..., p, q)
+        1 = largest |rho|.
+    """
     a = -np.abs(np.asarray(coefficients, dtype=float))
     order = np.argsort(a, axis=-2, kind="stable")  # stable: equal |rho| keep catalogue order
     ranks = np.empty(a.shape, dtype=int)
@@ -180,7 +311,19 @@ def rank_intervals(repeated: np.ndarray, level: float = 0.95) -> tuple[np.ndarra
 
     ``repeated`` (R, p, q): coefficients of R independent designs of the same size.  Returns
     ``(lo, hi)`` integer ranks (p, q) (``numpy.quantile`` with ``method="inverted_cdf"``, so
-    both ends are ranks that occurred)."""
+    both ends are ranks that occurred).
+
+    Parameters
+    ----------
+    repeated : array (R, p, q)
+        Coefficients of R independent designs.
+    level : float
+        Central share of the ranks covered.
+
+    Returns
+    -------
+    lo, hi : arrays of int (p, q)
+    """
     r = rank_positions(repeated)
     if r.ndim != 3 or r.shape[0] < 2:
         raise ValueError(f"need coefficients of at least 2 designs, shape (R, p, q); got {r.shape}")
@@ -202,7 +345,17 @@ def sum_of_squares(coefficients: np.ndarray) -> np.ndarray:
     gives ``sum_i corr(U_i, V)^2 <= 1`` (equality when ``V`` is a linear function of the
     ``U_i``: a rank-linear model).  A sample of n points adds about (number of inputs) / n on
     average (each coefficient's sampling variance) and spreads by its own sampling noise;
-    :func:`rank_r_squared` gives the exact sample bound."""
+    :func:`rank_r_squared` gives the exact sample bound.
+
+    Parameters
+    ----------
+    coefficients : array (..., p, q)
+        Spearman coefficients.
+
+    Returns
+    -------
+    array (..., q)
+    """
     return (np.asarray(coefficients, dtype=float) ** 2).sum(axis=-2)
 
 
@@ -211,7 +364,19 @@ def rank_r_squared(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     all ``x`` columns, ``r^T C^{-1} r`` with ``r`` the Spearman coefficients and ``C`` the
     rank correlation matrix of the design: at most 1 in every sample (it is an R^2), and equal
     to :func:`sum_of_squares` when the design's ranks are exactly uncorrelated.  ``x`` (n, p),
-    ``y`` (n, q); returns (q,)."""
+    ``y`` (n, q); returns (q,).
+
+    Parameters
+    ----------
+    x : array (n, p)
+        The design.
+    y : array (n, q)
+        Outputs.
+
+    Returns
+    -------
+    array (q,)
+    """
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     r = spearman(x, y)
     c = spearman(x, x)

@@ -43,7 +43,23 @@ def adaptive_probabilities(f, f_mean, generation, max_generation, *, pc_max=PC_M
     ``Pm_min - (Pm_max - Pm_min) alpha / alpha_max``, which falls from ``Pm_min`` and is negative
     once ``alpha / alpha_max > Pm_min / (Pm_max - Pm_min)`` (after 6 % of the run with the paper's
     values); corrected (default), ``Pm_min + (Pm_max - Pm_min) alpha / alpha_max``, rising from
-    0.005 to 0.09 as the text describes.  Returns the raw values (not clipped)."""
+    0.005 to 0.09 as the text describes.  Returns the raw values (not clipped).
+
+    Parameters
+    ----------
+    f, f_mean : arrays
+        Fitness and the population's mean fitness (broadcasting).
+    generation, max_generation : int
+        alpha and alpha_max.
+    pc_max, pc_min, pm_max, pm_min : float
+        The probability bounds (the paper's by default).
+    eq23 : {"corrected", "printed"}
+        Which Eq. 23.
+
+    Returns
+    -------
+    pc, pm : arrays
+    """
     return adaptive_rates(f, f_mean, generation, max_generation, pc_max=pc_max, pc_min=pc_min,
                           pm_max=pm_max, pm_min=pm_min, eq23=eq23)
 
@@ -87,6 +103,36 @@ def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_si
 
     ``k`` (scalar, or one per run) optimises Eq. 20 at that harmonic; ``harmonics`` optimises the
     worst case over them.  ``seed`` seeds one ``numpy.random.Generator`` (or pass a Generator).
+
+    Parameters
+    ----------
+    k : int or array (n_runs,), optional
+        Harmonic order of Eq. 20.
+    harmonics : sequence of int, optional
+        Optimise the worst case over these instead.
+    bounds : sequence of 4 (low, high)
+        Box of ``phi_1, phi_2, phi_3`` (rad) and ``a_3``.
+    n_runs, pop_size, generations : int
+        Runs at once, population, generations.
+    seed : int or Generator
+    adaptive : bool
+        The improved GA (Eqs. 22-23) or the traditional one.
+    pc, pm : float
+        Fixed probabilities of the traditional GA.
+    eq23 : {"corrected", "printed"}
+        Which Eq. 23.
+    encoding : {"real", "binary"}
+        Gene encoding.
+    mutation_scale : float
+        Real encoding: mutation step as a share of the range.
+    bits : int
+        Binary encoding: bits per gene.
+    pc_max, pc_min, pm_max, pm_min : float
+        Bounds of the adaptive probabilities.
+
+    Returns
+    -------
+    GAResult
     """
     if encoding not in ("real", "binary"):
         raise ValueError(f"encoding must be 'real' or 'binary', got {encoding!r}")
@@ -196,6 +242,24 @@ def run_de(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, popsiz
     ``popsize * 4`` members, no early stop, so every run lasts ``generations``; ``polish``
     refines each run's best with L-BFGS-B as scipy's ``polish=True`` does.  ``seed`` seeds one
     ``numpy.random.Generator`` for all runs (or pass a Generator).
+
+    Parameters
+    ----------
+    k : int or array (n_runs,), optional
+        Harmonic order of Eq. 20.
+    harmonics : sequence of int, optional
+        Optimise the worst case over these instead.
+    bounds : sequence of 4 (low, high)
+        The box of the genes.
+    n_runs, popsize, generations : int
+        Runs at once, population factor, generations.
+    seed : int or Generator
+    polish : bool
+        Refine each run's best with L-BFGS-B.
+
+    Returns
+    -------
+    GAResult
     """
     for name, v, low in (("n_runs", n_runs, 1), ("popsize", popsize, 1),
                          ("generations", generations, 1)):
@@ -226,7 +290,21 @@ def run_de(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, popsiz
 
 def convergence_generation(history, target, rel_tol: float = 0.01) -> np.ndarray:
     """First generation at which the best-so-far objective is within ``rel_tol`` of ``target``
-    (``history``: (generations + 1, runs); ``target``: scalar or per run).  ``-1`` if never."""
+    (``history``: (generations + 1, runs); ``target``: scalar or per run).  ``-1`` if never.
+
+    Parameters
+    ----------
+    history : array (generations + 1, runs)
+        Best-so-far objective.
+    target : float or array (runs,)
+        The value to reach.
+    rel_tol : float
+        Relative distance that counts as reached.
+
+    Returns
+    -------
+    array of int (runs,)
+    """
     hist = np.asarray(history, dtype=float)
     if hist.ndim != 2:
         raise ValueError("history must be (generations + 1, runs)")
@@ -251,6 +329,25 @@ def reference_optima(ks, bounds=PAPER_BOX, n_starts: int = 2, seed: int = 0,
     :func:`select_best` (starts whose ``H`` agree within ``rel_tol`` are ties, broken by the
     canonical layout), and the genes are the canonical member of the layout's symmetry class
     (:func:`canonical_genes`).  A numerical reference, not a proof.
+
+    Parameters
+    ----------
+    ks : sequence of int (K,)
+        Harmonic orders.
+    bounds : sequence of 4 (low, high)
+        The box (only the angles are searched; ``a_3`` is closed form).
+    n_starts : int
+        Runs per harmonic.
+    seed : int
+    maxiter, popsize : int
+        Differential evolution's budget.
+    rel_tol : float
+        Starts whose H agree within it are ties.
+
+    Returns
+    -------
+    H : array (K,)
+    genes : array (K, 4)
     """
     ks = np.atleast_1d(np.asarray(ks))
     if ks.ndim != 1 or ks.size == 0:
@@ -290,7 +387,25 @@ def reference_optima(ks, bounds=PAPER_BOX, n_starts: int = 2, seed: int = 0,
 def reference_optimum(k: int, bounds=PAPER_BOX, n_starts: int = 4, seed: int = 0,
                       maxiter: int = 400):
     """Best known ``H`` at harmonic ``k`` in ``bounds`` (:func:`reference_optima` for one
-    harmonic).  Returns ``(H, genes)``, the genes canonical (:func:`canonical_genes`)."""
+    harmonic).  Returns ``(H, genes)``, the genes canonical (:func:`canonical_genes`).
+
+    Parameters
+    ----------
+    k : int
+        Harmonic order.
+    bounds : sequence of 4 (low, high)
+        The box.
+    n_starts : int
+        Runs.
+    seed : int
+    maxiter : int
+        Differential evolution's budget.
+
+    Returns
+    -------
+    H : float
+    genes : array (4,)
+    """
     h, g = reference_optima([k], bounds, n_starts=n_starts, seed=seed, maxiter=maxiter)
     return float(h[0]), g[0]
 

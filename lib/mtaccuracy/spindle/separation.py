@@ -48,7 +48,20 @@ _DEGENERATE = 1e-12
 
 
 def probe_angles(positions, n_samples: int) -> np.ndarray:
-    """Angles ``2 pi p / N`` of probes at integer sample positions ``p`` (Section 1.3)."""
+    """Angles ``2 pi p / N`` of probes at integer sample positions ``p`` (Section 1.3).
+
+    Parameters
+    ----------
+    positions : sequence of int
+        Sample indices of the probes.
+    n_samples : int
+        Samples per turn N.
+
+    Returns
+    -------
+    array
+        rad.
+    """
     p = np.asarray(positions, dtype=float)
     n_samples = _check_n(n_samples)
     if not np.all(np.isfinite(p)) or np.any(p != np.round(p)):
@@ -95,6 +108,17 @@ def weights(phi, a3):
     in radians; batched over leading axes, broadcast against ``a3``.  Refuses layouts with
     ``sin(phi_2 - phi_1) = 0`` (probes 1 and 2 coincident or opposite), where Eq. 15 has no
     solution.
+
+    Parameters
+    ----------
+    phi : array (..., 3) or (..., 4)
+        Probe angles (rad).
+    a3 : float or array (...)
+        The free weight.
+
+    Returns
+    -------
+    a1, a2 : arrays (...)
     """
     phi3 = _split_phi(phi)
     a3 = np.asarray(a3, dtype=float)
@@ -108,7 +132,19 @@ def weights(phi, a3):
 
 
 def full_weights(phi, a3) -> np.ndarray:
-    """``(..., 4)`` weights ``a0..a3`` with ``a0 = 1`` and ``a1, a2`` from :func:`weights`."""
+    """``(..., 4)`` weights ``a0..a3`` with ``a0 = 1`` and ``a1, a2`` from :func:`weights`.
+
+    Parameters
+    ----------
+    phi : array (..., 3) or (..., 4)
+        Probe angles (rad).
+    a3 : float or array (...)
+        The free weight.
+
+    Returns
+    -------
+    array (..., 4)
+    """
     a1, a2 = weights(phi, a3)
     a3 = np.broadcast_to(np.asarray(a3, dtype=float), np.shape(a1))
     return np.stack([np.ones_like(a1), a1, a2, a3], axis=-1)
@@ -128,7 +164,21 @@ def _full(phi, w):
 
 
 def eigenvalues(phi, w, harmonics) -> np.ndarray:
-    """``Lambda_k = lambda_k + i mu_k = sum_l a_l exp(i k phi_l)`` (Eq. 14), shape (..., K)."""
+    """``Lambda_k = lambda_k + i mu_k = sum_l a_l exp(i k phi_l)`` (Eq. 14), shape (..., K).
+
+    Parameters
+    ----------
+    phi : array (..., 3) or (..., 4)
+        Probe angles (rad).
+    w : array (..., 3) or (..., 4)
+        Weights.
+    harmonics : array of int (K,)
+        Harmonic orders k.
+
+    Returns
+    -------
+    array of complex (..., K)
+    """
     phi4, w = _full(phi, w)
     k = np.asarray(harmonics, dtype=float)
     return np.einsum("...l,...kl->...k", w,
@@ -144,6 +194,20 @@ def transfer(phi, w, harmonics) -> np.ndarray:
     estimated Fourier coefficients ``A_k, B_k`` of the profile have variance
     ``2 q_k^2 sigma^2 / N`` (Eq. 18 prints ``2 q_k^2 sigma^2``, without the ``1/N`` its own
     definition of ``F_k, G_k`` implies).
+
+    Parameters
+    ----------
+    phi : array (..., 3) or (..., 4)
+        Probe angles (rad).
+    w : array (..., 3) or (..., 4)
+        Weights.
+    harmonics : array of int (K,)
+        Harmonic orders k.
+
+    Returns
+    -------
+    array (..., K)
+        q_k^2.
     """
     phi4, w = _full(phi, w)
     lam = eigenvalues(phi4, w, harmonics)
@@ -161,6 +225,19 @@ def circulant_matrix(positions, w, n_samples: int) -> np.ndarray:
 
     (The printed definition, ``eps_{p, q + p_l} = 1`` when ``p = q``, would make ``A`` diagonal;
     the intended one is ``A[p, q] = sum_l a_l [q = p + p_l mod N]``.)
+
+    Parameters
+    ----------
+    positions : sequence of int (4,)
+        Probe positions p_l (sample indices).
+    w : array (4,)
+        Weights a0..a3.
+    n_samples : int
+        N.
+
+    Returns
+    -------
+    array (N, N)
     """
     n_samples = _check_n(n_samples)
     p = np.asarray(positions)
@@ -177,6 +254,17 @@ def probe_signals(profile, dx, dy, positions) -> np.ndarray:
 
     ``positions`` are the integer sample indices ``p_l`` (``p_0 = 0`` included); sample ``n`` of
     probe ``l`` reads the profile at sample ``n + p_l``.
+
+    Parameters
+    ----------
+    profile, dx, dy : arrays (..., N)
+        Profile and error motion (any one length unit).
+    positions : sequence of int (4,)
+        Probe positions, p_0 = 0 first.
+
+    Returns
+    -------
+    array (..., 4, N)
     """
     r = np.asarray(profile, dtype=float)
     n = r.shape[-1]
@@ -194,7 +282,29 @@ def probe_signals(profile, dx, dy, positions) -> np.ndarray:
 @dataclass
 class Separation:
     """Everything :func:`separate_details` finds; ``(profile, dx, dy)`` is what :func:`separate`
-    returns."""
+    returns.
+
+    Attributes
+    ----------
+    profile : array (..., N)
+        Profile with the reconstructed first harmonic.
+    dx, dy : arrays (..., N)
+        Error motion along x and y.
+    profile_no_first : array (..., N)
+        The pseudo-inverse solution of Eq. 6 (no first harmonic).
+    first_harmonic : array (..., 2)
+        C, D: the profile's first harmonic C cos + D sin.
+    cancelled : array of int
+        Harmonics 0..N/2 set aside (|Lambda_k| ~ 0); always has 1.
+    rank : int
+        Rank of the Eq. 6 matrix: N minus the cancelled DFT bins.
+    residual_rms : array (...)
+        RMS misfit of the four-probe least squares for dx, dy.
+    convention : str
+        The first-harmonic convention used.
+    eigen : array of complex (N,)
+        Lambda_k, k = 0..N-1.
+    """
 
     profile: np.ndarray            # (..., N) profile with the reconstructed first harmonic
     dx: np.ndarray                 # (..., N) error motion along x
@@ -301,6 +411,29 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
     warns (:class:`CancelledHarmonicsWarning`), naming them.  ``max_harmonic``: the highest
     harmonic the signals can contain (e.g. after :func:`lowpass`); a cancelled harmonic above it
     loses nothing and is set aside without complaint.
+
+    Parameters
+    ----------
+    signals : array (..., 4, N)
+        Probe readings.
+    phi : array (3,) or (4,)
+        Probe angles (rad), on the sampling grid.
+    w : array (3,) or (4,)
+        Weights.
+    first_harmonic : {"eccentricity", "radial"}
+        Convention of the first harmonic.
+    rcond : float
+        Harmonics with ``|Lambda_k| <= rcond max|Lambda|`` are set aside.
+    check : bool
+        Refuse weights that do not cancel the first harmonic.
+    allow_cancelled : bool
+        Proceed (with a warning) when other harmonics are cancelled.
+    max_harmonic : int, optional
+        Highest harmonic the signals can contain.
+
+    Returns
+    -------
+    Separation
     """
     _check_options(first_harmonic, rcond)
     y, n, phi4, w, p = _check_signals(signals, phi, w, check)
@@ -501,6 +634,7 @@ def separate(signals, phi, w, *, first_harmonic: str = "eccentricity", rcond: fl
         ``2 pi p / N`` (the matrix method shifts by whole samples; other angles are refused).
     w : weights a1..a3 (a0 = 1) or a0..a3; they must cancel the first harmonic (Eq. 15) unless
         ``check=False`` (used to show what non-cancelling weights do).
+    check : whether to refuse weights that do not cancel the first harmonic.
     first_harmonic : ``"eccentricity"`` or ``"radial"``, the convention that splits the profile's
         first harmonic from the motion (module docstring).
     rcond : harmonics with ``|Lambda_k| <= rcond * max|Lambda|`` are set aside (not recoverable).
@@ -523,7 +657,19 @@ def separate(signals, phi, w, *, first_harmonic: str = "eccentricity", rcond: fl
 
 def rotation_error(dx, dy, theta=None) -> np.ndarray:
     """Scalar radial error ``delta = dx cos(theta) + dy sin(theta)`` of Eq. 9 (rotating
-    direction)."""
+    direction).
+
+    Parameters
+    ----------
+    dx, dy : arrays (..., N)
+        Error motion.
+    theta : array (N,), optional
+        Angles (rad); default the uniform grid.
+
+    Returns
+    -------
+    array (..., N)
+    """
     dx, dy = np.asarray(dx, dtype=float), np.asarray(dy, dtype=float)
     if theta is None:
         theta = TWO_PI * np.arange(dx.shape[-1]) / dx.shape[-1]
@@ -542,7 +688,23 @@ MAPPINGS = {
 
 def motion_from_scalar(delta, mapping: str = "radial", theta=None):
     """``(dx, dy)`` from a scalar rotation error under one of :data:`MAPPINGS`; also returns the
-    inverse map as a function ``(dx, dy) -> delta``."""
+    inverse map as a function ``(dx, dy) -> delta``.
+
+    Parameters
+    ----------
+    delta : array (N,)
+        Scalar rotation error.
+    mapping : str
+        One of :data:`MAPPINGS`.
+    theta : array (N,), optional
+        Angles (rad); default the uniform grid.
+
+    Returns
+    -------
+    dx, dy : arrays (N,)
+    inverse : callable
+        ``(dx, dy) -> delta``.
+    """
     delta = np.asarray(delta, dtype=float)
     if theta is None:
         theta = TWO_PI * np.arange(delta.shape[-1]) / delta.shape[-1]
@@ -558,7 +720,23 @@ def motion_from_scalar(delta, mapping: str = "radial", theta=None):
 
 def cancelled_harmonics(phi, w, n_samples: int, rcond: float = 1e-9) -> list[int]:
     """The harmonics 2..N/2 a layout's weights cancel: ``|Lambda_k| <= rcond * max|Lambda|``,
-    the test of :func:`separate_details` (which refuses such a layout unless told)."""
+    the test of :func:`separate_details` (which refuses such a layout unless told).
+
+    Parameters
+    ----------
+    phi : array (3,) or (4,)
+        Probe angles (rad).
+    w : array (3,) or (4,)
+        Weights.
+    n_samples : int
+        N.
+    rcond : float
+        Relative threshold on |Lambda_k|.
+
+    Returns
+    -------
+    list of int
+    """
     n = _check_n(n_samples)
     lam = np.abs(eigenvalues(phi, w, np.arange(n)))
     return [k for k in range(2, n // 2 + 1) if lam[k] <= rcond * lam.max()]

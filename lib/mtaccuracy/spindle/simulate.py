@@ -17,7 +17,24 @@ from .separation import TWO_PI, _check_n, probe_angles, probe_signals, separate_
 def random_profile(n_samples: int, harmonics, rng, decay: float = 1.0,
                    roundness: float | None = None) -> np.ndarray:
     """A random profile with the given harmonics, amplitudes ``~ k^-decay`` and random phases;
-    scaled so that its minimum-zone roundness equals ``roundness`` when given."""
+    scaled so that its minimum-zone roundness equals ``roundness`` when given.
+
+    Parameters
+    ----------
+    n_samples : int
+        Samples over one turn.
+    harmonics : sequence of int
+        Harmonic orders present.
+    rng : numpy.random.Generator
+    decay : float
+        Amplitudes ~ k^-decay.
+    roundness : float, optional
+        Minimum-zone roundness wanted (the profile's unit).
+
+    Returns
+    -------
+    array (n_samples,)
+    """
     n = _check_n(n_samples)
     ks = np.asarray(harmonics)
     if ks.ndim != 1 or ks.size == 0 or np.any(ks < 0) or np.any(ks >= n / 2):
@@ -44,6 +61,28 @@ def simulate_measurements(profile, dx, dy, positions, *, n_rev: int, interleave:
     averaged angle by angle.  The synchronous motion ``dx, dy`` repeats every revolution; the
     asynchronous motion is new every revolution (random harmonics in ``async_harmonics``, rms
     ``async_sd`` per axis); each probe adds white noise ``noise_sd``.  Returns ``(M, 4, N)``.
+
+    Parameters
+    ----------
+    profile, dx, dy : arrays (N,)
+        The true profile and synchronous error motion (mm).
+    positions : sequence of int (4,)
+        Probe positions.
+    n_rev : int
+        Revolutions per measurement.
+    interleave : int
+        Revolutions per full set of angles.
+    async_sd, noise_sd : float
+        Asynchronous motion and probe noise (mm).
+    n_measurements : int
+        M.
+    rng : numpy.random.Generator
+    async_harmonics : (int, int)
+        Harmonic band of the asynchronous motion.
+
+    Returns
+    -------
+    array (M, 4, N)
     """
     r = _profile(profile)
     n = r.shape[-1]
@@ -93,6 +132,17 @@ def coincidence_ratio(curves, k: float = 2.0) -> np.ndarray:
     mean_P(v_a + v_b) / M``, so the ratio is about ``1 / k``; a ratio at most 1 means the groups'
     curves coincide within ``k`` standard errors of the measurement scatter (the ``k = 2`` of the
     compendium's tolerance policy), a ratio above 1 a systematic difference between groups.
+
+    Parameters
+    ----------
+    curves : array (G, M, P)
+        G groups of M >= 2 repeated curves of P points.
+    k : float
+        Standard errors per unit of the ratio.
+
+    Returns
+    -------
+    array (G, G)
     """
     c = np.asarray(curves, dtype=float)
     if c.ndim != 3 or c.shape[1] < 2 or c.shape[2] < 1:
@@ -119,7 +169,40 @@ def measure_separated(profile, dx, dy, positions, phi, w, *, speed_rpm: float, d
     ``async_sd_600 (speed / 600)^async_exponent``; the signals (:func:`simulate_measurements`,
     ``n_measurements`` of them) are low-passed to ``lowpass_harmonic`` and separated with the
     layout ``positions``, ``phi``, ``w`` (:func:`~.separation.separate_details`, told that no
-    harmonic above the cut-off is present).  Returns ``(separation, revolutions)``."""
+    harmonic above the cut-off is present).  Returns ``(separation, revolutions)``.
+
+    Parameters
+    ----------
+    profile, dx, dy : arrays (N,)
+        The true profile and synchronous error motion (mm).
+    positions : sequence of int (4,)
+        Probe positions (sample indices).
+    phi : array (3,)
+        Probe angles (rad).
+    w : array (4,)
+        Weights.
+    speed_rpm, duration_s : float
+        Spindle speed (r/min) and acquisition time (s).
+    interleave : int
+        Revolutions per full set of angles (Eqs. 1-2).
+    async_sd_600, async_exponent : float
+        Asynchronous motion (mm at 600 r/min) and its growth with speed.
+    noise_sd : float
+        Probe noise (mm).
+    n_measurements : int
+        Repeated measurements.
+    lowpass_harmonic : int
+        Low-pass cut-off.
+    first_harmonic : str
+        Convention of the first harmonic (:func:`separate_details`).
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    separation : Separation
+        Of every measurement, ``(n_measurements, N)`` arrays.
+    revolutions : int
+    """
     n_rev = max(interleave, int(duration_s * speed_rpm / 60) // interleave * interleave)
     amp = async_sd_600 * (speed_rpm / 600) ** async_exponent
     y = simulate_measurements(profile, dx, dy, positions, n_rev=n_rev, interleave=interleave,
