@@ -20,16 +20,6 @@ import pytest
 
 import mtaccuracy
 
-#: modules whose docstrings are still terse prose, with the count of names that fail; the
-#: test fails when a listed module passes (remove it then) or fails on more names than listed
-PENDING = {
-    "mtaccuracy.machines.ac_double_turntable": 10,
-    "mtaccuracy.machines.horizontal_3axis": 8,
-    "mtaccuracy.machines.vertical_xyfz": 8,
-    "mtaccuracy.sensitivity.pce": 19,
-    "mtaccuracy.spindle.design": 13,
-}
-
 _SECTION = re.compile(r"^(Parameters|Returns|Yields|Raises|Attributes|Notes|References|"
                       r"Examples|See Also|Other Parameters|Warns)\n-{3,}$", re.M)
 
@@ -123,11 +113,6 @@ def module_problems(module_name: str) -> list[str]:
 @pytest.mark.parametrize("module_name", science_modules())
 def test_public_api_has_numpydoc_docstrings(module_name):
     problems = module_problems(module_name)
-    if module_name in PENDING:
-        assert problems, f"{module_name} passes: remove it from PENDING"
-        names = {p.split(":")[0] for p in problems}
-        assert len(names) <= PENDING[module_name], "\n".join(problems)
-        return
     assert not problems, "\n".join(problems)
 
 

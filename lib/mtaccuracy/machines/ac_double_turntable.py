@@ -58,7 +58,13 @@ class ACDoubleTurntable(ChainMachine):
     """Zheng et al. 2024's AC double-turntable machine; pose keys x, y, z (mm), A, C (rad),
     optional tool length L (mm).  A description for :class:`~mtaccuracy.machines.chain.
     ChainMachine` (:data:`TOPOLOGY`, :func:`placements`): the generic chain evaluates it
-    (2 M samples/s and more) and gives its closed-form Jacobian (:meth:`linear_jacobian`)."""
+    (2 M samples/s and more) and gives its closed-form Jacobian (:meth:`linear_jacobian`).
+
+    Parameters
+    ----------
+    convention : {"moving", "fixed"}
+        Where the location errors of A and C enter (:func:`placements`).
+    """
 
     travels = TRAVELS
 
@@ -86,7 +92,17 @@ def placements(convention: str = "moving") -> dict[str, Placement]:
     are blocks after the motion of A and of C; S_xy turns the X carriage frame on the Y
     carriage (a block after Y's motion), S_yz and S_xz the Z carriage frame on X.
     ``fixed``: the location errors before the motion, the squareness errors as first-order
-    tilts of the directions of Y (S_xy) and Z (S_yz, S_xz)."""
+    tilts of the directions of Y (S_xy) and Z (S_yz, S_xz).
+
+    Parameters
+    ----------
+    convention : {"moving", "fixed"}
+        Where the location errors enter.
+
+    Returns
+    -------
+    dict of str to Placement
+    """
     if convention not in ("moving", "fixed"):
         raise ValueError(f"unknown convention {convention!r}; allowed: moving, fixed")
     pl = {}
@@ -118,6 +134,18 @@ def diagonal_test_points(n_per_diagonal: int = 5, rotary: str = "sweep") -> dict
     centre.  The rotary axes are not given by Fig. 4: ``rotary="sweep"`` moves A and C with the
     same fraction of their travel as the linear axes, ``rotary="zero"`` keeps A = C = 0.
     Returns pose arrays and ``diagonal`` (0-3) and ``fraction`` (0..1) per point.
+
+    Parameters
+    ----------
+    n_per_diagonal : int
+        Points per diagonal, ends included.
+    rotary : {"sweep", "zero"}
+        The rule for A and C.
+
+    Returns
+    -------
+    dict of str to array
+        x, y, z (mm), A, C (rad), ``diagonal``, ``fraction``.
     """
     if n_per_diagonal < 2:
         raise ValueError(f"n_per_diagonal must be >= 2, got {n_per_diagonal}")
@@ -167,6 +195,17 @@ def pose_orbit(pose: Mapping, fixed_position: bool = False) -> dict[str, np.ndar
     (-180, 180] deg (members outside the A travel remain in the list), C to [0, 360) deg.
     The reflections need the tool tip at the Z carriage's origin: a tool length ``L`` other
     than 0 is refused.
+
+    Parameters
+    ----------
+    pose : mapping
+        x, y, z (mm), A, C (rad).
+    fixed_position : bool
+        Only the 4 symmetries that keep x, y, z.
+
+    Returns
+    -------
+    dict of str to array (32,) or (4,)
     """
     if np.any(np.asarray(pose.get("L", 0.0)) != 0):
         raise ValueError("pose_orbit: the symmetries hold for tool length L = 0 only (the "
@@ -201,6 +240,19 @@ def canonical_pose(pose: Mapping, fixed_position: bool = False, pos_tol: float =
     coordinate that is zero up to rounding does not decide.  For a generic pose this is the
     member with x, y, z >= 0, -90 < A <= 90 deg and 0 <= C < 180 deg, which always lies inside
     the travels (they are symmetric in x, y, z and contain that A range).
+
+    Parameters
+    ----------
+    pose : mapping
+        x, y, z (mm), A, C (rad).
+    fixed_position : bool
+        Only the symmetries that keep x, y, z.
+    pos_tol, ang_tol : float
+        Tolerances (mm; on cosines and sines).
+
+    Returns
+    -------
+    dict of str to float
     """
     orbit = pose_orbit(pose, fixed_position)
     if orbit["x"].ndim != 1:
@@ -225,6 +277,24 @@ def rank_poses(candidates, misfit: str = "misfit", rtol: float = 1e-6,
     :func:`~mtaccuracy.sensitivity.rank_with_ties`).  Returns one row per minimum, best
     first, with x, y, z, A, C, ``misfit`` and ``n_starts``: which pose comes first depends
     neither on the order of the starts nor on rounding noise.
+
+    Parameters
+    ----------
+    candidates : DataFrame
+        x, y, z (mm), A, C (rad) and the misfit column.
+    misfit : str
+        Name of the misfit column.
+    rtol : float
+        Relative tie window of misfits.
+    fixed_position : bool
+        Only the symmetries that keep x, y, z.
+    pos_tol, ang_tol : float
+        One minimum within these (mm, rad).
+
+    Returns
+    -------
+    DataFrame
+        One row per minimum, best first.
     """
     import pandas as pd
 
@@ -275,6 +345,31 @@ def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, rows, cols, star
     ``misfit`` (RMS of the residuals) and the optimiser's ``status``.  BLAS runs
     single-threaded (small matrices: threads only cost time, and the result is then the same
     for any thread count).
+
+    Parameters
+    ----------
+    machine : ACDoubleTurntable
+    sd : array (41,)
+        Error standard deviations (mm, rad).
+    target : array (m,)
+        The published indices.
+    rows, cols : arrays of int (m,)
+        Their (component, error) entries.
+    starts : array (s, len(free))
+        Start values of the free axes.
+    free : sequence of str
+        The axes fitted.
+    fixed : mapping, optional
+        The other axes' values.
+    ftol, xtol : float
+        Stopping rules.
+    max_nfev : int
+        Evaluations per start.
+
+    Returns
+    -------
+    DataFrame (s, 7)
+        x, y, z, A, C, misfit, status.
     """
     from ..sensitivity.linear import linear_indices
     from ..sensitivity.posefit import fit_pose
@@ -321,6 +416,22 @@ def index_invariants(machine: ACDoubleTurntable, sd, rows, cols, poses: Mapping,
     ``(S_num_k / S_den_k) / (S_num_l / S_den_l)`` of the heads.  A ratio counts as fixed when
     its largest relative spread over ``poses`` is below ``rtol``; entries whose index is zero
     at some pose are left alone (no ratio).
+
+    Parameters
+    ----------
+    machine : ACDoubleTurntable
+    sd : array (41,)
+        Error standard deviations.
+    rows, cols : arrays of int (m,)
+        The table's (component, error) entries.
+    poses : mapping
+        Pose arrays (many random poses).
+    rtol : float
+        Ratios constant within it count as fixed.
+
+    Returns
+    -------
+    groups, cross : DataFrame
     """
     import pandas as pd
 
@@ -367,7 +478,17 @@ def index_invariants(machine: ACDoubleTurntable, sd, rows, cols, poses: Mapping,
 
 def ratio_interval(num_lo, num_hi, den_lo, den_hi):
     """The interval of ``num / den`` for positive intervals (interval arithmetic): how the
-    printed precision of two published values propagates into their ratio."""
+    printed precision of two published values propagates into their ratio.
+
+    Parameters
+    ----------
+    num_lo, num_hi, den_lo, den_hi : float
+        Positive intervals.
+
+    Returns
+    -------
+    lo, hi : float
+    """
     if np.any(np.asarray(den_lo) <= 0) or np.any(np.asarray(num_lo) < 0):
         raise ValueError("ratio_interval needs positive intervals")
     return np.asarray(num_lo) / np.asarray(den_hi), np.asarray(num_hi) / np.asarray(den_lo)
@@ -384,7 +505,29 @@ def fit_pose_average_to_indices(machine: ACDoubleTurntable, sd, target, rows, co
     canonical image (:func:`canonical_pose`), the poses of one fit ordered by decreasing A
     (the mean does not depend on their order).  Returns a DataFrame, one row per start and
     pose: ``start``, ``pose`` (0..m-1), x, y, z, A, C, ``misfit`` (RMS over the entries)
-    and ``status``."""
+    and ``status``.
+
+    Parameters
+    ----------
+    machine : ACDoubleTurntable
+    sd : array (41,)
+        Error standard deviations (mm, rad).
+    target : array (m,)
+        The published indices.
+    rows, cols : arrays of int (m,)
+        Their (component, error) entries.
+    starts : array (s, poses, 5)
+        Start poses.
+    ftol, xtol : float
+        Stopping rules.
+    max_nfev : int
+        Evaluations per start.
+
+    Returns
+    -------
+    DataFrame
+        One row per start and pose.
+    """
     import pandas as pd
 
     from ..sensitivity.linear import linear_indices

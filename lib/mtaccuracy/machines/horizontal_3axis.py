@@ -84,6 +84,14 @@ def parse_layout(layout: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """Split ``"W/T"`` into the workpiece-side and tool-side axes, each from the bed outwards.
 
     Raises ValueError unless x, y and z each appear exactly once and there is exactly one '/'.
+
+    Parameters
+    ----------
+    layout : str
+
+    Returns
+    -------
+    work, tool : tuple of str
     """
     if not isinstance(layout, str):
         raise TypeError(f"layout must be a string like {DEFAULT_LAYOUT!r}, got {layout!r}")
@@ -101,7 +109,16 @@ def parse_layout(layout: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
 
 
 def topology(layout: str) -> str:
-    """The chain topology (:mod:`.chain`) of a layout: ``"z/xy"`` -> ``"w Z b X Y t"``."""
+    """The chain topology (:mod:`.chain`) of a layout: ``"z/xy"`` -> ``"w Z b X Y t"``.
+
+    Parameters
+    ----------
+    layout : str
+
+    Returns
+    -------
+    str
+    """
     work, tool = parse_layout(layout)
     return " ".join(["w", *(a.upper() for a in reversed(work)), "b",
                      *(a.upper() for a in tool), "t"])
@@ -113,6 +130,19 @@ def error_twist_exp(eps: np.ndarray, delta: np.ndarray, exact: bool = True) -> n
     ``exact=False`` gives the first-order matrix ``I + xi^`` (``[[I + [eps]x, delta], [0, 1]]``).
     The exact form is ``[[exp([eps]x), V delta], [0, 1]]`` with
     ``V = I + (1 - cos t)/t^2 [eps]x + (t - sin t)/t^3 [eps]x^2``, ``t = |eps|``.
+
+    Parameters
+    ----------
+    eps : array (..., 3)
+        Angular errors (rad).
+    delta : array (..., 3)
+        Translational errors (mm).
+    exact : bool
+        Exact exponential or first order.
+
+    Returns
+    -------
+    array (..., 4, 4)
     """
     if not exact:
         return homogeneous(np.eye(3) + hat(np.asarray(eps, dtype=float)), delta)
@@ -136,6 +166,13 @@ class Horizontal3Axis(ChainMachine):
     directions (exact or first-order), rotation-vector output.
     ``tests/test_horizontal_3axis.py`` checks it against the 4x4 product of the twist
     exponentials.
+
+    Parameters
+    ----------
+    layout : str
+        ``"W/T"`` axes (:data:`LAYOUTS`).
+    exact : bool
+        Exact exponentials or first-order matrices.
     """
 
     def __init__(self, layout: str = DEFAULT_LAYOUT, exact: bool = True):
@@ -205,6 +242,22 @@ def linear_sobol_indices(machine: Horizontal3Axis, bounds, pose: Mapping | None 
     the full model (about 1e-4 of the error here).  Errors that enter identically (same
     coefficients, same range) get bitwise-equal indices.  One case of
     :func:`linear_sobol_indices_batch`.
+
+    Parameters
+    ----------
+    machine : Horizontal3Axis
+    bounds : array (2, 21)
+        Uniform error ranges (mm, rad).
+    pose : mapping, optional
+        Fixed pose coordinates (mm).
+    pose_bounds : mapping, optional
+        Pose name -> (low, high) uniform.
+    components : int
+        Output rows kept.
+
+    Returns
+    -------
+    s1, st : arrays (21, components)
     """
     base = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in (pose or {}).items()}
     if any(v.shape != (1,) for v in base.values()):
@@ -221,7 +274,25 @@ def linear_sobol_indices_batch(machine: Horizontal3Axis, bounds, poses: Mapping 
     or (T,) arrays (e.g. T tool lengths), ``pose_bounds`` as there (the same box for every
     case).  Returns ``S1`` and ``ST`` (T, 21, components) and the output variance ``V``
     (T, components) in mm^2 (pooled over the box), all from one batched Jacobian over the
-    T x 2^k quadrature poses."""
+    T x 2^k quadrature poses.
+
+    Parameters
+    ----------
+    machine : Horizontal3Axis
+    bounds : array (2, 21)
+        Uniform error ranges (mm, rad).
+    poses : mapping, optional
+        Pose name -> scalar or (T,) array (mm).
+    pose_bounds : mapping, optional
+        Pose name -> (low, high) uniform.
+    components : int
+        Output rows kept.
+
+    Returns
+    -------
+    s1, st : arrays (T, 21, components)
+    variance : array (T, components)
+    """
     from ..sensitivity import linear as _linear
 
     mean, var = _linear.uniform_moments(bounds, machine.n_errors)
@@ -235,7 +306,19 @@ def tool_length_offsets(tool_lengths, base=(0.0, 0.0, 0.0)) -> dict[str, np.ndar
     """Tool offsets (``tool_x, tool_y, tool_z``, (T,) arrays, mm) of tools of the given
     lengths (mm, >= 0) on the horizontal spindle: the tip sits ``length`` mm from the
     carriages' reference point towards the workpiece, i.e. along -z (ISO 841: +z points from
-    the workpiece to the tool), on top of the ``base`` offsets."""
+    the workpiece to the tool), on top of the ``base`` offsets.
+
+    Parameters
+    ----------
+    tool_lengths : array (T,)
+        Tool lengths (mm, >= 0).
+    base : sequence of 3 floats
+        Offsets added (mm).
+
+    Returns
+    -------
+    dict of str to array (T,)
+    """
     lengths = np.atleast_1d(np.asarray(tool_lengths, dtype=float))
     if lengths.ndim != 1 or np.any(lengths < 0) or not np.all(np.isfinite(lengths)):
         raise ValueError(f"tool lengths must be finite and >= 0, got {tool_lengths!r}")
@@ -249,7 +332,22 @@ def linear_indices_at_poses(machine: Horizontal3Axis, bounds, poses: Mapping,
     """Exact Sobol indices (S1 = ST) of the first-order model at each of P fixed poses:
     (P, 21, components).  ``poses`` maps pose names to scalars or (P,) arrays.  The same
     numbers as :func:`linear_sobol_indices` with ``pose=`` one at a time, in one batched call.
-    A component with no variance at a pose gets zeros."""
+    A component with no variance at a pose gets zeros.
+
+    Parameters
+    ----------
+    machine : Horizontal3Axis
+    bounds : array (2, 21)
+        Uniform error ranges (mm, rad).
+    poses : mapping
+        Pose name -> scalar or (P,) array (mm).
+    components : int
+        Output rows kept.
+
+    Returns
+    -------
+    array (P, 21, components)
+    """
     from ..sensitivity import linear as _linear
 
     _, var = _linear.uniform_moments(bounds, machine.n_errors)

@@ -40,7 +40,13 @@ class VerticalXYFZ(ChainMachine):
     by its error matrix), first-order error matrices (``exact=True``: exact rotations, form
     ``rodrigues``), squareness entering the translations linearly (first-order tilts of the
     Y and Z directions; the paper's S_xz is -EB0Z: ``dx(z) - z S_xz``), tool offsets
-    ``D1, D2, D3``, rotation-vector output."""
+    ``D1, D2, D3``, rotation-vector output.
+
+    Parameters
+    ----------
+    exact : bool
+        Exact rotation matrices instead of the paper's first-order ones.
+    """
 
     def __init__(self, exact: bool = False):
         self.exact = bool(exact)
@@ -57,7 +63,17 @@ TOPOLOGY = "w b X Y Z t"
 def placements(s_xz_sign: float = -1.0) -> dict[str, Placement]:
     """Where the 21 errors enter a three-axis chain: each axis' six error motions in the block
     after its motion; S_xy tilts Y about z (EC0Y), S_yz tilts Z about x (EA0Z) and S_xz tilts
-    Z about y with ``s_xz_sign`` (Guo et al.: -1, their S_xz is -EB0Z; Rong et al.: +1)."""
+    Z about y with ``s_xz_sign`` (Guo et al.: -1, their S_xz is -EB0Z; Rong et al.: +1).
+
+    Parameters
+    ----------
+    s_xz_sign : float
+        -1 (Guo et al.) or +1 (Rong et al.).
+
+    Returns
+    -------
+    dict of str to Placement
+    """
     pl = {}
     for a in AXES:
         for c, d in enumerate(AXES):
@@ -79,6 +95,17 @@ def printed_closed_form(e: Mapping, x, y, z, D1, D2, D3):
     ``e`` maps paper symbols to values; works with numpy arrays and with sympy symbols.
     Ambiguous brackets are read as follows (:data:`PRINTED_UNBALANCED`): in Eq. 13,
     ``y(ey(x) S_xy + ex(x)`` is closed after ``ex(x)``.  Returns ``(Ex, Ey, Ez)``.
+
+    Parameters
+    ----------
+    e : mapping
+        Paper symbol -> value (mm, rad) or sympy symbol.
+    x, y, z, D1, D2, D3 : float, array or sympy symbol
+        The pose (mm).
+
+    Returns
+    -------
+    Ex, Ey, Ez
     """
     d = lambda s: e[s]  # noqa: E731  (short alias keeps the transcription readable)
     ex = (d("dx(z)") + d("dx(x)") + d("dx(y)") - y * (d("ez(x)") + d("S_xy"))
@@ -128,7 +155,13 @@ PRINTED_UNBALANCED = (
 # --------------------------------------------------------------------------------------
 
 def symbols():
-    """sympy symbols: a dict of the 21 errors by paper symbol, and the pose symbols."""
+    """sympy symbols: a dict of the 21 errors by paper symbol, and the pose symbols.
+
+    Returns
+    -------
+    errors : dict of str to sympy.Symbol
+    pose : dict of str to sympy.Symbol
+    """
     import sympy as sp
 
     cat = _errors.three_axis_catalogue()
@@ -139,7 +172,12 @@ def symbols():
 
 def symbolic_position_error():
     """Exact symbolic (Ex, Ey, Ez) of the full product of the paper's matrices (Eqs. 1-10,
-    Eq. 8 corrected), as sympy expressions in the error and pose symbols."""
+    Eq. 8 corrected), as sympy expressions in the error and pose symbols.
+
+    Returns
+    -------
+    Ex, Ey, Ez : sympy expressions
+    """
     import sympy as sp
 
     e, p = symbols()
@@ -164,7 +202,18 @@ def symbolic_position_error():
 
 def truncate(expr, order: int = 2):
     """Drop every term of ``expr`` whose total degree in the 21 error symbols exceeds
-    ``order`` (pose symbols do not count)."""
+    ``order`` (pose symbols do not count).
+
+    Parameters
+    ----------
+    expr : sympy expression
+    order : int
+        Highest total degree kept.
+
+    Returns
+    -------
+    sympy expression
+    """
     import sympy as sp
 
     e, _ = symbols()
@@ -175,7 +224,12 @@ def truncate(expr, order: int = 2):
 
 
 def second_order():
-    """The correct second-order closed form (Ex, Ey, Ez) derived from the matrix product."""
+    """The correct second-order closed form (Ex, Ey, Ez) derived from the matrix product.
+
+    Returns
+    -------
+    Ex, Ey, Ez : sympy expressions
+    """
     return tuple(truncate(c, 2) for c in symbolic_position_error())
 
 
@@ -190,6 +244,10 @@ def closed_form_typos():
     bracket opened and never closed as printed (:data:`PRINTED_UNBALANCED`) is a row of kind
     ``bracket`` (printed: the text as printed; derived: the reading whose terms are compared;
     degree: the lowest degree in the errors it affects).
+
+    Returns
+    -------
+    list of dict
     """
     import sympy as sp
 

@@ -86,6 +86,11 @@ class ChaosInputs:
     >>> inp = ChaosInputs([stats.uniform(-1, 2), stats.norm(0, 2)])
     >>> inp.families
     ('legendre', 'hermite')
+
+    Parameters
+    ----------
+    marginals : sequence of frozen scipy distributions (d,)
+        The input laws.
     """
 
     def __init__(self, marginals):
@@ -163,7 +168,21 @@ class ChaosInputs:
 def multi_indices(dim: int, degree: int, q_norm: float = 1.0) -> np.ndarray:
     """All multi-indices of total degree <= ``degree`` with q-norm <= degree, (P, dim)
     (hyperbolic truncation, Blatman & Sudret 2011: (sum_i a_i^q)^(1/q) <= degree; a fresh copy
-    of a cached table: chaospy takes a quarter of a second for 41 dimensions at degree 3)."""
+    of a cached table: chaospy takes a quarter of a second for 41 dimensions at degree 3).
+
+    Parameters
+    ----------
+    dim : int
+        d.
+    degree : int
+        Total degree.
+    q_norm : float
+        In (0, 1].
+
+    Returns
+    -------
+    array of int (P, dim)
+    """
     if degree < 0 or dim < 1 or not 0 < q_norm <= 1:
         raise ValueError(f"need dim >= 1, degree >= 0, 0 < q_norm <= 1; got {dim}, {degree}, "
                          f"{q_norm}")
@@ -193,7 +212,20 @@ def poly_table(z: np.ndarray, degree: int, families="hermite") -> np.ndarray:
     """Orthonormal one-dimensional polynomials of every column of ``z`` (n, d), k = 0..degree:
     (degree + 1, n, d).  ``families``: one name for all columns or one per column
     (``hermite``: He_k/sqrt(k!), orthonormal for the standard normal; ``legendre``:
-    sqrt(2k+1) P_k, orthonormal for the uniform law on [-1, 1]); chaospy's families."""
+    sqrt(2k+1) P_k, orthonormal for the uniform law on [-1, 1]); chaospy's families.
+
+    Parameters
+    ----------
+    z : array (n, d)
+        Standard variables.
+    degree : int
+    families : str or tuple of str
+        Family per column.
+
+    Returns
+    -------
+    array (degree + 1, n, d)
+    """
     z = np.asarray(z, dtype=float)
     if z.ndim != 2:
         raise ValueError(f"z must be (n, d), got shape {z.shape}")
@@ -210,7 +242,18 @@ def poly_table(z: np.ndarray, degree: int, families="hermite") -> np.ndarray:
 
 def hermite_table(xi: np.ndarray, degree: int) -> np.ndarray:
     """Orthonormal (probabilists') Hermite polynomials He_k(x)/sqrt(k!) of every column,
-    k = 0..degree: (degree + 1, n, d), from chaospy's one-dimensional family."""
+    k = 0..degree: (degree + 1, n, d), from chaospy's one-dimensional family.
+
+    Parameters
+    ----------
+    xi : array (n, d)
+        Standard normal variables.
+    degree : int
+
+    Returns
+    -------
+    array (degree + 1, n, d)
+    """
     return poly_table(xi, degree, "hermite")
 
 
@@ -223,6 +266,22 @@ def design_matrix(z: np.ndarray, alphas: np.ndarray, families="hermite",
     Each column is a product over the non-zero entries of its multi-index, gathered from the
     one-dimensional table ``block`` terms at a time (cache-sized pieces): the cost is
     n x P x (largest number of non-zero entries), not n x P x d.
+
+    Parameters
+    ----------
+    z : array (n, d)
+        Standard variables.
+    alphas : array (P, d)
+        Multi-indices.
+    families : str or tuple of str
+        Polynomial family per input.
+    block : int
+        Terms gathered at a time.
+
+    Returns
+    -------
+    array (n, P)
+        Fortran-ordered.
     """
     z = np.asarray(z, dtype=float)
     alphas = np.asarray(alphas)
@@ -252,7 +311,23 @@ def design_matrix(z: np.ndarray, alphas: np.ndarray, families="hermite",
 def loo_error(psi: np.ndarray, y: np.ndarray, corrected: bool = True) -> tuple[float, np.ndarray]:
     """Relative leave-one-out error of the least-squares fit of ``y`` on ``psi`` (n, k), from
     the hat matrix (no refits), and the coefficients.  ``corrected`` applies Chapelle's factor
-    T(k, n) = n/(n-k) (1 + tr((psi^T psi / n)^-1)/n), as UQLab does."""
+    T(k, n) = n/(n-k) (1 + tr((psi^T psi / n)^-1)/n), as UQLab does.
+
+    Parameters
+    ----------
+    psi : array (n, k)
+        Design matrix.
+    y : array (n,)
+        The output.
+    corrected : bool
+        Apply Chapelle's factor.
+
+    Returns
+    -------
+    error : float
+        Relative LOO error.
+    coef : array (k,)
+    """
     n, k = psi.shape
     q, r = np.linalg.qr(psi)
     coef = np.linalg.solve(r, q.T @ y)
@@ -270,7 +345,21 @@ def loo_path(psi: np.ndarray, y: np.ndarray, corrected: bool = True) -> np.ndarr
     k = 1..K, from one QR factorisation: the QR of a leading block is the leading part of the
     QR of the whole, so hat-matrix diagonals, residuals and the trace of the inverse Gram
     matrix are cumulative sums over the columns of Q and R^-1.  Returns (K,) errors; equal to
-    :func:`loo_error` on each block up to rounding (a test checks it)."""
+    :func:`loo_error` on each block up to rounding (a test checks it).
+
+    Parameters
+    ----------
+    psi : array (n, K)
+        Design matrix, columns in path order.
+    y : array (n,)
+        The output.
+    corrected : bool
+        Apply Chapelle's factor.
+
+    Returns
+    -------
+    array (K,)
+    """
     n, kk = psi.shape
     q, r = np.linalg.qr(psi)
     qy = q.T @ y
@@ -303,7 +392,16 @@ def _prefix_coefficients(psi_sel: np.ndarray, y: np.ndarray) -> np.ndarray:
 # ------------------------------------------------------------------------------------------
 
 def column_norms(psi: np.ndarray) -> np.ndarray:
-    """Euclidean norms of the columns of ``psi`` (n, P), rows of its contiguous transpose."""
+    """Euclidean norms of the columns of ``psi`` (n, P), rows of its contiguous transpose.
+
+    Parameters
+    ----------
+    psi : array (n, P)
+
+    Returns
+    -------
+    array (P,)
+    """
     t = psi.T if psi.flags.f_contiguous else np.ascontiguousarray(psi.T)
     norms = np.sqrt(np.einsum("ij,ij->i", t, t))
     norms[norms == 0] = 1.0
@@ -331,6 +429,30 @@ def omp_path(psi: np.ndarray, y: np.ndarray, max_terms: int | None = None,
     Returns ``order`` (K,): the columns taken (indices into ``psi``, all >= 1), and ``loo``
     (K + 1,): the corrected relative LOO error with the constant plus the first k columns,
     k = 0..K (equal to :func:`loo_path` on ``psi[:, [0, *order]]``; a test checks it).
+
+    Parameters
+    ----------
+    psi : array (n, P)
+        Design matrix, constant column first.
+    y : array (n,)
+        The output.
+    max_terms : int, optional
+        Longest path.
+    patience : int, optional
+        Steps after the best LOO error before stopping (None: never early).
+    target : float
+        Relative LOO error at which to stop.
+    norms : array (P,), optional
+        :func:`column_norms` of ``psi``.
+    rows : array of int, optional
+        Rows used (a training fold).
+
+    Returns
+    -------
+    order : array of int
+        Columns taken, in order.
+    loo : array
+        Corrected LOO error of every prefix.
     """
     y = np.asarray(y, dtype=float)
     n, p = psi.shape
@@ -411,7 +533,24 @@ def lars_order(psi: np.ndarray, y: np.ndarray, max_terms: int,
     """The non-constant columns of ``psi`` in the order least-angle regression
     (``sklearn.linear_model.lars_path``, method ``lar``: columns only enter) activates them,
     on centred columns at unit norm; at most ``max_terms``.  The least-squares fits on its
-    prefixes ("hybrid LARS", Blatman & Sudret 2011) are evaluated as for OMP."""
+    prefixes ("hybrid LARS", Blatman & Sudret 2011) are evaluated as for OMP.
+
+    Parameters
+    ----------
+    psi : array (n, P)
+        Design matrix, constant column first.
+    y : array (n,)
+        The output.
+    max_terms : int
+        Longest path.
+    rows : array of int, optional
+        Rows used (a training fold).
+
+    Returns
+    -------
+    array of int
+        Column indices in activation order.
+    """
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.linear_model import lars_path
 
@@ -466,7 +605,27 @@ class PCEFit:
     input; the inputs are the standard variables of :class:`ChaosInputs`), ``loo`` the corrected
     leave-one-out error of the kept model, ``validation`` the k-fold validation error of the
     selection procedure (NaN when not computed), ``n_candidates`` the size of the truncated
-    basis the solver chose from."""
+    basis the solver chose from.
+
+    Attributes
+    ----------
+    alphas : array (k, d)
+        Multi-indices of the kept terms.
+    coef : array (k,)
+        Coefficients in the orthonormal basis.
+    loo : float
+        Corrected leave-one-out error of the kept model.
+    degree : int
+    q_norm : float
+    n_candidates : int
+        Size of the truncated basis.
+    validation : float
+        k-fold validation error of the selection (NaN when not computed).
+    method : str
+        The solver.
+    families : str or tuple of str
+        Polynomial family per input.
+    """
 
     alphas: np.ndarray
     coef: np.ndarray
@@ -497,6 +656,35 @@ def fit_pce(xi: np.ndarray, y: np.ndarray, degree: int = 3, q_norm: float = 1.0,
     the path hundreds of terms long), or at ``max_terms`` (default n - 2).  The constant term is
     always kept.  ``psi``/``alphas`` may be passed to reuse a design matrix across outputs (or use
     :func:`fit_pce_outputs`).
+
+    Parameters
+    ----------
+    xi : array (n, d)
+        Standard variables of the inputs.
+    y : array (n,)
+        The output.
+    degree : int
+        Total degree of the candidate basis.
+    q_norm : float
+        Hyperbolic truncation, in (0, 1].
+    max_terms : int, optional
+        Longest path (default n - 2).
+    patience : int
+        Steps after the best LOO error before the path stops.
+    psi : array (n, P), optional
+        A design matrix to reuse (with ``alphas``).
+    alphas : array (P, d), optional
+        Its multi-indices.
+    target : float
+        Relative LOO error at which the path stops.
+    families : str or tuple of str
+        Polynomial family per input (``hermite``, ``legendre``).
+    method : {"omp", "lars"}
+        The sparse solver.
+
+    Returns
+    -------
+    PCEFit
     """
     y = np.asarray(y, dtype=float)
     return fit_pce_outputs(xi, y[:, None], degree, q_norm, max_terms, patience, psi, alphas,
@@ -511,7 +699,37 @@ def fit_pce_outputs(xi: np.ndarray, y: np.ndarray, degree: int = 3, q_norm: floa
     """:func:`fit_pce` for every column of ``y`` (n, q) on one design: the basis, the design
     matrix and its column norms are built once.  BLAS runs single-threaded here: the result is
     then the same for any thread count, and the many small BLAS calls of the path do not stall
-    when another process shares the cores."""
+    when another process shares the cores.
+
+    Parameters
+    ----------
+    xi : array (n, d)
+        Standard variables of the inputs.
+    y : array (n, q)
+        The outputs.
+    degree : int
+        Total degree of the candidate basis.
+    q_norm : float
+        Hyperbolic truncation, in (0, 1].
+    max_terms : int, optional
+        Longest path (default n - 2).
+    patience : int
+        Steps after the best LOO error before the path stops.
+    psi : array (n, P), optional
+        A design matrix to reuse (with ``alphas``).
+    alphas : array (P, d), optional
+        Its multi-indices.
+    target : float
+        Relative LOO error at which the path stops.
+    families : str or tuple of str
+        Polynomial family per input (``hermite``, ``legendre``).
+    method : {"omp", "lars"}
+        The sparse solver.
+
+    Returns
+    -------
+    list of PCEFit (q,)
+    """
     with threadpool_limits(limits=1, user_api="blas"):
         xi = np.asarray(xi, dtype=float)
         y = np.asarray(y, dtype=float)
@@ -558,6 +776,19 @@ def pce_selection_order(loo, basis, terms, degree, q_norm, rtol: float = LOO_RTO
     below it every fit is as good as was asked for) and then compared with ties within
     ``rtol`` (relative); ties go to the smallest basis, then the fewest kept terms, the
     lowest degree and the smallest q-norm.  Returns indices, best first.
+
+    Parameters
+    ----------
+    loo, basis, terms, degree, q_norm : arrays (m,)
+        Per candidate fit.
+    rtol : float
+        Relative tie window.
+    floor : float
+        LOO errors below it count as equal.
+
+    Returns
+    -------
+    array of int (m,)
     """
     loo = np.asarray(loo, dtype=float)
     if not 0 <= floor < np.inf:
@@ -572,7 +803,26 @@ def select_pce(xi, y, degrees=(1, 2, 3), q_norms=(0.5, 0.75, 1.0), rtol: float =
     below ``rtol`` (relative) and LOO errors below the fits' target accuracy (``target``,
     see :func:`fit_pce`) being ties that go to the smallest basis
     (:func:`pce_selection_order`).  Returns the chosen fit and a list of (degree, q_norm,
-    basis size, kept terms, LOO) in grid order."""
+    basis size, kept terms, LOO) in grid order.
+
+    Parameters
+    ----------
+    xi : array (n, d)
+        Standard variables.
+    y : array (n,)
+        The output.
+    degrees : sequence of int
+    q_norms : sequence of float
+    rtol : float
+        Relative tie window.
+    **kw
+        Passed to :func:`fit_pce`.
+
+    Returns
+    -------
+    fit : PCEFit
+    table : list of tuple
+    """
     fits, table = [], []
     for p in degrees:
         for q in q_norms:
@@ -597,7 +847,19 @@ class SparsePCE:
     (degree, q_norm, basis, terms, loo) in the order tried; ``validation_curve``: the k-fold
     validation error of the chosen basis against the number of non-constant terms (index k =
     k terms); ``s1``, ``st``: the Sobol indices from the coefficients; ``reliable``: the
-    validation error is at most ``poor_fit``."""
+    validation error is at most ``poor_fit``.
+
+    Attributes
+    ----------
+    fit : PCEFit
+        The chosen fit.
+    candidates : list of dict
+        One row per (degree, q-norm) tried.
+    validation_curve : array
+        Validation error of the chosen basis against the number of terms.
+    poor_fit : float
+        Validation error above which the fit is flagged unreliable.
+    """
 
     fit: PCEFit
     candidates: list = field(default_factory=list)
@@ -631,7 +893,30 @@ def validation_curve(psi: np.ndarray, y: np.ndarray, method: str = "omp", length
     its prefixes predict the held-out part, and the squared errors are pooled over folds.
     Returns ``curve`` (length + 1,): mean squared error / Var(y) (index k: the constant plus
     k terms; lengths a fold's path did not reach are infinite) and ``se`` (length + 1,): its
-    standard error (standard deviation of the n pooled squared errors / sqrt(n), / Var(y))."""
+    standard error (standard deviation of the n pooled squared errors / sqrt(n), / Var(y)).
+
+    Parameters
+    ----------
+    psi : array (n, P)
+        Design matrix, constant column first.
+    y : array (n,)
+        The output.
+    method : {"omp", "lars"}
+        The solver.
+    length : int
+        Path length.
+    folds : int
+        Folds, 2..n/2.
+    norms : array (P,), optional
+        :func:`column_norms` of ``psi``.
+    seed : int
+        Seed of the folds.
+
+    Returns
+    -------
+    curve : array (length + 1,)
+    se : array (length + 1,)
+    """
     if method not in ("omp", "lars"):
         raise ValueError(f"unknown sparse solver {method!r}; allowed: omp, lars")
     n = psi.shape[0]
@@ -720,6 +1005,39 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
     The final model is the full-data path to the chosen length, refitted by least squares.
     Folds are a seeded permutation (``seed``).  Returns a :class:`SparsePCE`.  BLAS runs
     single-threaded (results independent of the thread count).
+
+    Parameters
+    ----------
+    x : array (n, d)
+        Inputs (physical, or standard normal when ``inputs`` is None).
+    y : array (n,)
+        The output.
+    inputs : ChaosInputs, optional
+        The input laws.
+    degrees : sequence of int
+        Degrees tried, ascending.
+    q_norms : sequence of float
+        q-norms tried at each degree.
+    method : {"omp", "lars"}
+        The sparse solver.
+    folds : int
+        Folds of the validation.
+    seed : int
+        Seed of the folds.
+    degree_patience : int
+        Degrees without improvement before stopping.
+    patience : int
+        Path steps beyond the validation minimum.
+    target : float
+        Errors below it are ties.
+    poor_fit : float
+        Validation error above which a warning is raised.
+    max_basis : int
+        Largest candidate basis built.
+
+    Returns
+    -------
+    SparsePCE
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -790,7 +1108,16 @@ def pce_sobol(fit: PCEFit) -> tuple[np.ndarray, np.ndarray]:
     """First-order and total Sobol indices (d,) from the coefficients (Zheng et al. Eq. 23;
     Sudret 2008): the variance of an orthonormal PCE is the sum of its squared non-constant
     coefficients, and an index sums those of the terms that hold only (S1) or also (ST) the
-    input."""
+    input.
+
+    Parameters
+    ----------
+    fit : PCEFit
+
+    Returns
+    -------
+    s1, st : arrays (d,)
+    """
     a = fit.alphas
     c2 = fit.coef**2
     nonconst = a.sum(axis=1) > 0

@@ -47,7 +47,20 @@ def _genes(x):
 
 def genes_to_layout(x):
     """Genes ``(phi_1, phi_2, phi_3, a_3)`` -> angles ``(..., 4)`` with phi_0 = 0 and weights
-    ``(..., 4)`` with a0 = 1 (a1, a2 from Eq. 15; inf for degenerate layouts)."""
+    ``(..., 4)`` with a0 = 1 (a1, a2 from Eq. 15; inf for degenerate layouts).
+
+    Parameters
+    ----------
+    x : array (..., 4)
+        Genes.
+
+    Returns
+    -------
+    phi : array (..., 4)
+        Angles (rad), phi_0 = 0.
+    w : array (..., 4)
+        Weights, a0 = 1.
+    """
     x = _genes(x)
     a1, a2 = _raw_weights(x[..., :3], x[..., 3])
     phi = np.concatenate([np.zeros(x.shape[:-1] + (1,)), x[..., :3]], axis=-1)
@@ -57,7 +70,19 @@ def genes_to_layout(x):
 
 def objective_H(x, k) -> np.ndarray:
     """``H = q_k^2`` (Eq. 20) of genes ``x = (..., 4)`` at harmonic ``k`` (broadcast against
-    ``x[..., 0]``); ``inf`` for degenerate or cancelling layouts."""
+    ``x[..., 0]``); ``inf`` for degenerate or cancelling layouts.
+
+    Parameters
+    ----------
+    x : array (..., 4)
+        Genes.
+    k : int or array
+        Harmonic order(s), broadcast against ``x[..., 0]``.
+
+    Returns
+    -------
+    array (...)
+    """
     x = _genes(x)
     k = np.asarray(k, dtype=float)
     if np.any(k < 2) or np.any(k != np.round(k)):
@@ -75,7 +100,19 @@ def objective_H(x, k) -> np.ndarray:
 
 def objective_worst(x, harmonics) -> np.ndarray:
     """Worst case over harmonics: ``max_k q_k^2`` for every ``k`` in ``harmonics`` (beyond the
-    paper, which protects one harmonic at a time)."""
+    paper, which protects one harmonic at a time).
+
+    Parameters
+    ----------
+    x : array (..., 4)
+        Genes.
+    harmonics : sequence of int
+        The orders protected.
+
+    Returns
+    -------
+    array (...)
+    """
     x = _genes(x)
     ks = np.asarray(harmonics)
     if ks.ndim != 1 or ks.size == 0 or np.any(ks < 2):
@@ -85,7 +122,17 @@ def objective_worst(x, harmonics) -> np.ndarray:
 
 
 def fitness(h) -> np.ndarray:
-    """``F = 1/H`` (Eq. 21); 0 where ``H`` is infinite."""
+    """``F = 1/H`` (Eq. 21); 0 where ``H`` is infinite.
+
+    Parameters
+    ----------
+    h : array
+        Objective values H.
+
+    Returns
+    -------
+    array
+    """
     h = np.asarray(h, dtype=float)
     with np.errstate(divide="ignore"):
         return np.where(np.isfinite(h) & (h > 0), 1.0 / h, 0.0)
@@ -97,6 +144,19 @@ def optimal_a3(phi, k, a3_bounds=(-np.inf, np.inf)):
     ``a1, a2`` are affine in ``a3``, so ``H(a3)`` is a ratio of two quadratics; its stationary
     points solve a quadratic, and the minimum over an interval is at one of them or an end.
     ``phi``: (..., 3) angles phi_1..phi_3; returns ``(a3, H)`` of shape (...).
+
+    Parameters
+    ----------
+    phi : array (..., 3)
+        Angles phi_1..phi_3 (rad).
+    k : int
+        Harmonic order.
+    a3_bounds : (float, float)
+        The interval searched.
+
+    Returns
+    -------
+    a3, H : arrays (...)
     """
     phi3 = _split_phi(phi)
     lo, hi = a3_bounds
@@ -141,6 +201,15 @@ def lower_bound_H(n_probes: int = 4) -> float:
     Cauchy-Schwarz inequalities), so ``q_k^2 >= 1/n``; equality needs ``|a_l|`` all equal and
     ``a_l e^{i k phi_l}`` all in phase.  With four probes and ``sum a_l e^{i phi_l} = 0`` this is
     possible exactly when ``k`` is even (:func:`bound_layout`).
+
+    Parameters
+    ----------
+    n_probes : int
+        n.
+
+    Returns
+    -------
+    float
     """
     if isinstance(n_probes, bool) or not isinstance(n_probes, int) or n_probes < 3:
         raise ValueError(f"n_probes must be an integer >= 3, got {n_probes!r}")
@@ -170,6 +239,17 @@ def weights_bound_H(w, half_units=None) -> np.ndarray:
     equality for equal ``|a_l|``; the interval version can fall slightly below 1/4.  The bound
     does not use Eq. 15: it holds whether or not the weights cancel the first harmonic, and it
     ignores the signs of the weights (a sign lost in print does not change it).
+
+    Parameters
+    ----------
+    w : array (..., 3) or (..., 4)
+        Weights.
+    half_units : array, optional
+        Half-widths of the intervals the weights are known to lie in.
+
+    Returns
+    -------
+    array (...)
     """
     w = np.asarray(w, dtype=float)
     if w.ndim == 0 or w.shape[-1] not in (3, 4):
@@ -193,7 +273,20 @@ def bound_layout(k: int, m: int = 1) -> np.ndarray:
     """Genes of a layout reaching ``H = 1/4`` at even ``k``: two diametral pairs,
     ``phi = (0, 2 pi m / k, pi, pi + 2 pi m / k)``, ``a = (1, 1, 1, 1)`` (for k = 2:
     ``(0, pi/2, pi, 3 pi/2)``, ``a = (1, -1, 1, -1)``).  It also cancels every odd harmonic:
-    ``Lambda_j = (1 + e^{i j pi})(1 + e^{i j phi_1})``."""
+    ``Lambda_j = (1 + e^{i j pi})(1 + e^{i j phi_1})``.
+
+    Parameters
+    ----------
+    k : int
+        An even harmonic order.
+    m : int
+        Which of the layouts (the second pair turned by ``2 pi m / k``).
+
+    Returns
+    -------
+    array (4,)
+        Genes ``(phi_1, phi_2, phi_3, a_3)``.
+    """
     if not isinstance(k, int | np.integer) or k < 2 or k % 2:
         raise ValueError(f"H = 1/4 is reachable only at even k >= 2 (got {k!r}); for odd k the "
                          "infimum is larger, see reference_optimum")
@@ -211,6 +304,15 @@ def worst_case_bound(n_samples: int) -> float:
     Parseval: ``sum_{k=0}^{N-1} |Lambda_k|^2 = N sum a_l^2`` for distinct positions; with
     ``Lambda_1 = Lambda_{N-1} = 0`` the smallest of the other ``N - 3`` terms is at most
     ``N sum a_l^2 / (N - 3)``.
+
+    Parameters
+    ----------
+    n_samples : int
+        N.
+
+    Returns
+    -------
+    float
     """
     n = _check_n(n_samples)
     return (n - 3) / n
@@ -236,6 +338,15 @@ def equivalent_genes(x) -> np.ndarray:
     4 x 6 x 2 = 48 gene vectors per layout, computed here (angles in ``[0, 2 pi)``; NaN rows
     where a relabelling is degenerate, ``a_j = 0`` or ``sin(phi_2 - phi_1) = 0``).  Member 0 is
     ``x`` itself (angles taken modulo ``2 pi``).
+
+    Parameters
+    ----------
+    x : array (..., 4)
+        Genes ``(phi_1, phi_2, phi_3, a_3)``.
+
+    Returns
+    -------
+    array (..., 48, 4)
     """
     x = _genes(x)
     phi, w = genes_to_layout(x)                                 # (..., 4) each
@@ -274,7 +385,19 @@ def canonical_genes(x, bounds=None) -> np.ndarray:
     """The canonical member of the symmetry class of ``x`` (:func:`equivalent_genes`): the
     lexicographically smallest ``(phi_1, phi_2, phi_3, a_3)`` among the members inside
     ``bounds`` (``x`` itself counts as inside; angles within 1e-12 of a bound are put on it, and
-    an angle 0 counts as 2 pi where only that is inside).  ``bounds=None``: all members."""
+    an angle 0 counts as 2 pi where only that is inside).  ``bounds=None``: all members.
+
+    Parameters
+    ----------
+    x : array (..., 4)
+        Genes.
+    bounds : sequence of 4 (low, high), optional
+        The box the canonical member must lie in.
+
+    Returns
+    -------
+    array (..., 4)
+    """
     x = _genes(x)
     members = equivalent_genes(x)
     members = np.concatenate([x[..., None, :], members], axis=-2)
@@ -300,6 +423,23 @@ def select_best(h, x, bounds=None, rel_tol: float = 1e-9):
     two round-off orders, that found the same optimum or symmetric copies of it); among them
     the one whose canonical genes (:func:`canonical_genes` in ``bounds``) are lexicographically
     smallest wins.  Returns ``(index, canonical genes)`` of shapes (...) and (..., 4).
+
+    Parameters
+    ----------
+    h : array (..., M)
+        Objective values.
+    x : array (..., M, 4)
+        Their genes.
+    bounds : sequence of 4 (low, high), optional
+        Box of the canonical genes.
+    rel_tol : float
+        Relative tie window.
+
+    Returns
+    -------
+    index : array of int (...)
+    genes : array (..., 4)
+        Canonical genes of the winner.
     """
     h = np.asarray(h, dtype=float)
     x = _genes(x)
@@ -318,7 +458,22 @@ def grid_layout(x, n_samples: int):
     """The layout of genes ``x = (phi_1, phi_2, phi_3, a_3)`` on a sampling grid of ``n_samples``
     per revolution (the matrix method shifts by whole samples): the probe positions ``p``
     (4,) with ``p_0 = 0`` and each angle rounded to the nearest sample, their angles
-    ``2 pi p / N`` and the weights ``a_0..a_3`` of Eq. 15 for those angles and ``a_3``."""
+    ``2 pi p / N`` and the weights ``a_0..a_3`` of Eq. 15 for those angles and ``a_3``.
+
+    Parameters
+    ----------
+    x : array (4,)
+        Genes.
+    n_samples : int
+        Samples per revolution N.
+
+    Returns
+    -------
+    positions : array of int (4,)
+    phi : array (4,)
+        rad.
+    w : array (4,)
+    """
     x = _genes(x)
     if x.ndim != 1:
         raise ValueError(f"grid_layout takes one gene vector (4,), got shape {x.shape}")
