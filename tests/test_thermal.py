@@ -783,3 +783,18 @@ def test_svr_through_the_decoupled_regressor_gets_the_groups():
     assert list(hp.target) == ["k", "b"] and (hp.candidates == 40).all()
     with pytest.raises(ValueError, match="unknown model kind 'gp'"):
         thermal.decoupled(tr, {"k": ["T1"], "b": ["T3"]}, kind="gp")
+
+
+def test_the_calibration_reads_its_targets_from_the_published_metrics():
+    """The residuals the reconstruction was calibrated to come from data/papers, not from
+    numbers typed into the code: Table 7's RMSE and largest residual of k and b, Table 4's
+    largest residual."""
+    metrics = xu2022.published_metrics()
+    res = thermal.synthetic.published_residuals(metrics)
+    row = metrics.set_index(["method", "target"])
+    assert res["rmse_k"] == float(row.loc[("decoupled_mlr", "slope k"), "rmse"])
+    assert res["max_b"] == float(row.loc[("decoupled_mlr", "intercept b"), "max_residual"])
+    assert res["max_eq8"] == float(row.loc[("point_by_point_mlr", "thermal positioning error"),
+                                           "max_residual"])
+    assert all(res[f"max_{k}"] > m for k, m in (("k", thermal.synthetic.CALIBRATION_MARGINS["k"]),
+                                                ("b", thermal.synthetic.CALIBRATION_MARGINS["b"])))

@@ -17,6 +17,7 @@ from . import paths, provenance, reproduction
 
 __all__ = [
     "DEFAULT_DIR", "LSTSQ_TOLERANCE", "SVR_TOLERANCE", "published_targets", "published_models",
+    "published_metrics",
     "reconstruct", "noise_replicates", "calibrate", "read", "is_default_dir", "prepare",
 ]
 
@@ -65,10 +66,16 @@ def noise_replicates(seed: int = synthetic.DEFAULT_SEED, n: int = 40, papers_fol
     return synthetic.noise_replicates(published_targets(papers_folder), seed, n)
 
 
+def published_metrics(folder=None):
+    """The printed prediction metrics (Tables 4, 7, 8) from ``data/papers/xu2022_metrics.csv``."""
+    return reproduction.published("xu2022_metrics", ["table", "method", "target", "rmse",
+                                                     "max_residual", "mae", "unit"], folder)
+
+
 def calibrate(papers_folder=None, **kwargs):
     """:func:`mtaccuracy.thermal.synthetic.calibrate` on the published tables (about a minute)."""
     return synthetic.calibrate(published_targets(papers_folder), published_models(papers_folder),
-                               **kwargs)
+                               published_metrics(papers_folder), **kwargs)
 
 
 def read(folder) -> thermal.ThermalData:

@@ -62,7 +62,8 @@ __all__ = [
     "DEFAULT_SEED", "TIMES_MIN", "POSITIONS_MM", "AMBIENT", "Sensor", "SENSORS",
     "GROUP_OFFSETS", "NOISE_C", "Targets", "targets_from_tables", "ambient", "simulate",
     "reconstruct", "Replicates", "noise_replicates", "printed_eq9", "printed_eq8",
-    "printed_model", "eq9_consistency", "eq8_residuals", "calibrate",
+    "printed_model", "eq9_consistency", "eq8_residuals", "calibrate", "CALIBRATION_MARGINS",
+    "published_residuals",
 ]
 
 #: The seed of the committed reconstruction.
@@ -507,19 +508,50 @@ WARMING_GROUPS = ("transmission", "motor")
 CALIBRATION_TIES = (("T1", "T2"), ("T6", "T11"), ("T7", "T12"))
 
 
-def calibrate(targets: Targets, models: pd.DataFrame, max_nfev: int = 20000,
-              eq8_weight: float = 1.0):
+#: How far (um/m for k, um for b and Eq. 8) below the paper's largest residuals the hinges of
+#: :func:`calibrate` hold the noise-free fit, leaving room for the measurement noise added later.
+CALIBRATION_MARGINS = {"k": 0.4, "b": 0.25, "eq8": 0.3}
+
+
+def published_residuals(metrics: pd.DataFrame) -> dict:
+    """The paper's residuals the calibration aims at, from ``xu2022_metrics.csv``.
+
+    Parameters
+    ----------
+    metrics : DataFrame
+        table, method, target, rmse, max_residual, mae, unit (Tables 4, 7, 8).
+
+    Returns
+    -------
+    dict
+        ``rmse_k``, ``rmse_b``, ``max_k``, ``max_b`` (Table 7, decoupled MLR on the test
+        experiment; um/m and um) and ``max_eq8`` (Table 4, point-by-point MLR; um).
+    """
+    m = metrics.set_index(["method", "target"])
+
+    def value(method, target, col):
+        return float(m.loc[(method, target), col])
+
+    return {"rmse_k": value("decoupled_mlr", "slope k", "rmse"),
+            "rmse_b": value("decoupled_mlr", "intercept b", "rmse"),
+            "max_k": value("decoupled_mlr", "slope k", "max_residual"),
+            "max_b": value("decoupled_mlr", "intercept b", "max_residual"),
+            "max_eq8": value("point_by_point_mlr", "thermal positioning error", "max_residual")}
+
+
+def calibrate(targets: Targets, models: pd.DataFrame, metrics: pd.DataFrame,
+              max_nfev: int = 20000, eq8_weight: float = 1.0):
     """How :data:`SENSORS` (T1, T2, T6, T7, T11, T12) and :data:`GROUP_OFFSETS` were found.
 
     Weighted least squares (``scipy.optimize.least_squares``, deterministic) on the noise-free
     temperatures of :func:`simulate`.  Terms, each divided by its scale:
 
     * Eq. 9 minus Table 5 on the training experiments 1-3 (0.5 um/m for k, 0.15 um for b);
-    * on experiment 4, the RMS of that residual minus Table 7's RMSE (2.6 um/m, 0.5 um);
-    * hinges keeping every Eq. 9 residual below 3.2 um/m and 0.55 um, margins under Table 7's
-      largest residuals (3.6, 0.8) for the measurement noise added later;
+    * on experiment 4, the RMS of that residual minus Table 7's RMSE of k and of b;
+    * hinges keeping every Eq. 9 residual below Table 7's largest residuals of k and b less
+      :data:`CALIBRATION_MARGINS` (room for the measurement noise added later);
     * Eq. 8's printed rows minus Table 5's lines at 185, 205, 225, 445 mm on experiments 1-3
-      (1 um, times ``eq8_weight``), and a hinge at 4.0 um (Table 4's largest residual is 4.3);
+      (1 um, times ``eq8_weight``), and a hinge at Table 4's largest residual less its margin;
     * a hinge keeping heat sources (:data:`WARMING_GROUPS`) from starting above their steady rise;
     * a physical prior: time constants and rises log-normal about :data:`CALIBRATION_PRIOR`
       (sd 0.5), feed exponent 1 +- 0.25, biases 0 +- 0.3 degC, sensor offsets 0 +- 0.3 degC,
@@ -530,7 +562,8 @@ def calibrate(targets: Targets, models: pd.DataFrame, max_nfev: int = 20000,
     :data:`SENSORS` and :data:`GROUP_OFFSETS`, so generation needs no optimiser; run again, it
     gives back the stored values.
     ``targets`` are Table 5 and Table 1 (:func:`targets_from_tables`), ``models`` the
-    printed models (``xu2022_models.csv``: model, target, term, coefficient).
+    printed models (``xu2022_models.csv``: model, target, term, coefficient), ``metrics`` the
+    printed metrics (``xu2022_metrics.csv``, :func:`published_residuals`).
     Returns (sensors, group_offsets, scipy result).
 
     Parameters
@@ -539,6 +572,8 @@ def calibrate(targets: Targets, models: pd.DataFrame, max_nfev: int = 20000,
         Table 5 and Table 1.
     models : DataFrame
         The printed models.
+    metrics : DataFrame
+        The printed metrics.
     max_nfev : int
         Evaluations allowed.
     eq8_weight : float
@@ -556,6 +591,10 @@ def calibrate(targets: Targets, models: pd.DataFrame, max_nfev: int = 20000,
     from scipy.optimize import least_squares
 
     k5, b5, t1 = targets.k, targets.b, targets.t1
+    res = published_residuals(metrics)
+    hinge_k = res["max_k"] - CALIBRATION_MARGINS["k"]
+    hinge_b = res["max_b"] - CALIBRATION_MARGINS["b"]
+    hinge_8 = res["max_eq8"] - CALIBRATION_MARGINS["eq8"]
     eq9, eq8 = printed_eq9(models), printed_eq8(models)
     line = {p: k5 * (p - POSITIONS_MM[0]) / 1000.0 + b5 for p in eq8}
     free = list(CALIBRATION_PRIOR)
@@ -591,12 +630,12 @@ def calibrate(targets: Targets, models: pd.DataFrame, max_nfev: int = 20000,
         return np.concatenate([
             np.maximum(np.array(warm), 0) / 0.05,
             eq8_weight * r8[:, :3].ravel() / 1.0,
-            eq8_weight * np.maximum(np.abs(r8).ravel() - 4.0, 0) / 0.05,
+            eq8_weight * np.maximum(np.abs(r8).ravel() - hinge_8, 0) / 0.05,
             rk[:3].ravel() / 0.5, rb[:3].ravel() / 0.15,
-            [(np.sqrt(np.mean(rk[3] ** 2)) - 2.6) / 0.2,
-             (np.sqrt(np.mean(rb[3] ** 2)) - 0.5) / 0.05],
-            np.maximum(np.abs(rk).ravel() - 3.2, 0) / 0.05,
-            np.maximum(np.abs(rb).ravel() - 0.55, 0) / 0.02,
+            [(np.sqrt(np.mean(rk[3] ** 2)) - res["rmse_k"]) / 0.2,
+             (np.sqrt(np.mean(rb[3] ** 2)) - res["rmse_b"]) / 0.05],
+            np.maximum(np.abs(rk).ravel() - hinge_k, 0) / 0.05,
+            np.maximum(np.abs(rb).ravel() - hinge_b, 0) / 0.02,
             (p - p0) / sd, [(p[i] - p[j]) / 0.1 for i, j in ties]])
 
     lo, hi = p0 - 3 * sd, p0 + 3 * sd
