@@ -1,11 +1,17 @@
 """The public API of the science packages has numpydoc docstrings (issue 15 item 5).
 
 For every public function of a science module (its ``__all__``, else the names without a
-leading underscore, defined in that module): a one-line summary; a ``Parameters`` section that
-documents exactly the signature's parameters (``a, b : ...`` documents two; ``*args`` and
-``**kwargs`` with or without their stars); a ``Returns`` (or ``Yields``) section when the
-function returns a value.  For every public class whose constructor takes arguments: a
-``Parameters`` or ``Attributes`` section.  Every science module renders with ``pydoc``.
+leading underscore, defined in that module) and every public method of a public class: a
+docstring; a ``Parameters`` section that documents exactly the signature's parameters
+(``self``/``cls`` aside; ``a, b : ...`` documents two; ``*args`` and ``**kwargs`` with or
+without their stars); a ``Returns`` (or ``Yields``) section when the function returns a value
+(a return annotation other than None or, without one, a ``return <value>``).  For every public
+class whose constructor takes arguments: a ``Parameters`` section documenting exactly them, or
+(dataclasses, estimators) an ``Attributes`` section naming each of them.  Every public property
+has a docstring.  Every science module renders with ``pydoc``, and the docstrings' examples run.
+
+The parser below is small on purpose (numpydoc is not a dependency): a section is a heading
+line followed by a line of dashes; a documented name is an unindented ``name : type`` line.
 """
 
 import ast
@@ -19,6 +25,15 @@ import textwrap
 import pytest
 
 import mtaccuracy
+
+#: Science modules whose public API does not pass yet -> why.  The test fails for a listed
+#: module that passes (remove it then), so the list stays honest.
+PENDING: dict[str, str] = {}
+
+#: Modules whose docstrings must carry runnable examples (kinematics, chain building, the pose
+#: error); ``test_the_examples_in_docstrings_run`` runs the examples of every science module.
+WITH_EXAMPLES = ("mtaccuracy.kinematics", "mtaccuracy.errors", "mtaccuracy.machines",
+                 "mtaccuracy.machines.chain", "mtaccuracy.sensitivity.pce")
 
 _SECTION = re.compile(r"^(Parameters|Returns|Yields|Raises|Attributes|Notes|References|"
                       r"Examples|See Also|Other Parameters|Warns)\n-{3,}$", re.M)
@@ -83,15 +98,39 @@ def function_problems(name: str, func) -> list[str]:
 
 
 def class_problems(name: str, cls) -> list[str]:
+    """What a class's docstring (constructor) and its public methods and properties lack."""
     if not inspect.getdoc(cls):
         return [f"{name}: no docstring"]
+    out = []
     try:
         params = [p for p in inspect.signature(cls).parameters if p not in ("self", "cls")]
     except (TypeError, ValueError):
         params = []
-    if params and not ({"Parameters", "Attributes"} & set(sections(cls.__doc__))):
-        return [f"{name}: no Parameters or Attributes section"]
-    return []
+    sec = sections(inspect.getdoc(cls))
+    if params:
+        if "Parameters" in sec:
+            doc_names = documented(sec["Parameters"])
+            missing = [p for p in params if p not in doc_names]
+            extra = [p for p in doc_names if p not in params]
+            if missing or extra:
+                out.append(f"{name}: Parameters undocumented {missing}, not in signature {extra}")
+        elif "Attributes" in sec:
+            missing = [p for p in params if p not in documented(sec["Attributes"])]
+            if missing:
+                out.append(f"{name}: constructor arguments {missing} not in Attributes")
+        else:
+            out.append(f"{name}: no Parameters or Attributes section")
+    for attr, member in vars(cls).items():
+        if attr.startswith("_"):
+            continue
+        if isinstance(member, property):
+            if not inspect.getdoc(member):
+                out.append(f"{name}.{attr}: property without docstring")
+            continue
+        func = getattr(member, "__func__", member)       # staticmethod, classmethod
+        if inspect.isfunction(func):
+            out += function_problems(f"{name}.{attr}", func)
+    return out
 
 
 def module_problems(module_name: str) -> list[str]:
@@ -113,7 +152,14 @@ def module_problems(module_name: str) -> list[str]:
 @pytest.mark.parametrize("module_name", science_modules())
 def test_public_api_has_numpydoc_docstrings(module_name):
     problems = module_problems(module_name)
-    assert not problems, "\n".join(problems)
+    if module_name in PENDING:
+        assert problems, f"{module_name} passes now: remove it from PENDING"
+    else:
+        assert not problems, "\n".join(problems)
+
+
+def test_pending_names_science_modules():
+    assert set(PENDING) <= set(science_modules())
 
 
 @pytest.mark.parametrize("module_name", science_modules())
@@ -184,5 +230,79 @@ def test_the_examples_in_docstrings_run():
         mod = importlib.import_module(name)
         result = doctest.testmod(mod, optionflags=doctest.NORMALIZE_WHITESPACE)
         assert result.failed == 0, f"{name}: {result.failed} example(s) fail"
+        assert result.attempted > 0 or name not in WITH_EXAMPLES, f"{name} has no example"
         ran += result.attempted
     assert ran > 0
+
+
+def test_the_rules_catch_bad_classes_methods_and_properties():
+    class Good:
+        """A good class.
+
+        Parameters
+        ----------
+        a : float
+            Length, mm.
+        """
+
+        def __init__(self, a):
+            self.a = a
+
+        @property
+        def twice(self):
+            """float: twice ``a``, mm."""
+            return 2 * self.a
+
+        def scaled(self, k):
+            """``a`` times ``k``.
+
+            Parameters
+            ----------
+            k : float
+                Factor.
+
+            Returns
+            -------
+            float
+            """
+            return k * self.a
+
+    class Bad:
+        """A bad class.
+
+        Parameters
+        ----------
+        b : float
+            Not the constructor's argument.
+        """
+
+        def __init__(self, a):
+            self.a = a
+
+        @property
+        def twice(self):
+            return 2 * self.a
+
+        @classmethod
+        def make(cls, a):
+            """A terse prose docstring."""
+            return cls(a)
+
+    class Fields:
+        """Documented by its attributes only.
+
+        Attributes
+        ----------
+        a : float
+        """
+
+        def __init__(self, a, b):
+            self.a, self.b = a, b
+
+    assert class_problems("Good", Good) == []
+    assert class_problems("Bad", Bad) == [
+        "Bad: Parameters undocumented ['a'], not in signature ['b']",
+        "Bad.twice: property without docstring",
+        "Bad.make: no Parameters section", "Bad.make: no Returns section"]
+    assert class_problems("Fields", Fields) == [
+        "Fields: constructor arguments ['b'] not in Attributes"]

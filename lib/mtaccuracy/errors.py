@@ -87,6 +87,14 @@ def three_axis_catalogue(angular_unit: str = "rad") -> tuple[ErrorSpec, ...]:
     Returns
     -------
     tuple of ErrorSpec (21,)
+
+    Examples
+    --------
+    >>> cat = three_axis_catalogue()
+    >>> len(cat), symbols(cat)[:3], symbols(cat)[-3:]
+    (21, ['dx(x)', 'dy(y)', 'dz(z)'], ['S_xy', 'S_yz', 'S_xz'])
+    >>> cat[0].iso_code, cat[0].paper_unit
+    ('EXX', 'um')
     """
     cat = [_motion("positioning", a, a, angular_unit) for a in "xyz"]
     cat += [_motion("straightness", d, a, angular_unit)

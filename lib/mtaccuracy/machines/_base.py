@@ -28,13 +28,32 @@ class Machine:
 
     @property
     def error_names(self) -> list[str]:
+        """list of str: the error symbols in catalogue order (the columns of an error array)."""
         return _errors.symbols(self.catalogue)
 
     @property
     def n_errors(self) -> int:
+        """int: the number of errors of the catalogue."""
         return len(self.catalogue)
 
     def check_errors(self, errors) -> np.ndarray:
+        """Validate an error array against the catalogue.
+
+        Parameters
+        ----------
+        errors : (n, n_errors) array_like
+            Error values in mm and rad, columns in catalogue order (:attr:`error_names`).
+
+        Returns
+        -------
+        (n, n_errors) ndarray of float
+            ``errors`` as a float array.
+
+        Raises
+        ------
+        ValueError
+            If ``errors`` is not two-dimensional with ``n_errors`` columns.
+        """
         e = np.asarray(errors, dtype=float)
         if e.ndim != 2 or e.shape[1] != self.n_errors:
             raise ValueError(
@@ -44,7 +63,29 @@ class Machine:
         return e
 
     def check_pose(self, pose: Mapping, n: int) -> dict[str, np.ndarray]:
-        """Validate a pose mapping; axes are required, tool offsets default to 0."""
+        """Validate a pose mapping; axes are required, tool offsets default to 0.
+
+        Parameters
+        ----------
+        pose : mapping of str to float or (n,) array
+            Axis positions (linear axes mm, rotary axes rad) by pose name (:attr:`axes`)
+            and, optionally, tool offsets (mm, :attr:`tool_offsets`).
+        n : int
+            The number of samples every value is broadcast to.
+
+        Returns
+        -------
+        dict of str to (n,) ndarray
+            Every axis and tool offset name, each broadcast to ``(n,)`` (read-only views).
+
+        Raises
+        ------
+        TypeError
+            If ``pose`` is not a mapping.
+        ValueError
+            If a name is unknown, an axis is missing or a value is neither a scalar nor of
+            shape ``(n,)`` (or ``(1,)``).
+        """
         if not isinstance(pose, Mapping):
             raise TypeError(f"pose must be a mapping of {self.axes + self.tool_offsets}")
         allowed = self.axes + self.tool_offsets
@@ -65,12 +106,41 @@ class Machine:
         return out
 
     def transforms(self, errors: np.ndarray, pose: Mapping) -> tuple[np.ndarray, np.ndarray]:
+        """The actual and the ideal tool frame in the workpiece frame (subclasses implement it).
+
+        Parameters
+        ----------
+        errors : (n, n_errors) array
+            Error values in mm and rad, columns in catalogue order.
+        pose : mapping of str to float or (n,) array
+            Axis positions (mm, rad) and tool offsets (mm).
+
+        Returns
+        -------
+        actual, ideal : (n, 4, 4) ndarray
+            Homogeneous transforms (translations in mm) with and without the errors.
+        """
         raise NotImplementedError
 
     def pose_error(self, errors, pose: Mapping) -> np.ndarray:
-        """(n, 6) pose error ``Px, Py, Pz`` (mm), ``Rx, Ry, Rz`` (rad: the rotation vector
-        ``vee(R_actual R_ideal^T)``) of the tool in the workpiece frame, actual minus ideal,
-        from the full (untruncated) matrix product."""
+        """The pose error of the tool in the workpiece frame, actual minus ideal.
+
+        From the full (untruncated) matrix product of :meth:`transforms`, via
+        :func:`mtaccuracy.kinematics.pose_difference`.
+
+        Parameters
+        ----------
+        errors : (n, n_errors) array
+            Error values in mm and rad, columns in catalogue order.
+        pose : mapping of str to float or (n,) array
+            Axis positions (mm, rad) and tool offsets (mm).
+
+        Returns
+        -------
+        (n, 6) ndarray
+            ``Px, Py, Pz`` (mm) and ``Rx, Ry, Rz`` (rad: the rotation vector
+            ``vee(R_actual R_ideal^T)``).
+        """
         actual, ideal = self.transforms(errors, pose)
         return pose_difference(actual, ideal)
 
@@ -78,9 +148,23 @@ class Machine:
         return f"<{type(self).__name__} {self.name!r}: {self.n_errors} errors, axes {self.axes}>"
 
     def jacobian(self, pose: Mapping, step: float = 1e-6) -> np.ndarray:
-        """d(pose error)/d(errors) at zero errors by central differences: (P, 6, n_errors)
-        for pose arrays of length P (or (1, 6, n_errors) for a scalar pose).  ``step`` is in
-        mm or rad; the model is smooth, so the result is exact to about step^2."""
+        """d(pose error)/d(errors) at zero errors by central differences.
+
+        Parameters
+        ----------
+        pose : mapping of str to float or (P,) array
+            Axis positions (mm, rad) and tool offsets (mm) of P poses.
+        step : float
+            Central-difference step, mm or rad; the model is smooth, so the result is exact
+            to about ``step**2``.
+
+        Returns
+        -------
+        (P, 6, n_errors) ndarray
+            Row ``[p, i, j]`` is d(pose error component i)/d(error j) at pose p
+            (``(1, 6, n_errors)`` for a scalar pose); translational errors give
+            dimensionless coefficients, angular errors mm per rad.
+        """
         vals = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
         n_poses = max(v.shape[0] for v in vals.values())
         d = self.n_errors

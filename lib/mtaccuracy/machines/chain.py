@@ -109,13 +109,32 @@ class Topology:
 
     @property
     def axes(self) -> tuple[str, ...]:
+        """tuple of str: the workpiece-side then the tool-side axes, each from the bed out."""
         return self.work + self.tool
 
     def side(self, axis: str) -> int:
-        """-1 for an axis of the workpiece side, +1 for one of the tool side."""
+        """-1 for an axis of the workpiece side, +1 for one of the tool side.
+
+        Parameters
+        ----------
+        axis : str
+            An axis letter (``X Y Z A B C``).
+
+        Returns
+        -------
+        int
+            -1 if ``axis`` is on the workpiece side, else +1.
+        """
         return -1 if axis in self.work else 1
 
     def describe(self) -> str:
+        """The chain in words, e.g. ``workpiece <- C <- A <- bed -> Y -> X -> Z -> tool``.
+
+        Returns
+        -------
+        str
+            One line from the workpiece through the bed to the tool.
+        """
         work = " <- ".join(["workpiece", *reversed(self.work), "bed"])
         return f"{work} -> " + " -> ".join([*self.tool, "tool"])
 
@@ -148,6 +167,14 @@ def parse_topology(text: str) -> Topology:
     ValueError
         For an unknown letter, a missing or repeated ``w``, ``b`` or ``t``, a repeated axis or
         no axis, with the grammar in the message.
+
+    Examples
+    --------
+    >>> topo = parse_topology("w C A b Y X Z t")
+    >>> topo.work, topo.tool
+    (('A', 'C'), ('Y', 'X', 'Z'))
+    >>> topo.describe()
+    'workpiece <- C <- A <- bed -> Y -> X -> Z -> tool'
     """
     if not isinstance(text, str):
         raise TypeError(f"topology must be a string, got {type(text).__name__}; {_GRAMMAR}")
@@ -467,11 +494,27 @@ class ChainMachine(Machine):
 
     # -- description -----------------------------------------------------------------------
     def describe(self) -> str:
+        """One line: the machine's name, its chain (:meth:`Topology.describe`), its errors.
+
+        Returns
+        -------
+        str
+            ``"<name>: <chain> (<n_errors> errors)"``.
+        """
         return f"{self.name}: {self.topology.describe()} ({self.n_errors} errors)"
 
     def factors(self) -> list[tuple[int, str, str]]:
-        """The chain in output order as (side, axis, slot): the workpiece side inverted (its
-        factors outermost-last), then the tool side; slot ``move`` is the nominal motion."""
+        """The chain's factors in output order.
+
+        The workpiece side inverted (its factors outermost-last), then the tool side.
+
+        Returns
+        -------
+        list of (int, str, str)
+            ``(side, axis, slot)`` per factor: side -1 (workpiece) or +1 (tool), the axis
+            letter, and the slot (``pre``, ``move`` -- the nominal motion --, ``motion``,
+            ``post``).
+        """
         return list(self._factors)
 
     def _build_factors(self):
@@ -615,8 +658,24 @@ class ChainMachine(Machine):
         return v
 
     def relative(self, errors, pose: Mapping, with_errors: bool = True):
-        """Tool in the workpiece frame as (R (n, 3, 3), t (n, 3)); ``with_errors=False`` the
-        ideal chain."""
+        """The tool frame in the workpiece frame, with or without the errors.
+
+        Parameters
+        ----------
+        errors : (n, n_errors) array
+            Error values in mm and rad, columns in catalogue order.
+        pose : mapping of str to float or (n,) array
+            Axis positions (mm, rad) and tool offsets (mm).
+        with_errors : bool
+            False: the ideal chain (``errors`` then only sets ``n``).
+
+        Returns
+        -------
+        R : (n, 3, 3) ndarray
+            Rotation of the tool frame.
+        t : (n, 3) ndarray
+            Position of the tool tip, mm.
+        """
         e = self.check_errors(errors)
         n = e.shape[0]
         p = self.check_pose(pose, n)
@@ -690,6 +749,20 @@ class ChainMachine(Machine):
         return out
 
     def transforms(self, errors, pose: Mapping):
+        """The actual and the ideal tool frame in the workpiece frame as 4x4 transforms.
+
+        Parameters
+        ----------
+        errors : (n, n_errors) array
+            Error values in mm and rad, columns in catalogue order.
+        pose : mapping of str to float or (n,) array
+            Axis positions (mm, rad) and tool offsets (mm).
+
+        Returns
+        -------
+        actual, ideal : (n, 4, 4) ndarray
+            Homogeneous transforms of :meth:`relative` with and without the errors (mm).
+        """
         from ..kinematics import homogeneous
 
         return (homogeneous(*self.relative(errors, pose)),
@@ -730,7 +803,19 @@ class ChainMachine(Machine):
         after it, it moves the tip by ``R_A (w x p_B + v)`` and turns the tool by ``R_A w``
         (the tool axis by ``R_A (w x a_B)``), with the opposite sign on the workpiece side
         (the inverse of I + xi is I - xi to first order).  A tilt ``w`` of a linear axis moved
-        by ``s q`` is the translation ``s q (w x e_k)``.  All forms agree to first order."""
+        by ``s q`` is the translation ``s q (w x e_k)``.  All forms agree to first order.
+
+        Parameters
+        ----------
+        pose : mapping of str to float or (P,) array
+            Axis positions (mm, rad) and tool offsets (mm) of P poses.
+
+        Returns
+        -------
+        (P, 6, n_errors) ndarray
+            d(pose error component)/d(error) at zero errors, per pose: dimensionless for
+            translational errors, mm per rad for angular ones (position rows).
+        """
         vals = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
         n = max((v.shape[0] for v in vals.values()), default=1)
         p = self.check_pose(vals, n)
@@ -972,6 +1057,24 @@ def iso_machine(topology: str, *, name: str = "iso_machine", keep_redundant: boo
         With ``machine.removed``: the (symbol, reason) of every removed location error.
         Location errors sit before their axis' motion (ISO 230-7), squareness errors tilt the
         directions of the linear axes (:func:`iso_catalogue`).
+
+    Examples
+    --------
+    A three-axis machine with every axis on the tool side: a positioning error EXX of 1 um,
+    and an angular error EBX of 10 urad seen through a 200 mm tool (Abbe offset: 2 um).
+
+    >>> import numpy as np
+    >>> m = iso_machine("w b X Y Z t")
+    >>> m.n_errors, m.axes, m.tool_offsets
+    (21, ('x', 'y', 'z'), ('L',))
+    >>> e = np.zeros((2, m.n_errors))
+    >>> e[0, m.error_names.index("EXX")] = 0.001               # mm
+    >>> e[1, m.error_names.index("EBX")] = 1e-5                # rad
+    >>> pe = m.pose_error(e, {"x": 100.0, "y": 0.0, "z": 0.0, "L": 200.0})
+    >>> pe.shape
+    (2, 6)
+    >>> pe[:, 0].round(6).tolist(), round(float(pe[1, 4]), 9)  # Px (mm), Ry (rad)
+    ([0.001, 0.002], 1e-05)
     """
     cat, placements = iso_catalogue(topology)
     topo = parse_topology(topology)

@@ -187,7 +187,14 @@ class Horizontal3Axis(ChainMachine):
                          axis_names=AXES)
 
     def describe(self) -> str:
-        """One line: which axes carry the workpiece and which the tool."""
+        """One line: which axes carry the workpiece and which the tool.
+
+        Returns
+        -------
+        str
+            E.g. ``layout 'z/xy': workpiece <- Z <- bed -> X -> Y -> spindle -> tool``,
+            followed by the layout's description when it is one of :data:`LAYOUTS`.
+        """
         known = LAYOUTS.get(self.layout)
         work = " <- ".join(a.upper() for a in reversed(self.workpiece_axes)) or "(fixed)"
         tool = " -> ".join(a.upper() for a in self.tool_axes) or "(fixed)"
@@ -195,7 +202,21 @@ class Horizontal3Axis(ChainMachine):
         return text + (f" ({known})" if known else "")
 
     def position_error(self, errors, pose: Mapping) -> np.ndarray:
-        """(n, 3) tool-tip position error ``Ex, Ey, Ez`` (mm) in the workpiece frame."""
+        """The tool-tip position error in the workpiece frame.
+
+        Parameters
+        ----------
+        errors : (n, 21) array
+            Error values in mm and rad, columns in the order of
+            :func:`mtaccuracy.errors.three_axis_catalogue`.
+        pose : mapping of str to float or (n,) array
+            ``x, y, z`` (mm) and optional tool offsets ``tool_x, tool_y, tool_z`` (mm).
+
+        Returns
+        -------
+        (n, 3) ndarray
+            ``Ex, Ey, Ez``, mm: the first three columns of :meth:`pose_error`.
+        """
         return self.pose_error(errors, pose)[:, :3]
 
     def first_order_jacobian(self, pose: Mapping) -> np.ndarray:
@@ -211,6 +232,22 @@ class Horizontal3Axis(ChainMachine):
         squareness error tilts an axis direction, which moves the tip by the travel times
         the tilt: ``S_xy -> (-y, 0, 0)``, ``S_yz -> (0, -z, 0)``, ``S_xz -> (z, 0, 0)`` on
         either side (x, y, z are relative coordinates).
+
+        Parameters
+        ----------
+        pose : mapping of str to float or (P,) array
+            ``x, y, z`` (mm) and optional tool offsets (mm) of P poses.
+
+        Returns
+        -------
+        (P, 6, 21) ndarray
+            d(pose error)/d(error) at zero errors: dimensionless for translational errors,
+            mm per rad (position rows) for angular ones.
+
+        Raises
+        ------
+        ValueError
+            If a pose value is not a scalar or a 1-d array.
         """
         vals = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
         if any(v.ndim != 1 for v in vals.values()):
@@ -221,7 +258,23 @@ class Horizontal3Axis(ChainMachine):
         """First-order coefficients (6, 21) of the pose error at one pose (exact, see
         :meth:`first_order_jacobian`): column j is d(pose error)/d(error j), so a
         translational error has coefficients of order 1 and an angular error its Abbe arm in
-        mm."""
+        mm.
+
+        Parameters
+        ----------
+        pose : mapping of str to float
+            ``x, y, z`` (mm) and optional tool offsets (mm), one pose (scalars).
+
+        Returns
+        -------
+        (6, 21) ndarray
+            d(pose error)/d(error j) in column j.
+
+        Raises
+        ------
+        ValueError
+            If a pose value is not a scalar.
+        """
         single = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
         if any(v.shape != (1,) for v in single.values()):
             raise ValueError("first_order_coefficients takes one pose (scalars)")

@@ -97,20 +97,79 @@ class RealEncoding:
 
     @property
     def n_genes(self) -> int:
+        """int: the number of genes d."""
         return self.lo.shape[0]
 
     def initial(self, rng, runs: int, pop: int) -> np.ndarray:
+        """A uniformly random initial population, genes stored as values in the box.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The random stream.
+        runs, pop : int
+            Independent runs and population size.
+
+        Returns
+        -------
+        (runs, pop, d) ndarray
+            The genotypes.
+        """
         return self.lo + rng.random((runs, pop, self.n_genes)) * (self.hi - self.lo)
 
     def decode(self, geno) -> np.ndarray:
+        """Genotypes to gene values in the box.
+
+        Parameters
+        ----------
+        geno : (..., d) array
+            Genotypes as :meth:`initial` stores them.
+
+        Returns
+        -------
+        (..., d) ndarray
+            Gene values in ``[lo, hi]`` (the units of the box).
+        """
         return geno
 
     def crossover(self, a, b, cross, rng):
+        """Cross paired parents where ``cross`` holds: arithmetic crossover per gene.
+
+        Parameters
+        ----------
+        a, b : (runs, pop // 2, d) array
+            The paired parents' genotypes.
+        cross : (runs, pop // 2, 1) array of bool
+            Which pairs cross; the others are copied.
+        rng : numpy.random.Generator
+            The random stream.
+
+        Returns
+        -------
+        c1, c2 : (runs, pop // 2, d) ndarray
+            The children's genotypes.
+        """
         beta = rng.random(a.shape)
         return (np.where(cross, beta * a + (1 - beta) * b, a),
                 np.where(cross, (1 - beta) * a + beta * b, b))
 
     def mutate(self, child, pm, rng) -> np.ndarray:
+        """Mutate children: per gene, with probability ``pm``, a Gaussian step (reflected).
+
+        Parameters
+        ----------
+        child : (runs, pop, d) array
+            The children's genotypes.
+        pm : (runs, pop) array
+            Mutation probability per individual.
+        rng : numpy.random.Generator
+            The random stream.
+
+        Returns
+        -------
+        (runs, pop, d) ndarray
+            The mutated genotypes.
+        """
         mut = rng.random(child.shape) < pm[..., None]
         step = rng.normal(size=child.shape) * self.mutation_scale * (self.hi - self.lo)
         return _reflect(np.where(mut, child + step, child), self.lo, self.hi)
@@ -141,6 +200,7 @@ class BinaryEncoding:
 
     @property
     def n_genes(self) -> int:
+        """int: the number of genes d."""
         return self.lo.shape[0]
 
     def _pack(self, bitstring):
@@ -149,12 +209,54 @@ class BinaryEncoding:
                 ).astype(np.int64)
 
     def initial(self, rng, runs: int, pop: int) -> np.ndarray:
+        """A uniformly random initial population, genes stored as ``bits``-bit integers (int64).
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The random stream.
+        runs, pop : int
+            Independent runs and population size.
+
+        Returns
+        -------
+        (runs, pop, d) ndarray
+            The genotypes.
+        """
         return self._pack(rng.random((runs, pop, self.n_genes * self.bits)) < 0.5)
 
     def decode(self, geno) -> np.ndarray:
+        """Genotypes to gene values in the box.
+
+        Parameters
+        ----------
+        geno : (..., d) array
+            Genotypes as :meth:`initial` stores them.
+
+        Returns
+        -------
+        (..., d) ndarray
+            Gene values in ``[lo, hi]`` (the units of the box).
+        """
         return self.lo + (self.hi - self.lo) * geno / (2.0 ** self.bits - 1)
 
     def crossover(self, a, b, cross, rng):
+        """Cross paired parents where ``cross`` holds: single point on the bit string.
+
+        Parameters
+        ----------
+        a, b : (runs, pop // 2, d) array
+            The paired parents' genotypes.
+        cross : (runs, pop // 2, 1) array of bool
+            Which pairs cross; the others are copied.
+        rng : numpy.random.Generator
+            The random stream.
+
+        Returns
+        -------
+        c1, c2 : (runs, pop // 2, d) ndarray
+            The children's genotypes.
+        """
         d, bits = self.n_genes, self.bits
         cut = rng.integers(1, d * bits, size=a.shape[:-1] + (1,))
         # single-point crossover at bit `cut` of the string: the tail of gene i is its last
@@ -164,6 +266,22 @@ class BinaryEncoding:
         return (a & ~swap) | (b & swap), (b & ~swap) | (a & swap)
 
     def mutate(self, child, pm, rng) -> np.ndarray:
+        """Mutate children: each bit of the string flipped with probability ``pm``.
+
+        Parameters
+        ----------
+        child : (runs, pop, d) array
+            The children's genotypes.
+        pm : (runs, pop) array
+            Mutation probability per individual.
+        rng : numpy.random.Generator
+            The random stream.
+
+        Returns
+        -------
+        (runs, pop, d) ndarray
+            The mutated genotypes.
+        """
         flips = rng.random(child.shape[:-1] + (self.n_genes * self.bits,)) < pm[..., None]
         return child ^ self._pack(flips)
 

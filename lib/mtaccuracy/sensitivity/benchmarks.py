@@ -54,11 +54,27 @@ class Benchmark:
 
     @property
     def dim(self) -> int:
+        """int: the number of inputs d."""
         return len(self.marginals)
 
     def sample(self, n: int, seed, method: str = "lhs") -> np.ndarray:
-        """``n`` input points (n, d): a Latin hypercube (``lhs``) or independent uniforms
-        (``mc``) on the unit cube, mapped through each input's inverse CDF."""
+        """``n`` input points: a Latin hypercube or independent uniforms, through the laws.
+
+        Parameters
+        ----------
+        n : int
+            Number of points.
+        seed : int, numpy.random.Generator or None
+            Seed of the random stream (``numpy.random.default_rng``).
+        method : {"lhs", "mc"}
+            A Latin hypercube (``lhs``) or independent uniforms (any other value) on the
+            unit cube, mapped through each input's inverse CDF.
+
+        Returns
+        -------
+        (n, d) ndarray
+            The input points.
+        """
         from scipy.stats import qmc
 
         rng = np.random.default_rng(seed)

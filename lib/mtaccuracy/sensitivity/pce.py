@@ -108,7 +108,23 @@ class ChaosInputs:
 
     @classmethod
     def uniform(cls, lower, upper) -> ChaosInputs:
-        """Independent uniforms on [lower_i, upper_i]."""
+        """Independent uniforms on [lower_i, upper_i] (Legendre families).
+
+        Parameters
+        ----------
+        lower, upper : float or (d,) array_like
+            The bounds, broadcast together; finite with ``lower < upper``.
+
+        Returns
+        -------
+        ChaosInputs
+            One uniform input per (flattened) bound.
+
+        Raises
+        ------
+        ValueError
+            If a bound is not finite or ``lower >= upper``.
+        """
         lo, hi = np.broadcast_arrays(np.asarray(lower, float), np.asarray(upper, float))
         if np.any(~np.isfinite(lo) | ~np.isfinite(hi) | (hi <= lo)):
             raise ValueError("uniform bounds must be finite with lower < upper")
@@ -116,7 +132,23 @@ class ChaosInputs:
 
     @classmethod
     def normal(cls, mean, sd) -> ChaosInputs:
-        """Independent normals N(mean_i, sd_i^2)."""
+        """Independent normals N(mean_i, sd_i^2) (Hermite families).
+
+        Parameters
+        ----------
+        mean, sd : float or (d,) array_like
+            Means and standard deviations, broadcast together; finite with ``sd > 0``.
+
+        Returns
+        -------
+        ChaosInputs
+            One normal input per (flattened) value.
+
+        Raises
+        ------
+        ValueError
+            If a value is not finite or ``sd <= 0``.
+        """
         mu, s = np.broadcast_arrays(np.asarray(mean, float), np.asarray(sd, float))
         if np.any(~np.isfinite(mu) | ~np.isfinite(s) | (s <= 0)):
             raise ValueError("normal means and standard deviations must be finite, sd > 0")
@@ -124,6 +156,7 @@ class ChaosInputs:
 
     @property
     def dim(self) -> int:
+        """int: the number of inputs d."""
         return len(self.marginals)
 
     def _check(self, x):
@@ -133,7 +166,26 @@ class ChaosInputs:
         return x
 
     def to_standard(self, x) -> np.ndarray:
-        """Physical inputs (n, d) to the standard variables of the families (n, d)."""
+        """Physical inputs to the standard variables of the families.
+
+        Uniform: ``z = 2 (x - lo)/(hi - lo) - 1``; normal: ``z = (x - mu)/sd``; any other
+        law: ``z = Phi^-1(F(x))``.
+
+        Parameters
+        ----------
+        x : (n, d) array
+            Inputs in their physical units.
+
+        Returns
+        -------
+        (n, d) ndarray
+            The standard variables.
+
+        Raises
+        ------
+        ValueError
+            If ``x`` is not of shape ``(n, d)``.
+        """
         x = self._check(x)
         z = np.empty_like(x)
         for i, (m, kind) in enumerate(zip(self.marginals, self._kind, strict=True)):
@@ -147,7 +199,23 @@ class ChaosInputs:
         return z
 
     def from_standard(self, z) -> np.ndarray:
-        """The inverse of :meth:`to_standard`."""
+        """The inverse of :meth:`to_standard`.
+
+        Parameters
+        ----------
+        z : (n, d) array
+            Standard variables.
+
+        Returns
+        -------
+        (n, d) ndarray
+            The inputs in their physical units.
+
+        Raises
+        ------
+        ValueError
+            If ``z`` is not of shape ``(n, d)``.
+        """
         z = self._check(z)
         x = np.empty_like(z)
         for i, (m, kind) in enumerate(zip(self.marginals, self._kind, strict=True)):
@@ -638,7 +706,18 @@ class PCEFit:
     families: tuple | str = "hermite"
 
     def predict(self, z: np.ndarray) -> np.ndarray:
-        """The expansion at standard variables ``z`` (n, d): (n,)."""
+        """The expansion at standard variables.
+
+        Parameters
+        ----------
+        z : (n, d) array
+            Standard variables of the inputs (:meth:`ChaosInputs.to_standard`).
+
+        Returns
+        -------
+        (n,) ndarray
+            The expansion's value, in the units of the fitted output.
+        """
         return design_matrix(z, self.alphas, self.families) @ self.coef
 
 
@@ -868,14 +947,17 @@ class SparsePCE:
 
     @property
     def s1(self) -> np.ndarray:
+        """(d,) ndarray: first-order Sobol indices from the coefficients (:func:`pce_sobol`)."""
         return pce_sobol(self.fit)[0]
 
     @property
     def st(self) -> np.ndarray:
+        """(d,) ndarray: total Sobol indices from the coefficients (:func:`pce_sobol`)."""
         return pce_sobol(self.fit)[1]
 
     @property
     def reliable(self) -> bool:
+        """bool: the k-fold validation error is at most ``poor_fit``."""
         return bool(self.fit.validation <= self.poor_fit)
 
 

@@ -131,6 +131,7 @@ class KeySet:
 
     @property
     def n_key(self) -> int:
+        """int: the number of key errors."""
         return len(self.index)
 
     @property

@@ -98,10 +98,12 @@ class ThermalData:
 
     @property
     def sensors(self) -> list[str]:
+        """list of str: the sensor names, in column order."""
         return list(self.temperatures.columns)
 
     @property
     def experiments(self) -> list[int]:
+        """list of int: the experiment numbers, ascending."""
         return sorted(self.index.experiment.unique().tolist())
 
     @property
@@ -110,7 +112,17 @@ class ThermalData:
         return self.index.experiment.to_numpy()
 
     def subset(self, experiments) -> ThermalData:
-        """The rows of the given experiments, in the stored order."""
+        """The rows of the given experiments, in the stored order.
+
+        Parameters
+        ----------
+        experiments : int or sequence of int
+            Experiments kept (ValueError for an unknown one).
+
+        Returns
+        -------
+        ThermalData
+        """
         experiments = [int(e) for e in np.atleast_1d(experiments)]
         unknown = sorted(set(experiments) - set(self.experiments))
         if unknown:
@@ -122,13 +134,25 @@ class ThermalData:
                            {e: f for e, f in self.feeds.items() if e in experiments}, self.source)
 
     def rises(self) -> pd.DataFrame:
-        """Temperatures relative to the first measurement of each experiment (Eq. 9's T - T0)."""
+        """Temperatures relative to the first measurement of each experiment (Eq. 9's T - T0).
+
+        Returns
+        -------
+        DataFrame (n, S)
+            degC.
+        """
         t = self.temperatures
         r = rises_of(t.to_numpy(dtype=float)[None], self.index.experiment.to_numpy())[0]
         return pd.DataFrame(r, index=t.index, columns=t.columns)
 
     def offsets_mm(self) -> np.ndarray:
-        """Target positions shifted to start at 0 (185..445 mm -> 0..260 mm)."""
+        """Target positions shifted to start at 0 (185..445 mm -> 0..260 mm).
+
+        Returns
+        -------
+        array (P,)
+            mm.
+        """
         return self.positions_mm - self.positions_mm[0]
 
 

@@ -158,7 +158,19 @@ class StandardisedSVR(RegressorMixin, BaseEstimator):
         self.tol = tol
 
     def fit(self, X, y):
-        """Fit ``X`` (n, p) to ``y`` (n,), both standardised first."""
+        """Fit on standardised inputs and target.
+
+        Parameters
+        ----------
+        X : array (n, p)
+            Inputs (temperatures or rises, degC).
+        y : array (n,)
+            Target.
+
+        Returns
+        -------
+        self
+        """
         X, y = validate_data(self, X, y, y_numeric=True, dtype=np.float64)
         self.x_mean_, sx = X.mean(axis=0), X.std(axis=0)
         self.x_scale_ = np.where(sx > 0, sx, 1.0)
@@ -170,7 +182,18 @@ class StandardisedSVR(RegressorMixin, BaseEstimator):
         return self
 
     def predict(self, X):
-        """Predictions (n,) in the target's units."""
+        """Predictions in the target's units.
+
+        Parameters
+        ----------
+        X : array (n, p)
+            Inputs.
+
+        Returns
+        -------
+        array (n,)
+            Predicted target.
+        """
         check_is_fitted(self)
         z = (validate_data(self, X, reset=False, dtype=np.float64) - self.x_mean_) / self.x_scale_
         return self.svr_.predict(z) * self.y_scale_ + self.y_mean_
@@ -348,14 +371,39 @@ class GroupedSVR(RegressorMixin, BaseEstimator):
         self.tie_rtol = tie_rtol
 
     def fit(self, X, y, groups=None):
-        """Search the grid on ``X`` (n, p), ``y`` (n,) with folds by ``groups`` (n,)."""
+        """Search the grid with grouped folds and refit the chosen candidate.
+
+        Parameters
+        ----------
+        X : array (n, p)
+            Inputs (temperatures or rises, degC).
+        y : array (n,)
+            Target.
+        groups : array (n,), optional
+            Experiment of each row: one fold per experiment.
+
+        Returns
+        -------
+        self
+        """
         X, y = validate_data(self, X, y, y_numeric=True)
         self.search_ = svr_search(X, y, groups, self.grid, self.tie_rtol)
         self.best_estimator_ = self.search_.best_estimator_
         return self
 
     def predict(self, X):
-        """Predictions (n,) of the chosen candidate."""
+        """Predictions of the chosen candidate.
+
+        Parameters
+        ----------
+        X : array (n, p)
+            Inputs.
+
+        Returns
+        -------
+        array (n,)
+            Predicted target.
+        """
         check_is_fitted(self)
         X = validate_data(self, X, reset=False)
         return self.best_estimator_.predict(X)
@@ -386,7 +434,21 @@ class PointByPointRegressor(RegressorMixin, BaseEstimator):
         self.estimator = estimator
 
     def fit(self, X, y, groups=None):
-        """Fit ``X`` (n, p) to ``y`` (n, P) errors (um) at P positions, or (n,) for one."""
+        """Fit one clone per target position.
+
+        Parameters
+        ----------
+        X : array (n, p)
+            Inputs (temperatures or rises, degC).
+        y : array (n, P) or (n,)
+            Errors (um) at P positions.
+        groups : array (n,), optional
+            Passed to an inner estimator that takes them (:class:`GroupedSVR`).
+
+        Returns
+        -------
+        self
+        """
         X, y = validate_data(self, X, y, multi_output=True, y_numeric=True)
         self._single = y.ndim == 1
         y2 = y[:, None] if self._single else y
@@ -396,7 +458,18 @@ class PointByPointRegressor(RegressorMixin, BaseEstimator):
         return self
 
     def predict(self, X):
-        """Predicted errors (n, P), or (n,) when fitted on a 1-D ``y``."""
+        """Predicted errors at every position.
+
+        Parameters
+        ----------
+        X : array (n, p)
+            Inputs.
+
+        Returns
+        -------
+        array (n, P) or (n,)
+            um; 1-D when fitted on a 1-D y.
+        """
         check_is_fitted(self)
         X = validate_data(self, X, reset=False)
         out = np.column_stack([m.predict(X) for m in self.estimators_])
@@ -450,7 +523,21 @@ class DecoupledRegressor(RegressorMixin, BaseEstimator):
         return X[:, list(self.k_columns)], X[:, list(self.b_columns)]
 
     def fit(self, X, y, groups=None):
-        """Fit ``X`` (n, p) to the error profiles ``y`` (n, P) in um."""
+        """Decouple the error profiles into k and b (Eq. 6) and regress each.
+
+        Parameters
+        ----------
+        X : array (n, p)
+            Inputs (temperatures or rises, degC).
+        y : array (n, P)
+            Error profiles (um).
+        groups : array (n,), optional
+            Experiment of each row: one fold per experiment.
+
+        Returns
+        -------
+        self
+        """
         X, y = validate_data(self, X, y, multi_output=True, y_numeric=True)
         if y.ndim != 2 or y.shape[1] != len(self.offsets_mm):
             raise ValueError(f"y must be (n, {len(self.offsets_mm)}): one error per position "
@@ -466,14 +553,38 @@ class DecoupledRegressor(RegressorMixin, BaseEstimator):
         return self
 
     def predict_kb(self, X):
-        """Predicted slope k (n,) in um/m and intercept b (n,) in um."""
+        """Predicted slope and intercept.
+
+        Parameters
+        ----------
+        X : array (n, p)
+            Inputs.
+
+        Returns
+        -------
+        k : array (n,)
+            um/m.
+        b : array (n,)
+            um.
+        """
         check_is_fitted(self)
         X = validate_data(self, X, reset=False)
         xk, xb = self._split(X)
         return self.k_estimator_.predict(xk), self.b_estimator_.predict(xb)
 
     def predict(self, X):
-        """Predicted errors (n, P) in um: k x + b at every offset (Eq. 7)."""
+        """Predicted error profiles: k x + b at every offset (Eq. 7).
+
+        Parameters
+        ----------
+        X : array (n, p)
+            Inputs.
+
+        Returns
+        -------
+        array (n, P)
+            um.
+        """
         return compose(*self.predict_kb(X), self.offsets_mm)
 
     def __sklearn_tags__(self):
