@@ -26,10 +26,6 @@ import pytest
 
 import mtaccuracy
 
-#: Science modules whose public API does not pass yet -> why.  The test fails for a listed
-#: module that passes (remove it then), so the list stays honest.
-PENDING: dict[str, str] = {}
-
 #: Modules whose docstrings must carry runnable examples (kinematics, chain building, the pose
 #: error); ``test_the_examples_in_docstrings_run`` runs the examples of every science module.
 WITH_EXAMPLES = ("mtaccuracy.kinematics", "mtaccuracy.errors", "mtaccuracy.machines",
@@ -152,14 +148,7 @@ def module_problems(module_name: str) -> list[str]:
 @pytest.mark.parametrize("module_name", science_modules())
 def test_public_api_has_numpydoc_docstrings(module_name):
     problems = module_problems(module_name)
-    if module_name in PENDING:
-        assert problems, f"{module_name} passes now: remove it from PENDING"
-    else:
-        assert not problems, "\n".join(problems)
-
-
-def test_pending_names_science_modules():
-    assert set(PENDING) <= set(science_modules())
+    assert not problems, "\n".join(problems)
 
 
 @pytest.mark.parametrize("module_name", science_modules())
