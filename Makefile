@@ -5,8 +5,13 @@
 #   make lab LAB_ARGS="--port 9999"                       JupyterLab on 127.0.0.1
 #   make test | bench | report | clean | lock
 #
-# NB, PARAMS and LAB_ARGS reach the programs through the environment and are split by Python's
-# shlex, never evaluated by a shell: PARAMS="--check; touch x" is an error, not a command.
+# NB, PARAMS, LAB_ARGS and LAB_UNSAFE reach the programs raw, through the environment: make
+# does not expand them ($(value ...) below: PARAMS='seed=$(shell ...)' is text, $HOME stays
+# $HOME) and Python's shlex splits them, never a shell: PARAMS="--check; touch x" is an error.
+#
+# Every target first checks that .venv is this checkout's own (ownenv.py: a .venv shared with
+# another checkout would run that checkout's code) and finishes a commit of results that a
+# killed run left half done (mtaccuracy.compendium.commit).
 
 SHELL := /bin/bash
 PYTHON ?= python3
@@ -16,8 +21,16 @@ STAMP := $(VENV)/.installed-$(shell cat environment.txt pyproject.toml | cksum |
 NB ?= all
 PARAMS ?=
 LAB_ARGS ?=
-export NB PARAMS LAB_ARGS
+LAB_UNSAFE ?=
+override NB := $(value NB)
+override PARAMS := $(value PARAMS)
+override LAB_ARGS := $(value LAB_ARGS)
+override LAB_UNSAFE := $(value LAB_UNSAFE)
+export NB PARAMS LAB_ARGS LAB_UNSAFE
 PIP := $(PY) -m pip --disable-pip-version-check --no-input
+OWN_VENV := $(PY) -I lib/mtaccuracy/compendium/ownenv.py
+RECOVER := PYTHONPATH=lib $(PYTHON) -m mtaccuracy.compendium.commit
+GUARD := @$(OWN_VENV) && $(RECOVER)
 
 .PHONY: reproduce report browser test test-notebooks lab bench clean distclean lint venv lock
 
@@ -26,6 +39,7 @@ venv: $(STAMP)
 $(STAMP): environment.txt pyproject.toml
 	@echo "==> setting up $(VENV) from environment.txt (first time: a few minutes)"
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	@$(OWN_VENV)
 	@$(PIP) install --quiet "$$(grep -E '^pip==' environment.txt)"
 	@$(PIP) install --quiet -r environment.txt
 	@$(PIP) install --quiet --no-deps --no-build-isolation -e .
@@ -34,12 +48,14 @@ $(STAMP): environment.txt pyproject.toml
 	@echo "==> $(VENV) ready"
 
 reproduce: $(STAMP)
+	$(GUARD)
 	@$(PY) -m mtaccuracy.compendium.runner --from-env
 	@$(PY) -m mtaccuracy.compendium.reproduction gather
 	@$(PY) -m mtaccuracy.compendium.report
 
 # The static report (figures/index.html) from what is in figures/ now, without running anything.
 report: $(STAMP)
+	$(GUARD)
 	$(PY) -m mtaccuracy.compendium.report
 
 # Debian's Chromium and ChromeDriver for the browser test (root; apt-get; never a browser download).
@@ -47,25 +63,30 @@ browser:
 	bash .ci/install-browser
 
 test: $(STAMP)
+	$(GUARD)
 	$(PY) -m ruff check lib tests notebooks conftest.py
 	$(PY) -m pytest
 
 # The notebook checks alone (execution, printed tables, regenerated CSVs); CI runs them once
 # more with OPENBLAS_NUM_THREADS=1.
 test-notebooks: $(STAMP)
+	$(GUARD)
 	$(PY) -m pytest tests/test_notebooks.py
 
 lint: $(STAMP)
+	$(GUARD)
 	$(PY) -m ruff check lib tests notebooks conftest.py
 
 # Bound to 127.0.0.1 with a token; --allow-root when run as root (containers); LAB_ARGS for more.
 lab: $(STAMP)
+	$(GUARD)
 	@$(PY) -m mtaccuracy.compendium.lab
 
 # The speed targets; BENCH_ARGS=--quick skips timing make reproduce and make test themselves.
 BENCH_ARGS ?=
 export BENCH_ARGS
 bench: $(STAMP)
+	$(GUARD)
 	@$(PY) -m mtaccuracy.compendium.bench --from-env
 
 # Regenerate the lock from the direct requirements in a throw-away venv.
@@ -77,9 +98,12 @@ lock:
 	{ head -3 environment.txt; /tmp/mtaccuracy-lock/bin/pip freeze --all; } > environment.txt.new
 	mv environment.txt.new environment.txt
 
+# First finishes a commit a killed run left half done and removes what dead runs left (staging
+# folders, temporary notebooks; a live run's are kept): never a pending commit's files.
 clean:
+	@$(RECOVER)
 	rm -rf notebooks/.running notebooks/.failed .pytest_cache .ruff_cache .test-output build
-	rm -rf figures/index.html figures/html figures/.runs.json figures/.*.staging-* figures/.*.old-*
+	rm -rf figures/index.html figures/html figures/.runs.json
 	find . -path ./.venv -prune -o -name __pycache__ -type d -exec rm -rf {} +
 	find . -path ./.venv -prune -o -name .ipynb_checkpoints -type d -exec rm -rf {} +
 

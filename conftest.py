@@ -1,7 +1,8 @@
 """Test-session setup shared by the unit tests and the notebook checks.
 
-* Executed notebooks write their figures and tables under ``.test-output/session-<pid>/``
-  (through ``$MTACCURACY_OUTPUT_BASE``), never over the committed ``figures/``.
+* Executed notebooks write their figures and tables under ``<tmp>/mtaccuracy-tests/session-<pid>/``
+  (through ``$MTACCURACY_OUTPUT_BASE`` and ``--copy-to``, which takes only folders outside the
+  repository), never over the committed ``figures/``.
 * When the session includes tests that use the ``notebook_runs`` fixture
   (tests/test_notebooks.py), every notebook starts executing in the background as soon as the
   tests are collected, two at a time
@@ -16,6 +17,7 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -23,13 +25,15 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent
-# One folder per test session, so that two sessions running at once cannot clear each other's
-# regenerated outputs; it is removed when the session ends, except the browser test's
-# screenshot, kept in .test-output/report/.
-TEST_OUTPUT = ROOT / ".test-output" / f"session-{os.getpid()}"
+# One folder per test session, outside the repository (a run copies only to folders outside
+# it), so that two sessions running at once cannot clear each other's regenerated outputs; it
+# is removed when the session ends, except the browser test's screenshot, kept in
+# .test-output/report/.
+TEST_OUTPUT = Path(tempfile.gettempdir()) / "mtaccuracy-tests" / f"session-{os.getpid()}"
+KEPT = ROOT / ".test-output"
 GUARDED = [ROOT / "figures", ROOT / "notebooks"]
 # Ignored by git and written by the runner outside the tests; not part of the guard.
-_UNGUARDED = {".runs.json", "index.html", "html", ".running", ".failed", ".backup",
+_UNGUARDED = {".runs.json", "index.html", "html", ".running", ".failed", ".backup", ".commits",
               ".ipynb_checkpoints"}
 NOTEBOOK_TIMEOUT_S = 1200
 #: The extra runs of tests/test_notebooks.py: notebook 03 twice with small parameters.
@@ -43,7 +47,7 @@ def _snapshot() -> dict:
         for p in sorted(top.rglob("*")):
             rel = p.relative_to(ROOT)
             if p.is_file() and not set(rel.parts) & _UNGUARDED and \
-                    not any(part.startswith(".") and ("staging" in part or "old-" in part)
+                    not any(part.startswith(".staging-") or part.endswith(".tmp")
                             for part in rel.parts):
                 out[str(rel)] = hashlib.sha256(p.read_bytes()).hexdigest()
     return out
@@ -115,7 +119,11 @@ _RUNS: NotebookRuns | None = None
 
 def pytest_configure(config):
     shutil.rmtree(TEST_OUTPUT, ignore_errors=True)
-    TEST_OUTPUT.mkdir(parents=True)
+    try:
+        TEST_OUTPUT.mkdir(parents=True)
+    except OSError as exc:
+        raise pytest.UsageError(f"cannot create the tests' scratch folder {TEST_OUTPUT}: "
+                                f"{exc.strerror or exc}") from None
     os.environ["MTACCURACY_OUTPUT_BASE"] = str(TEST_OUTPUT)
     config._mtaccuracy_guard = _snapshot()
 
@@ -168,9 +176,14 @@ def pytest_unconfigure(config):
     # keep the browser test's screenshot (.test-output/report/index.png), drop the rest
     kept = TEST_OUTPUT / "report"
     if kept.is_dir():
-        target = TEST_OUTPUT.parent / "report"
-        shutil.rmtree(target, ignore_errors=True)
-        shutil.move(str(kept), target)
+        target = KEPT / "report"
+        try:
+            shutil.rmtree(target, ignore_errors=True)
+            target.parent.mkdir(exist_ok=True)
+            shutil.move(str(kept), target)
+        except OSError as exc:  # a read-only checkout: the screenshot is not kept
+            print(f"note: the browser test's screenshot was not kept in {target}: {exc}",
+                  file=sys.stderr)
     shutil.rmtree(TEST_OUTPUT, ignore_errors=True)
 
 

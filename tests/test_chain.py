@@ -240,12 +240,12 @@ def test_a_range_file_that_does_not_match_the_catalogue_is_refused(tmp_path):
         C.read_ranges(_range_file(m, tmp_path, [r for r in good if r[0] != "EXX"]), m)
     with pytest.raises(ValueError, match=rf"error\(s\) \['{good[0][0]}'\] given more than once"):
         C.read_ranges(_range_file(m, tmp_path, good + [good[0]]), m)
-    good = sorted(good, key=lambda r: r[0] != "EXX")                 # EXX first: row 2
+    good = sorted(good, key=lambda r: r[0] != "EXX")                 # EXX first: line 2
     bad = [("EXX", -5, 5, "urad"), *good[1:]]
     with pytest.raises(ValueError, match="EXX is a translation, unit 'urad' is not"):
         C.read_ranges(_range_file(m, tmp_path, bad), m)
     bad = [("EXX", 5, -5, "um"), *good[1:]]
-    with pytest.raises(ValueError, match=r"row 2 \(EXX\): the range must be finite with high"):
+    with pytest.raises(ValueError, match=r"line 2 \(EXX\): the range must be finite with high"):
         C.read_ranges(_range_file(m, tmp_path, bad), m)
     with pytest.raises(FileNotFoundError, match="range file"):
         C.read_ranges(tmp_path / "nothing.csv", m)

@@ -1,9 +1,13 @@
 """Provenance stamps and the static report (the browser test is test_report_browser.py)."""
 
+import io
 import json
 import re
+import shutil
+import xml.etree.ElementTree as ET
 
 import matplotlib
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -114,7 +118,141 @@ def test_report_lists_every_row_and_figure(committed_report):
         assert (figs / "html" / f"{stem}.html").exists()
     assert "http://" not in text and "https://" not in text and "<script" not in text
     assert not re.search(r'src="https?://', (figs / "html" / f"{stem}.html").read_text())
-    assert report.build(figs, export=False).read_text() == text  # deterministic
+    broken = []
+    assert report.build(figs, export=False, broken=broken).read_text() == text  # deterministic
+    assert broken == [] and 'class="broken"' not in text  # every committed output as recorded
+
+
+ZHENG, RONG, GUO = ("01_zheng2024_pce_sobol_41_errors", "02_rong_sobol_21_errors",
+                    "03_guo2016_spearman_21_errors")
+
+
+def test_report_marks_deleted_and_changed_outputs_and_fails(committed_report, tmp_path, capsys):
+    """A figure or table that provenance.json lists but that is gone, or whose bytes changed,
+    is marked (not shown, not linked) and fails the command; a measured table may change but
+    must exist."""
+    figs = tmp_path / "figures"
+    shutil.copytree(committed_report, figs)  # with its notebook exports: none is redone
+    side = provenance.read(figs / ZHENG)["files"]
+    assert side["table3_timing.csv"] == {"measured": True}
+    assert side["reproduction_measured.csv"] == {"measured": True}
+    (figs / ZHENG / "fig07_convergence.png").unlink()
+    (figs / RONG / "table3_key_errors.csv").unlink()
+    (figs / ZHENG / "table3_timing.csv").unlink()                   # measured, but listed
+    with open(figs / GUO / "pose_search.csv", "a") as fh:           # changed after its run
+        fh.write("edited,by,hand\n")
+    with open(figs / ZHENG / "reproduction_measured.csv", "a") as fh:  # measured: may change
+        fh.write("\n")
+    assert report.main(["--figures", str(figs)]) == 1
+    err = capsys.readouterr().err
+    assert f"figure {figs / ZHENG / 'fig07_convergence.png'} is missing" in err
+    assert f"table {figs / RONG / 'table3_key_errors.csv'} is missing" in err
+    assert f"table {figs / ZHENG / 'table3_timing.csv'} is missing" in err
+    assert f"table {figs / GUO / 'pose_search.csv'} does not match the hash" in err
+    assert "reproduction_measured.csv" not in err and err.count("error:") == 4
+    text = (figs / "index.html").read_text()
+    assert text.count('class="broken"') == 4
+    assert (f"<strong>Missing figure</strong> <code>{ZHENG}/fig07_convergence.png</code>"
+            in text)
+    assert f'src="{ZHENG}/fig07_convergence.png"' not in text
+    assert f'href="{ZHENG}/fig07_convergence.svg"' not in text  # its SVG only with its PNG
+    assert f"<strong>Missing table</strong> <code>{RONG}/table3_key_errors.csv</code>" in text
+    assert f"<strong>Broken table</strong> <code>{GUO}/pose_search.csv</code>" in text
+    assert f'href="{GUO}/pose_search.csv"' not in text  # not linked
+    assert f'href="{ZHENG}/reproduction_measured.csv"' in text
+    assert f'src="{ZHENG}/fig05_position_total_sobol.png"' in text  # the rest as before
+
+
+def test_a_paper_folder_that_lost_its_scorecard_is_still_reported(run_record, tmp_path,
+                                                                   capsys):
+    figs = tmp_path / "figures"
+    folder = figs / RONG
+    card = reproduction.Card()
+    card.number("Fig. 2", "q", "1.0", 1.0)
+    card.write(folder / "reproduction.csv")
+    _fig(folder, "fig02_good")
+    (folder / "reproduction.csv").unlink()
+    assert report.main(["--figures", str(figs)]) == 1
+    assert f"table {folder / 'reproduction.csv'} is missing" in capsys.readouterr().err
+    text = (figs / "index.html").read_text()
+    assert f'<section class="paper" id="{RONG}">' in text
+    assert f'src="{RONG}/fig02_good.png"' in text
+
+
+def test_outputs_are_checked_against_the_sidecar(run_record):
+    """folder_problems: a table written without the library is not listed; a measured one
+    is only required to exist; a hashed one must keep its bytes."""
+    folder = run_record / "out"
+    reproduction.save_table(pd.DataFrame({"a": [1.5]}), folder / "t.csv")
+    reproduction.save_table(pd.DataFrame({"s": [0.25]}), folder / "timing.csv", measured=True)
+    assert report.folder_problems(folder) == []
+    (folder / "timing.csv").write_text("s\n0.5\n")
+    (folder / "by_hand.csv").write_text("a\n1\n")
+    assert report.folder_problems(folder) == [
+        (folder / "by_hand.csv",
+         "is not listed in provenance.json (not written by this folder's run)")]
+    (folder / "timing.csv").unlink()
+    (folder / "t.csv").write_text("a\n1.6\n")
+    assert [(p.name, why.split(" (")[0]) for p, why in report.folder_problems(folder)] == [
+        ("by_hand.csv", "is not listed in provenance.json"),
+        ("t.csv", "does not match the hash in provenance.json"),
+        ("timing.csv", "is missing")]
+
+
+def _convergence_like(noise: float):
+    """A figure laid out as Fig. 7 of notebook 01 (log axes, ``tight_layout``): where its
+    axes sit depends on its tick labels, so on the data, down to their last digit."""
+    n = np.array([100, 200, 500, 1000, 2000])
+    r = 10.0 ** np.random.default_rng(5).uniform(-3.5, 2.8, (2, n.size)) * (1 + noise)
+    fig, axes = plt.subplots(1, 2, figsize=(6, 2.5))
+    for ax, rr in zip(axes, r, strict=True):
+        ax.plot(n, rr, "o-")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+    fig.tight_layout()
+    return fig
+
+
+def test_svg_bytes_do_not_change_with_rounding_noise_in_the_data(run_record, tmp_path):
+    """Data that differ in the 15th digit (another BLAS kernel, an optimiser's last step)
+    move the clip rectangles by 1e-13 pt: nothing printed changes, and neither may the file.
+    Matplotlib's own ids (hashes of the unrounded rectangles) did change: the fig07 churn."""
+    raw, svg, png = [], [], []
+    for k, noise in enumerate((0.0, 1e-15)):
+        fig = _convergence_like(noise)
+        buf = io.BytesIO()
+        with matplotlib.rc_context(plotting.STYLE):
+            fig.savefig(buf, format="svg", metadata={"Date": None}, bbox_inches="tight")
+        raw.append(buf.getvalue())
+        plotting.save(fig, tmp_path / str(k), "fig07_demo")
+        plt.close(fig)
+        svg.append((tmp_path / str(k) / "fig07_demo.svg").read_bytes())
+        png.append((tmp_path / str(k) / "fig07_demo.png").read_bytes())
+    assert raw[0] != raw[1]  # the noise reached matplotlib's ids: the test can fail
+    assert svg[0] == svg[1] and png[0] == png[1]
+    text = svg[0].decode()
+    defined = {e.get("id") for e in ET.fromstring(text).iter() if e.get("id")}
+    used = set(re.findall(r"url\(#([^)]+)\)", text))
+    assert used and used <= defined and not any(re.fullmatch(r"p[0-9a-f]{10}", u) for u in used)
+
+
+def test_clip_paths_are_named_after_what_they_print():
+    svg = ('<svg><g clip-path="url(#pa)"/><g clip-path="url(#pb)"/><g clip-path="url(#pc)"/>\n'
+           ' <defs>\n'
+           '  <clipPath id="pb">\n   <rect x="1.5" y="0"/>\n  </clipPath>\n'
+           '  <clipPath id="pa">\n   <rect x="0" y="0"/>\n  </clipPath>\n'
+           '  <clipPath id="pc">\n   <rect x="1.5" y="0"/>\n  </clipPath>\n'
+           ' </defs>\n</svg>\n')
+    out = plotting.stable_svg_ids(svg)
+    assert out == ('<svg><g clip-path="url(#clip2)"/><g clip-path="url(#clip1)"/>'
+                   '<g clip-path="url(#clip1)"/>\n <defs>\n'
+                   '  <clipPath id="clip1">\n   <rect x="1.5" y="0"/>\n  </clipPath>\n'
+                   '  <clipPath id="clip2">\n   <rect x="0" y="0"/>\n  </clipPath>\n'
+                   ' </defs>\n</svg>\n')  # pb and pc print the same: one clip path
+    assert plotting.stable_svg_ids(out) == out
+    assert plotting.stable_svg_ids("<svg/>") == "<svg/>"
+    with pytest.raises(ValueError, match="clip1"):
+        plotting.stable_svg_ids(svg.replace("<svg>", '<svg><g id="clip1"/>'))
 
 
 @pytest.mark.parametrize("name, label", [("fig05_position_total_sobol", "Fig. 5"),

@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -132,14 +133,23 @@ def test_every_notebook_estimates_its_memory_and_the_estimate_grows_with_the_cou
 
 
 def test_a_run_that_cannot_fit_in_memory_is_refused(tmp_path, monkeypatch):
+    from mtaccuracy.compendium import memory
+
     path = _tiny(tmp_path, monkeypatch, "print(n)", "# {memory: 1e8 + 1e9 * n}  peak bytes\n")
-    monkeypatch.setattr(runner, "memory_available", lambda: (20e9, "available memory"))
+    limits = [memory.Limit(20e9, "available memory"),
+              memory.Limit(30e9, "the address-space limit (ulimit -v)", per_process=True)]
+    monkeypatch.setattr(memory, "limits", lambda: limits)
     assert runner.validate(path, {"n": 10}) == {"n": 10}
-    with pytest.raises(runner.ParameterError,
-                       match="need about 50.1 GB of memory, more than the 20 GB available"):
+    with pytest.raises(runner.ParameterError, match="need about 50.1 GB of memory, more than "
+                                                    "the 20 GB left under available memory"):
         runner.validate(path, {"n": 50})
     with pytest.raises(runner.ParameterError, match="shared by 2 runs at once"):
         runner.validate(path, {"n": 15}, share=2)
+    limits[0] = memory.Limit(200e9, "available memory")  # each run has its own ulimit -v
+    assert runner.validate(path, {"n": 25}, share=2) == {"n": 25}
+    with pytest.raises(runner.ParameterError, match="left under the address-space limit "
+                                                    "\\(ulimit -v\\) on this machine"):
+        runner.validate(path, {"n": 31}, share=2)
 
 
 def test_the_memory_expression_is_arithmetic_only(tmp_path, monkeypatch):
@@ -151,7 +161,9 @@ def test_the_memory_expression_is_arithmetic_only(tmp_path, monkeypatch):
 @pytest.mark.parametrize("value, message", [
     ("", "output_dir is empty, which would be the repository root"),
     (".", "the repository root"),
-    ("figures/02_other", "another notebook's folder"),
+    ("figures/02_other", "another notebook's folder \\(02_other\\)"),
+    ("figures/mine", "figures/mine' is .*, a folder inside the repository that is not this "
+                     "notebook's"),
     ("notebooks", "a folder inside the repository that is not this notebook's"),
     ("figures/01_tiny/sub", "a folder inside the repository"),
     ("..", "a folder that contains the repository"),
@@ -160,6 +172,7 @@ def test_output_dir_inside_the_repository_is_only_its_own_folder(tmp_path, monke
                                                                    message):
     (tmp_path / "repo").mkdir()
     path = _tiny(tmp_path / "repo", monkeypatch, "print(n)")
+    shutil.copy(path, path.with_name("02_other.ipynb"))
     with pytest.raises(runner.ParameterError, match=message):
         runner.validate(path, {"output_dir": value})
     assert runner.validate(path, {"output_dir": "figures/01_tiny"})
@@ -271,8 +284,10 @@ def test_a_run_elsewhere_leaves_notebooks_and_figures_untouched(tmp_path, monkey
     shutil.rmtree(away)
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-def test_an_interrupted_run_changes_nothing(tmp_path, monkeypatch, sig):
+@pytest.mark.parametrize("sig, installed", [(signal.SIGINT, "default"),
+                                             (signal.SIGINT, "ignored"),
+                                             (signal.SIGTERM, "default")], indirect=["installed"])
+def test_an_interrupted_run_changes_nothing(tmp_path, monkeypatch, sig, installed):
     path = _tiny(tmp_path, monkeypatch, WRITE + "time.sleep(0 if n == 3 else 60)")
     runner.run(path, {}, progress=False)
     out = tmp_path / "figures" / "01_tiny"
@@ -289,7 +304,18 @@ def test_an_interrupted_run_changes_nothing(tmp_path, monkeypatch, sig):
     assert path.read_bytes() == before and (out / "table.csv").read_bytes() == table
     assert (tmp_path / "notebooks" / ".failed" / "01_tiny.figures" / "table.csv").read_text() \
         == "n\n5\n"
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handlers restored
+    assert signal.getsignal(signal.SIGINT) is installed  # the handler of before, restored
+
+
+@pytest.fixture
+def installed(request):
+    """The SIGINT handler the run finds: Python's default, or SIG_IGN as under ``nohup`` or
+    ``make test &`` from a script (the run still stops on SIGINT, and restores SIG_IGN)."""
+    old = signal.getsignal(signal.SIGINT)
+    if request.param == "ignored":
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    yield signal.getsignal(signal.SIGINT)
+    signal.signal(signal.SIGINT, old)
 
 
 def test_measured_cells_are_stored_without_their_output(tmp_path, monkeypatch):
@@ -320,3 +346,195 @@ def test_a_cells_printing_is_stored_as_one_output_whatever_the_timing():
         {"metadata": {}, "cells": [{"cell_type": "code", "metadata": {}, "outputs": one}]},
         "x.ipynb")["cells"][0]["outputs"]
     assert "".join(got[0]["text"]) == "a\nbc\n" and len(got) == 3
+
+
+# --- issue 21: nothing of the user's is lost or mixed ---------------------------------------
+
+READ_INPUT = WRITE + ("src = globals().get('src', '')\n"
+                      "if src:\n    (out / 'copy.csv').write_text(open(src).read())\n")
+
+
+def test_a_rerun_leaves_alone_what_it_did_not_write_and_says_so(tmp_path, monkeypatch, capsys):
+    """A re-run replaced the whole folder: the user's notes and the run's own input file in it
+    were deleted.  Now only the files of the previous run's manifest are replaced."""
+    path = _tiny(tmp_path, monkeypatch, READ_INPUT, 'src = ""  # an input file\n')
+    runner.run(path, {}, progress=False)
+    out = tmp_path / "figures" / "01_tiny"
+    (out / "notes.txt").write_text("the user's notes\n")
+    (out / "my_input.csv").write_text("x\n1\n")
+    runner.run(path, {"n": 5, "src": str(out / "my_input.csv")}, progress=False)
+    assert (out / "notes.txt").read_text() == "the user's notes\n"
+    assert (out / "my_input.csv").read_text() == "x\n1\n"
+    assert (out / "table.csv").read_text() == "n\n5\n" and (out / "copy.csv").exists()
+    assert "left alone in figures/01_tiny/" in capsys.readouterr().err
+    runner.run(path, {}, progress=False)  # copy.csv was ours and is not written again: removed
+    assert not (out / "copy.csv").exists() and (out / "notes.txt").exists()
+    side = json.loads((out / "provenance.json").read_text())
+    assert set(side["files"]) == {"table.csv"}  # a file written without provenance is listed
+
+
+def test_notes_in_an_output_folder_outside_the_repository_survive_a_rerun(tmp_path, monkeypatch):
+    path = _tiny(tmp_path, monkeypatch, WRITE)
+    away = tmp_path.parent / f"{tmp_path.name}-away"
+    runner.run(path, {"output_dir": str(away)}, progress=False)
+    (away / "notes.txt").write_text("mine\n")
+    runner.run(path, {"n": 6, "output_dir": str(away)}, progress=False)
+    assert (away / "notes.txt").read_text() == "mine\n"
+    assert (away / "table.csv").read_text() == "n\n6\n"
+    assert sorted(p.name for p in away.iterdir()) == ["01_tiny.ipynb", "notes.txt",
+                                                      "provenance.json", "table.csv"]
+    shutil.rmtree(away)
+
+
+def test_an_output_edited_by_hand_is_refused_before_the_run(tmp_path, monkeypatch):
+    path = _tiny(tmp_path, monkeypatch, WRITE)
+    runner.run(path, {}, progress=False)
+    table = tmp_path / "figures" / "01_tiny" / "table.csv"
+    table.write_text("n\n99\n")
+    with pytest.raises(runner.ParameterError, match="table.csv in figures/01_tiny changed since "
+                                                    "the compendium wrote it"):
+        runner.run(path, {}, progress=False)
+    assert table.read_text() == "n\n99\n"
+    assert not (tmp_path / "notebooks" / ".running" / "01_tiny.ipynb").exists()
+
+
+@pytest.mark.parametrize("where", ["notebooks", ".", "figures", "figures/01_tiny"])
+def test_copy_to_inside_the_repository_is_refused(tmp_path, monkeypatch, capsys, where):
+    """``--copy-to notebooks`` rewrote the committed notebook; ``--copy-to .`` the figures."""
+    path = _tiny(tmp_path, monkeypatch, WRITE)
+    runner.run(path, {}, progress=False)
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    monkeypatch.setattr(paths, "ROOT", tmp_path)
+    monkeypatch.chdir(tmp_path)
+    assert runner.main(["01", "n=7", "--copy-to", where]) == 2
+    err = capsys.readouterr().err
+    assert "give a folder outside the repository" in err and err.count("\n") == 1
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
+
+
+def test_copy_to_goes_through_the_same_checks_and_staging(tmp_path, monkeypatch, capsys):
+    _tiny(tmp_path, monkeypatch, WRITE)
+    dest = tmp_path.parent / f"{tmp_path.name}-copy"
+    assert runner.main(["01", "n=7", "--copy-to", str(dest)]) == 0
+    out = dest / "figures" / "01_tiny"
+    assert (out / "table.csv").read_text() == "n\n7\n" and (dest / "01_tiny.ipynb").exists()
+    (out / "notes.txt").write_text("mine\n")
+    assert runner.main(["01", "n=8", "--copy-to", str(dest)]) == 0
+    assert (out / "notes.txt").read_text() == "mine\n" and "left alone" in capsys.readouterr().err
+    assert not list(out.glob(".staging-*"))
+    assert runner.main(["01", "n=0", "--copy-to", str(dest)]) == 2  # checked like a run in place
+    (dest / "01_tiny.ipynb").write_text("the user's own notebook\n")
+    assert runner.main(["01", "--copy-to", str(dest)]) == 2
+    assert "is not a notebook the compendium stored" in capsys.readouterr().err
+    assert (dest / "01_tiny.ipynb").read_text() == "the user's own notebook\n"
+    assert not (tmp_path / "figures" / "01_tiny").exists()  # the repository untouched
+    shutil.rmtree(dest)
+
+
+def test_all_notebooks_into_one_output_dir_get_a_folder_each(tmp_path, monkeypatch):
+    path = _tiny(tmp_path, monkeypatch, WRITE + "print(output_dir)")
+    nb = json.loads(path.read_text())
+    nb["cells"][0]["source"] = "".join(nb["cells"][0]["source"]).replace("01_tiny", "02_tiny")
+    path.with_name("02_tiny.ipynb").write_text(json.dumps(nb))
+    x = tmp_path.parent / f"{tmp_path.name}-all"
+    assert runner.main(["all", "n=4", f"output_dir={x}", "--jobs", "1"]) == 0
+    for stem in ("01_tiny", "02_tiny"):
+        assert (x / stem / "table.csv").read_text() == "n\n4\n"
+        assert json.loads((x / stem / "provenance.json").read_text())["run"]["notebook"] == stem
+        assert (x / stem / f"{stem}.ipynb").exists()
+    assert sorted(p.name for p in x.iterdir()) == ["01_tiny", "02_tiny"]
+    shutil.rmtree(x)
+
+
+def test_a_signal_during_the_commit_waits_for_the_commit_to_be_whole(tmp_path, monkeypatch):
+    from mtaccuracy.compendium import commit
+
+    path = _tiny(tmp_path, monkeypatch, WRITE + "(out / 'b.csv').write_text(str(n))\n")
+    runner.run(path, {}, progress=False)
+    monkeypatch.setattr(commit, "_step", lambda name: name == "move a.csv" or (
+        name.startswith("move") and os.kill(os.getpid(), signal.SIGINT)))
+    with pytest.raises(runner.Interrupted, match="the commit was completed"):
+        runner.run(path, {"n": 9}, progress=False)
+    out = tmp_path / "figures" / "01_tiny"
+    assert (out / "table.csv").read_text() == "n\n9\n" and (out / "b.csv").read_text() == "9"
+    assert "n = 9" in path.read_text()
+
+
+@pytest.mark.parametrize("name, message", [
+    ("*", "no notebook matches '\\*'"), ("**", "no notebook matches '\\*\\*'"),
+    ("/etc/passwd", "'/etc/passwd' is not one of the compendium's notebooks"),
+    ("x" * 5000, "no notebook matches 'x{57}\\.\\.\\.'; notebooks"),
+    ("../notebooks/03_guo2016_spearman_21_errors.ipynb", "not one of the compendium's"),
+])
+def test_a_bad_notebook_name_is_one_clear_line(capsys, name, message):
+    assert runner.main([name, "--check"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert re.search(message, err), err
+
+
+def test_check_may_come_before_the_parameters(capsys):
+    assert runner.main(["03", "--check", "seed=7"]) == 0
+    assert capsys.readouterr().out.strip() == "parameters ok"
+
+
+def test_a_checkout_the_runner_cannot_write_is_one_clear_line(tmp_path, monkeypatch, capsys):
+    """A read-only clone (as a non-root user) crashed with PermissionError on
+    notebooks/.running; the refusal is injected here (root may write anywhere)."""
+    path = _tiny(tmp_path, monkeypatch, WRITE)
+    real = runner.tempfile.TemporaryFile
+
+    def refuse(*a, dir=None, **k):
+        if dir is not None and str(dir).endswith(".running"):
+            raise PermissionError(13, "Permission denied")
+        return real(*a, dir=dir, **k)
+
+    monkeypatch.setattr(runner.tempfile, "TemporaryFile", refuse)
+    assert runner.main([str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot write in notebooks/.running (Permission denied)" \
+        in err and "nothing was run or changed" in err
+    assert not (tmp_path / "figures" / "01_tiny").exists()
+
+
+def _make(*args, env=None):
+    return subprocess.run(["make", "--no-print-directory", *args], cwd=paths.ROOT,
+                          env={**os.environ, **(env or {})}, capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_make_never_expands_nb_params_or_lab_args(tmp_path):
+    """``PARAMS='seed=$(shell touch x; echo 7)'`` ran the command; ``$HOME`` lost its ``$H``."""
+    x = tmp_path / "x"
+    res = _make("reproduce", "NB=03", f"PARAMS=--check seed=$(shell touch {x}; echo 7)")
+    assert res.returncode != 0 and not x.exists()
+    assert "parameter 'touch' must be written name=value" in res.stderr
+    res = _make("reproduce", "NB=03", "PARAMS=--check output_dir=$HOME/run")
+    assert res.returncode != 0 and "output_dir '$HOME/run'" in res.stderr
+    res = _make("reproduce", f"NB=$(shell touch {x})", "PARAMS=--check")
+    assert res.returncode != 0 and not x.exists() and "'$(shell touch " in res.stderr
+    res = _make("lab", f"LAB_ARGS=--ip=0.0.0.0 $(shell touch {x})")
+    assert res.returncode != 0 and not x.exists()
+    res = _make("reproduce", "NB=03", env={"PARAMS": f"--check seed=$(shell touch {x})"})
+    assert res.returncode != 0 and not x.exists()
+
+
+def test_make_clean_removes_what_dead_runs_left_and_keeps_a_live_runs(tmp_path):
+    for name in ("Makefile", "environment.txt", "pyproject.toml"):
+        shutil.copy(paths.ROOT / name, tmp_path / name)
+    shutil.copytree(paths.ROOT / "lib", tmp_path / "lib",
+                    ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True).stdout.strip()
+    nbs, figs = tmp_path / "notebooks", tmp_path / "figures" / "03_x"
+    figs.mkdir(parents=True)
+    nbs.mkdir()
+    (nbs / f".03_x.ipynb.commit-{dead}.tmp").write_text("{}")
+    (nbs / f".03_x.ipynb.commit-{os.getpid()}.tmp").write_text("{}")
+    (figs / f".staging-{dead}").mkdir()
+    (figs / "table.csv").write_text("kept\n")
+    res = subprocess.run(["make", "--no-print-directory", "clean"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert sorted(p.name for p in nbs.iterdir()) == [f".03_x.ipynb.commit-{os.getpid()}.tmp"]
+    assert sorted(p.name for p in figs.iterdir()) == ["table.csv"]

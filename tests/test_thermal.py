@@ -1,6 +1,8 @@
 """Thermal module (Xu et al. 2022): decoupling, fuzzy clustering, grey relational grade,
 the CSV schema and its validation, the models, and the reconstructed dataset."""
 
+import copy
+import re
 import shutil
 
 import numpy as np
@@ -10,7 +12,7 @@ import pytest
 from sklearn.linear_model import LinearRegression
 
 from mtaccuracy import thermal
-from mtaccuracy.compendium import paths, reproduction, xu2022
+from mtaccuracy.compendium import paths, provenance, reproduction, xu2022
 
 COMMITTED = paths.ROOT / xu2022.DEFAULT_DIR
 RNG = np.random.default_rng(5)
@@ -419,6 +421,121 @@ def test_an_oversized_file_is_refused_before_it_is_read(good_dir, monkeypatch):
         thermal.read_measurements(good_dir)
 
 
+# ------------------------------------------------------------------ line numbers in messages
+
+def _respace(header: str, rows: list[str], layout: str) -> str:
+    """A file of ``header`` and ``rows`` with blank lines (empty, spaces, a tab) before the
+    header, after it and between data rows; ``crlf``: Windows line ends; ``quoted``: the last
+    field of the first and of the middle row quoted with two line breaks inside (the value
+    still reads as its number, the rows after it move down two lines)."""
+    nl = "\r\n" if layout == "crlf" else "\n"
+    rows = list(rows)
+    if layout == "quoted":
+        for i in (0, len(rows) // 2):
+            head, last = rows[i].rsplit(",", 1)
+            rows[i] = f'{head},"{last}{nl}{nl}"'
+    out = ["", " \t", header, ""]
+    for i, r in enumerate(rows):
+        out += [r] + (["", "  "] if i % 3 == 0 else [])
+    return nl.join(out + ["", ""]) + nl
+
+
+def _file_lines(text: str, prefix: str) -> list[int]:
+    """The 1-based line numbers, as an editor shows them, of the lines starting with
+    ``prefix`` (found in the text, independently of the reader)."""
+    return [i + 1 for i, line in enumerate(text.splitlines()) if line.startswith(prefix)]
+
+
+def _set(prefix: str, column: int, value: str):
+    """An edit of a file's rows: field ``column`` of the row starting with ``prefix``."""
+    def edit(rows):
+        out = []
+        for r in rows:
+            if r.startswith(prefix):
+                fields = r.split(",")
+                fields[column] = value
+                r = ",".join(fields)
+            out.append(r)
+        return out
+    return edit
+
+
+def _swap_3_4(rows):   # experiment 1: measurement 3 at 69 min, measurement 4 at 46 min
+    return [r.replace("1,3,46,", "1,4,46,", 1) if r.startswith("1,3,46,") else
+            r.replace("1,4,69,", "1,3,69,", 1) if r.startswith("1,4,69,") else r for r in rows]
+
+
+# (file, edit of its rows, the message with {line...} where the lines go: the file's lines of
+# the rows starting with the given prefixes)
+BAD_ROWS = [
+    ("temperatures.csv", _set("2,2,", 7, "x"),
+     r"column 'T5_degC' has a missing, NaN or non-numeric value \('x'\) on line\(s\) \[{0}\]",
+     ["2,2,"]),
+    ("temperatures.csv", _set("3,4,", 1, "4.5"),
+     r"column 'measurement' must hold whole numbers \(line\(s\) \[{0}\]\)", ["3,4.5,"]),
+    ("temperatures.csv", _set("4,6,", 9, "-45"),
+     r"column 'T7_degC' has value\(s\) -45 degC on line\(s\) \[{0}\], outside", ["4,6,"]),
+    ("temperatures.csv", lambda rows: rows + [rows[2]],
+     r"experiment 1 measurement 3 appears more than once \(lines \[{0}, {1}\]\)", ["1,3,"]),
+    ("temperatures.csv", _swap_3_4,
+     r"measurement 4 \(line {0}, 46 min\) does not come after measurement 3 \(line {1}, 69 min\)",
+     ["1,4,", "1,3,"]),
+    ("temperatures.csv", lambda rows: rows[:9] + ["# sensors recalibrated"] + rows[9:],
+     r"column 'experiment' has a missing, NaN or non-numeric value \('# sensors recalibrated'\) "
+     r"on line\(s\) \[{0}\]", ["#"]),
+    ("temperatures.csv", lambda rows: rows[:17] + [rows[17] + ",9"] + rows[18:],
+     r"temperatures.csv: line {0} has 16 fields, the header \(line 3\) has 15$", ["3,2,"]),
+    ("temperatures.csv", lambda rows: [rows[0] + ",9"] + rows[1:],   # pandas: an index column
+     r"temperatures.csv: line {0} has 16 fields, the header \(line 3\) has 15$", ["1,1,"]),
+    ("temperatures.csv", lambda rows: rows[:-1] + [',"'.join(rows[-1].rsplit(",", 1))],
+     r"a quoted field of the row starting on line {0} is never closed", ["4,8,"]),
+    ("errors.csv", _set("2,5,305,", 3, "n/a"),
+     r"errors.csv: column 'error_um' has a missing, NaN or non-numeric value \('n/a'\) on "
+     r"line\(s\) \[{0}\]", ["2,5,305,"]),
+    ("errors.csv", lambda rows: rows + [rows[0]],
+     r"experiment 1 measurement 1 lists position 185 mm twice \(lines \[{0}, {1}\]\)",
+     ["1,1,185,"]),
+    ("experiments.csv", lambda rows: rows + ["2,5000"],
+     r"experiment\(s\) \[2\] listed more than once \(lines \[{0}, {1}\]\)", ["2,"]),
+]
+
+
+@pytest.mark.parametrize("layout", ["blank", "crlf", "quoted"])
+@pytest.mark.parametrize("file, edit, message, prefixes", BAD_ROWS,
+                         ids=[f"{f[:-4]}-{i}" for i, (f, *_) in enumerate(BAD_ROWS)])
+def test_messages_name_the_files_real_lines(good_dir, layout, file, edit, message, prefixes):
+    """Blank lines before the header and between rows, Windows line ends, line breaks inside
+    quoted fields and a comment line (the schema has none: a row like any other): every
+    message about a bad row names the lines an editor shows."""
+    header, *rows = (good_dir / file).read_text().splitlines()
+    text = _respace(header, edit(rows), layout)
+    (good_dir / file).write_bytes(text.encode())
+    lines = [n for prefix in prefixes for n in _file_lines(text, prefix)]
+    with pytest.raises(thermal.DataFormatError, match=message.format(*lines)):
+        thermal.read_measurements(good_dir)
+
+
+@pytest.mark.parametrize("layout", ["blank", "crlf", "quoted"])
+def test_blank_lines_and_quoted_line_breaks_read_the_same(good_dir, layout):
+    ref = thermal.read_measurements(good_dir)
+    for f in good_dir.glob("*.csv"):
+        header, *rows = f.read_text().splitlines()
+        f.write_bytes(_respace(header, rows, layout).encode())
+    d = thermal.read_measurements(good_dir)
+    assert d.index.equals(ref.index) and d.temperatures.equals(ref.temperatures)
+    assert np.array_equal(d.errors, ref.errors) and d.feeds == ref.feeds
+
+
+def test_a_byte_that_is_not_utf8_is_refused_naming_its_line(good_dir):
+    header, *rows = (good_dir / "errors.csv").read_text().splitlines()
+    text = _respace(header, _set("3,3,245,", 3, "-0.2\u00b5")(rows), "blank")
+    (good_dir / "errors.csv").write_bytes(text.encode("latin-1"))
+    with pytest.raises(thermal.DataFormatError,
+                       match=rf"errors.csv: not UTF-8 text: byte 0xb5 on line "
+                             rf"{_file_lines(text, '3,3,245,')[0]}; save the file as UTF-8"):
+        thermal.read_measurements(good_dir)
+
+
 # ------------------------------------------------------------------ models
 
 def _synthetic(n_exp=4, n_meas=6, seed=0):
@@ -699,6 +816,117 @@ def test_prepare_regenerates_only_the_default_folder(tmp_path, monkeypatch):
     assert xu2022.prepare("data/thermal", regenerate=True)[1] == []   # byte-identical
     assert xu2022.prepare("data/thermal", regenerate=False)[0] == COMMITTED
     assert xu2022.is_default_dir(str(COMMITTED)) and not xu2022.is_default_dir("x")
+
+
+def test_write_measurements_asks_before_overwriting_and_writes_nothing_when_refused(good_dir):
+    def state():
+        return {f.name: (f.read_bytes(), f.stat().st_mtime_ns) for f in good_dir.iterdir()}
+
+    asked = []
+    assert thermal.write_measurements(thermal.read_measurements(good_dir), good_dir,
+                                      before_overwrite=asked.append) == [] and asked == []
+
+    def refuse(files):
+        asked.append(files)
+        raise RuntimeError("refused")
+
+    before = state()
+    other = xu2022.reconstruct(seed=7)   # other noise, the same feeds: experiments.csv unchanged
+    with pytest.raises(RuntimeError, match="refused"):
+        thermal.write_measurements(other, good_dir, before_overwrite=refuse)
+    assert asked == [[good_dir / "temperatures.csv", good_dir / "errors.csv"]]
+    assert state() == before
+    (good_dir / "errors.csv").unlink()                  # a missing file is not asked about
+    assert thermal.write_measurements(other, good_dir, before_overwrite=asked.append) == \
+        [good_dir / "temperatures.csv", good_dir / "errors.csv"]
+    assert asked[-1] == [good_dir / "temperatures.csv"]
+
+
+@pytest.fixture
+def repository(tmp_path, monkeypatch):
+    """A repository root holding a copy of data/thermal, as ``make reproduce`` sees it: the
+    notebook's record (``provenance.start`` hashes the files of ``data_dir``) and the folder
+    ``prepare`` regenerates are the same files.  Returns that data/thermal."""
+    root = tmp_path / "repository"
+    shutil.copytree(COMMITTED, root / xu2022.DEFAULT_DIR)
+    monkeypatch.setattr(paths, "ROOT", root)
+    monkeypatch.delenv(paths.OUTPUT_BASE_ENV, raising=False)
+    monkeypatch.setattr(provenance, "_state", copy.deepcopy(provenance._state))
+    return root / xu2022.DEFAULT_DIR
+
+
+def _run_04(regenerate=True, seed=2022, out=None):
+    """What notebook 04's first cells do: start the record, then prepare."""
+    provenance.start("04_xu2022_thermal_mlr_svr", {"data_dir": "data/thermal", "seed": seed,
+                                                   "regenerate_data": regenerate})
+    return xu2022.prepare("data/thermal", regenerate, seed, out=out)
+
+
+def test_the_reconstructions_record_holds_the_hashes_of_the_bytes_on_disk(repository):
+    """A run that rewrites the compendium's own earlier files (here an older reconstruction
+    with other noise, written and recorded by the compendium) records the new bytes, in the
+    file entries and in the run's inputs (which ``provenance.start`` had hashed before the
+    files were rewritten)."""
+    assert len(thermal.write_measurements(xu2022.reconstruct(seed=7), repository,
+                                          save=reproduction.save_table)) == 2
+    folder, changed, what = _run_04()
+    assert folder == repository and "2 file(s) rewritten (temperatures.csv, errors.csv)" in what
+    side = provenance.read(folder)
+    for f in COMMITTED.glob("*.csv"):
+        disk = provenance.sha256(folder / f.name)
+        assert disk == provenance.sha256(f)                  # the committed bytes again
+        assert side["files"][f.name]["sha256"] == disk
+        assert side["run"]["inputs"][f"data/thermal/{f.name}"] == disk
+    before = (folder / provenance.SIDECAR).read_bytes()
+    assert _run_04()[1] == []                                # byte-stable, record unchanged
+    assert (folder / provenance.SIDECAR).read_bytes() == before
+
+
+def test_regenerating_never_overwrites_a_users_edit(repository):
+    def state():
+        return {f.name: (f.read_bytes(), f.stat().st_mtime_ns) for f in repository.iterdir()}
+
+    temps = repository / "temperatures.csv"
+    original = temps.read_bytes()
+    temps.write_bytes(original.replace(b"\n1,1,0,30.41,", b"\n1,1,0,30.99,", 1))
+    before = state()
+    with pytest.raises(xu2022.EditedDataError) as refused:
+        _run_04()
+    message = str(refused.value)
+    assert re.fullmatch(r"data/thermal/temperatures.csv: edited since the compendium wrote it "
+                        r"\(its SHA-256 is not the one recorded in data/thermal/provenance.json\); "
+                        r"regenerating would overwrite the edit, so nothing was written: run "
+                        r"with regenerate_data = False to use the edited data, or restore the "
+                        r"committed files with `git checkout data/thermal` and run again",
+                        message)
+    assert state() == before                                 # nothing written, not the record
+    folder, changed, _ = _run_04(regenerate=False)           # ... which reads the edit
+    assert changed == [] and xu2022.read(folder).temperatures.T1.iloc[0] == 30.99
+
+    (repository / provenance.SIDECAR).unlink()               # no record: not known to be ours
+    with pytest.raises(xu2022.EditedDataError, match="temperatures.csv: edited since"):
+        _run_04()
+    temps.write_bytes(original)                              # the generator's own bytes:
+    (repository / "errors.csv").unlink()                     # nothing overwritten; a missing
+    folder, changed, what = _run_04()                        # file is simply written
+    assert changed == [repository / "errors.csv"] and "(errors.csv)" in what
+    for f in COMMITTED.glob("*.csv"):
+        assert (folder / f.name).read_bytes() == f.read_bytes()
+    assert set(provenance.read(folder)["files"]) == {f.name for f in COMMITTED.glob("*.csv")}
+
+
+def test_another_seeds_reconstruction_is_not_overwritten_after_an_edit_either(repository,
+                                                                               tmp_path):
+    out = tmp_path / "out"
+    folder, changed, _ = _run_04(seed=7, out=out)
+    assert folder == out / "reconstruction" and len(changed) == 3
+    assert len(_run_04(seed=8, out=out)[1]) == 2             # its own files: rewritten
+    (folder / "errors.csv").write_text("edited\n")
+    with pytest.raises(xu2022.EditedDataError,
+                       match=r"^<output_dir>/reconstruction/errors.csv: edited since .* run "
+                             rf"with data_dir = '{re.escape(str(folder))}' to use the edited "
+                             r"data \(read, never written\), or delete the edited file\(s\)"):
+        _run_04(seed=7, out=out)
 
 
 def test_published_inputs_decoupled_beats_point_by_point_on_the_paper_split(recon):

@@ -21,5 +21,30 @@ direction, so they can be taken into other work without this repository's runner
 ``xu2022``         notebook 04: published tables, the reconstruction's folders, tolerances,
                    scorecard helpers and figures
 ``yang2021``       notebook 05's parameter checks, Table 1's consistency check and figures
+``commit``         the journalled commit of a finished run; finishes one a kill interrupted
+``memory``         the memory a run may use (available memory, cgroups, ``ulimit -v``)
+``ownenv``         refuses a ``.venv`` that runs another checkout's code
 =================  ====================================================================
+
+Run as a command (``python -m mtaccuracy.compendium.<tool>``, as the Makefile does), a tool
+stopped with Ctrl-C says so in one line instead of a traceback, wherever it was (importing
+its dependencies included): :func:`_one_line_interrupt` is installed when this package is
+imported on the way to ``-m``.
 """
+
+import sys
+
+
+def _one_line_interrupt(kind, value, tb, _previous=sys.excepthook):
+    """``sys.excepthook`` of the compendium's commands: Ctrl-C ends with one line."""
+    if issubclass(kind, KeyboardInterrupt):
+        tool = next((a for a in sys.argv[:1] if a and a != "-m"), "the command")
+        name = tool.rsplit("/", 1)[-1].removesuffix(".py")
+        print(f"interrupted (Ctrl-C): {name} stopped before it finished; every file it "
+              f"writes is replaced whole, so none is left half-written", file=sys.stderr)
+        return
+    _previous(kind, value, tb)
+
+
+if sys.argv[:1] == ["-m"]:  # python -m mtaccuracy.compendium.<tool>: sys.argv[0] is "-m" here
+    sys.excepthook = _one_line_interrupt

@@ -12,8 +12,8 @@ Never the repository root, never another notebook's folder, never a folder insid
 repository other than its own, never a non-empty folder the compendium did not write.
 
 When the runner executes a notebook it sets ``$MTACCURACY_STAGING``: :func:`output_dir` then
-returns that staging folder, and the runner moves its content into the real output folder only
-when the whole run succeeded (see :mod:`mtaccuracy.compendium.runner`).
+returns that staging folder, and the runner commits its content into the real output folder only
+when the whole run succeeded (see :mod:`mtaccuracy.compendium.commit`).
 """
 
 from __future__ import annotations
@@ -78,9 +78,12 @@ def check_output_dir(path: str | os.PathLike, notebook: str) -> Path:
         return p
     inside = [r for r in {ROOT, base} if p == r or p.is_relative_to(r) or r.is_relative_to(p)]
     if inside:
+        other = p.parent == base / "figures" and (
+            _written_by(p) not in (None, notebook)
+            or any(n.stem == p.name for n in NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")))
         what = ("the repository root" if p in (ROOT, base) else
                 "a folder that contains the repository" if ROOT.is_relative_to(p) else
-                f"another notebook's folder ({p.name})" if p.parent == base / "figures" else
+                f"another notebook's folder ({p.name})" if other else
                 "a folder inside the repository that is not this notebook's")
         raise OutputDirError(f"{notebook}: output_dir {str(path)!r} is {p}, {what}; {allowed}")
     if p.exists() and not p.is_dir():
@@ -92,6 +95,26 @@ def check_output_dir(path: str | os.PathLike, notebook: str) -> Path:
                    "it is not empty and was not written by the compendium")
             raise OutputDirError(f"{notebook}: output_dir {str(path)!r} ({p}): {why}; nothing "
                                  f"there is overwritten; {allowed}")
+    return p
+
+
+def check_copy_dir(path: str | os.PathLike) -> Path:
+    """The folder of ``--copy-to`` (the executed notebook and, by default, its outputs under
+    ``figures/<stem>/`` there), resolved: it must lie outside the repository, so that a copy
+    never touches the committed notebooks, figures or anything else of the checkout.  Raises
+    :class:`OutputDirError`."""
+    text = os.fspath(path)
+    if not str(text).strip():
+        raise OutputDirError("--copy-to needs a folder outside the repository")
+    p = Path(os.path.expanduser(text))
+    p = (p if p.is_absolute() else Path.cwd() / p).resolve()
+    if p == ROOT or p.is_relative_to(ROOT) or ROOT.is_relative_to(p):
+        what = ("the repository" if p == ROOT else "a folder inside the repository"
+                if p.is_relative_to(ROOT) else "a folder that contains the repository")
+        raise OutputDirError(f"--copy-to {text!r} is {p}, {what}; give a folder outside the "
+                             f"repository ({ROOT})")
+    if p.exists() and not p.is_dir():
+        raise OutputDirError(f"--copy-to {text!r} is a file ({p})")
     return p
 
 

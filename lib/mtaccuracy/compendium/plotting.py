@@ -4,10 +4,20 @@
 fixed ``svg.hashsalt`` for element ids), so the same figure gives the same bytes, and stamps the
 run's provenance into each file (PNG text chunk ``mtaccuracy:provenance``, SVG
 ``Description``; see :mod:`mtaccuracy.compendium.provenance`).
+
+The SVG's clip paths are renamed after what the file prints (:func:`stable_svg_ids`):
+matplotlib names each clip path by a hash of its rectangle's floats at full precision, and an
+axes laid out by ``tight_layout`` or ``bbox_inches="tight"`` sits where its tick labels put
+it, so a change of the plotted data in the 15th digit (another BLAS kernel, an optimiser's
+last step) moved the rectangles by 1e-13 pt and renamed every clip path, although no printed
+coordinate and no PNG pixel changed.
 """
 
 from __future__ import annotations
 
+import io
+import os
+import re
 from pathlib import Path
 
 import matplotlib as mpl
@@ -43,16 +53,89 @@ def use_style() -> None:
 #: PNG text key naming the scorecard rows a figure is scored with (read by the report).
 SCORED_WITH = "mtaccuracy:scored-with"
 
+#: A clip path as matplotlib's SVG backend writes it (one per line of its ``<defs>``).
+_CLIP_PATH = re.compile(r'[ \t]*<clipPath id="([^"]+)">(.*?)</clipPath>\n?', re.S)
+#: Prefix of the renamed clip paths (``clip1``, ``clip2``, ... in order of definition).
+CLIP_PREFIX = "clip"
+
+
+def stable_svg_ids(svg: str) -> str:
+    """``svg`` with each clip path named after its printed definition instead of matplotlib's
+    hash of the unrounded rectangle: ``clip1``, ``clip2``, ... in order of first definition,
+    clip paths that print the same merged into one.
+
+    The file then depends only on what it prints (coordinates to six decimals), as its PNG
+    depends only on pixels: rounding noise in the data behind a figure no longer renames its
+    clip paths.
+
+    Parameters
+    ----------
+    svg : str
+        An SVG document written by matplotlib.
+
+    Returns
+    -------
+    str
+        The same document with the clip paths renamed (unchanged when it has none; applied
+        twice, the same as once).
+    """
+    defs = _CLIP_PATH.findall(svg)
+    if not defs:
+        return svg
+    others = set(re.findall(r'\bid="([^"]+)"', svg)) - {old for old, _ in defs}
+    clash = sorted(i for i in others if re.fullmatch(rf"{CLIP_PREFIX}\d+", i))
+    if clash:
+        raise ValueError(f"the SVG has elements other than clip paths with the ids "
+                         f"{', '.join(clash)}; cannot give its clip paths those names")
+    by_body: dict[str, str] = {}
+    rename = {}
+    for old, body in defs:
+        rename[old] = by_body.setdefault(body, f"{CLIP_PREFIX}{len(by_body) + 1}")
+    kept = set()
+
+    def definition(m):
+        new = rename[m.group(1)]
+        if new in kept:  # prints the same as one already defined: drop it
+            return ""
+        kept.add(new)
+        return m.group(0).replace(f'id="{m.group(1)}"', f'id="{new}"', 1)
+
+    svg = _CLIP_PATH.sub(definition, svg)
+    refs = re.compile(r"url\(#(" + "|".join(map(re.escape, rename)) + r")\)")
+    return refs.sub(lambda m: f"url(#{rename[m.group(1)]})", svg)
+
 
 def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = None,
          scored_with=None) -> None:
-    """Save ``fig`` as ``folder/name.<fmt>`` for each format, without timestamps.  Returns
-    nothing, so that a notebook cell ending with it shows no machine-specific path.
+    """Save ``fig`` as ``folder/name.<fmt>`` for each format, without timestamps, and record
+    each file in the folder's ``provenance.json``.
 
-    ``scored_with``: patterns (:mod:`fnmatch`, on a scorecard row's ``item`` or
-    ``"item: quantity"``) of the rows that score what the figure shows, for a figure whose
-    name is not the item of its rows (``fig05_...`` drawing what Table 2 scores); the report
-    captions the figure with their verdicts."""
+    The SVG's clip paths are named after what it prints (:func:`stable_svg_ids`), so that the
+    bytes do not change with rounding noise in the data.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    folder : str or Path
+        The output folder (created when missing).
+    name : str
+        File name without extension (``fig05_...``, named after the paper's figure).
+    formats : tuple of str
+        Formats written, each as ``name.<fmt>``.
+    title : str, optional
+        Stored as the file's ``Title`` (the report's caption).
+    scored_with : list of str, optional
+        Patterns (:mod:`fnmatch`, on a scorecard row's ``item`` or ``"item: quantity"``) of
+        the rows that score what the figure shows, for a figure whose name is not the item of
+        its rows (``fig05_...`` drawing what Table 2 scores); the report captions the figure
+        with their verdicts.
+
+    Returns
+    -------
+    None
+        Nothing, so that a notebook cell ending with it shows no machine-specific path.
+    """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     stamp = provenance.as_text()
@@ -69,9 +152,24 @@ def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = Non
         if scored_with and fmt == "png":
             meta[SCORED_WITH] = " | ".join(scored_with)
         with mpl.rc_context(STYLE):
-            fig.savefig(path, format=fmt, metadata=meta, bbox_inches="tight")
+            if fmt == "svg":
+                buf = io.BytesIO()
+                fig.savefig(buf, format=fmt, metadata=meta, bbox_inches="tight")
+                text = stable_svg_ids(buf.getvalue().decode("utf-8"))
+                tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+                tmp.write_bytes(text.encode("utf-8"))
+                os.replace(tmp, path)
+            else:
+                fig.savefig(path, format=fmt, metadata=meta, bbox_inches="tight")
         provenance.register_output(path)
 
 
 def close(fig) -> None:
+    """Close ``fig`` (pyplot forgets it and its memory is freed).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    """
     plt.close(fig)

@@ -7,10 +7,14 @@ to an HTML export of the executed notebook (``figures/html/<stem>.html``).  A to
 the verdicts over all papers and gives the last run time and commit of each notebook (recorded
 by the runner in ``figures/.runs.json``; the only run-dependent content, and only when present).
 
-Every figure is checked before it is shown: a PNG or SVG that cannot be read (a truncated file
-from an interrupted run, say) or whose bytes do not match the hash in its folder's
-``provenance.json`` is marked as broken in the report instead of being shown, and the command
-exits with status 1 naming it.
+Every output is checked against its folder's ``provenance.json``, which lists each file the
+run wrote with its SHA-256 (a ``measured`` file, wall-clock times, without one) before it is
+shown: a figure (PNG, SVG) that cannot be read (a truncated file from an interrupted run, say),
+a figure or table (CSV) whose bytes do not match its hash, one that the sidecar does not list,
+and a file that the sidecar lists but that is no longer on disk are marked in the report (a
+broken or missing figure is not shown, such a table not linked), and the command exits with
+status 1 naming each.  A ``measured`` file is only required to exist (and a measured figure to
+be readable).
 
 The report uses no script and no external resource; the notebook exports have their CDN script
 tags removed, so they open offline too (LaTeX then shows as source).  ``python -m
@@ -174,23 +178,94 @@ def _provenance_html(rec: dict) -> str:
             f"<li>packages: {_e(pkgs)}</li></ul></details>")
 
 
-def figure_problem(path: Path, side: dict) -> str | None:
-    """Why a figure file cannot be shown (unreadable, truncated, not the file its folder's
-    provenance lists), or None when it is sound."""
+#: Outputs on disk that must be listed in their folder's provenance.json (figures, tables).
+CHECKED_SUFFIXES = (".png", ".svg", ".csv")
+
+
+def output_kind(path: Path) -> str:
+    """What an output file is, for the messages: "figure", "table" or "file"."""
+    return {".png": "figure", ".svg": "figure", ".csv": "table"}.get(Path(path).suffix, "file")
+
+
+def output_problem(path: Path, side: dict) -> str | None:
+    """Why an output file cannot be shown or linked, or None when it is sound.
+
+    Parameters
+    ----------
+    path : Path
+        The file, in its output folder.
+    side : dict
+        That folder's ``provenance.json`` (:func:`mtaccuracy.compendium.provenance.read`).
+
+    Returns
+    -------
+    str or None
+        The problem in words, to follow the file's name ("is missing ...", "cannot be read
+        ...", "is not listed ...", "does not match the hash ..."): missing though listed, a
+        figure that cannot be decoded, not listed, no hash though not ``measured``, or bytes
+        that are not the ones the run recorded.  A ``measured`` entry is only required to
+        exist (and, for a figure, to be readable).
+    """
+    path = Path(path)
     entry = side.get("files", {}).get(path.name)
+    if not path.is_file():
+        return (f"is missing (listed in {provenance.SIDECAR}, not on disk)" if entry is not None
+                else "is missing")
     try:
         if path.suffix == ".png":
             with Image.open(path) as im:
                 im.load()  # decodes every byte: a truncated file fails here
-        else:
+        elif path.suffix == ".svg":
             ET.parse(path)
     except Exception as exc:  # PIL and expat raise many kinds
         return f"cannot be read ({type(exc).__name__}: {str(exc)[:80]})"
     if entry is None:
         return f"is not listed in {provenance.SIDECAR} (not written by this folder's run)"
-    if "sha256" in entry and entry["sha256"] != provenance.sha256(path):
+    if entry.get("measured"):
+        return None  # a measurement of the machine: no hash to check
+    if "sha256" not in entry:
+        return f"has no hash in {provenance.SIDECAR} and is not declared measured"
+    if entry["sha256"] != provenance.sha256(path):
         return f"does not match the hash in {provenance.SIDECAR} (changed after its run)"
     return None
+
+
+#: The name this check had when it covered figures only.
+figure_problem = output_problem
+
+
+def folder_problems(folder: Path, side: dict | None = None) -> list[tuple[Path, str]]:
+    """Every problem (:func:`output_problem`) of an output folder, by file name: the files its
+    ``provenance.json`` lists and the figures and tables on disk.
+
+    Parameters
+    ----------
+    folder : Path
+        A notebook's output folder (``figures/<stem>``).
+    side : dict, optional
+        Its ``provenance.json`` (read when not given).
+
+    Returns
+    -------
+    list of (Path, str)
+        ``(path, why)`` for each file with a problem, sorted by name.
+    """
+    folder = Path(folder)
+    side = provenance.read(folder) if side is None else side
+    names = set(side.get("files", {}))
+    if folder.is_dir():
+        names |= {p.name for p in folder.iterdir()
+                  if p.is_file() and p.suffix in CHECKED_SUFFIXES and not p.name.startswith(".")}
+    found = ((folder / n, output_problem(folder / n, side)) for n in sorted(names))
+    return [(p, why) for p, why in found if why]
+
+
+def _problem_html(stem: str, path: Path, why: str, action: str) -> str:
+    what = output_kind(path)
+    state = "Missing" if not path.exists() else "Broken"
+    return (f'<p class="broken"><strong>{state} {what}</strong> '
+            f"<code>{_e(stem)}/{_e(path.name)}</code> {_e(why)}: {action}; run "
+            f"<code>make reproduce NB={_e(stem[:2])}</code> again.</p>")
 
 
 _EXPORTER = None
@@ -236,9 +311,28 @@ def _title(nb: Path) -> str:
 
 
 def build(figures=None, notebooks=None, broken: list | None = None, export: bool = True) -> Path:
-    """Write ``<figures>/index.html`` and (with ``export``) ``<figures>/html/<stem>.html``;
-    returns the index.  Figures that cannot be shown (:func:`figure_problem`) are marked in the
-    page and appended to ``broken`` as ``(path, why)``."""
+    """Write ``<figures>/index.html`` and (with ``export``) ``<figures>/html/<stem>.html``.
+
+    Every figure and table that cannot be trusted (:func:`folder_problems`: unreadable, not
+    the bytes its folder's ``provenance.json`` records, not listed there, or listed but
+    missing) is marked in the page instead of shown or linked, and appended to ``broken``.
+
+    Parameters
+    ----------
+    figures : str or Path, optional
+        The figures folder (default ``figures/``).
+    notebooks : str or Path, optional
+        The notebooks folder (default ``notebooks/``).
+    broken : list, optional
+        Receives ``(path, why)`` for each file marked.
+    export : bool
+        Also write the HTML export of each executed notebook.
+
+    Returns
+    -------
+    Path
+        ``<figures>/index.html``.
+    """
     figures = Path(figures or paths.FIGURES)
     notebooks = Path(notebooks or paths.NOTEBOOKS)
     broken = [] if broken is None else broken
@@ -248,10 +342,11 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
     summary = reproduction.summary(cards)
     runs = runner.last_runs() if figures == paths.FIGURES else {}
     runtimes = {k: v.get("seconds") for k, v in runs.items() if isinstance(v, dict)}
-    # the papers' notebooks (a scorecard each), then any other notebook with outputs (a method
-    # for the reader's own machine: figures and tables, nothing to score)
+    # the papers' notebooks (a scorecard each; a paper's folder that lost its scorecard is
+    # still shown, with what is missing), then any other notebook with outputs (a method for
+    # the reader's own machine: figures and tables, nothing to score)
     others = {p.parent.name for p in figures.glob("*/provenance.json")
-              if (notebooks / f"{p.parent.name}.ipynb").exists()}
+              if (notebooks / f"{p.parent.name}.ipynb").exists() or p.parent.name in index}
     stems = sorted(set(cards["notebook"]) | others)
 
     out = ['<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">',
@@ -294,8 +389,12 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
             if nb.exists() else []
         if nb.exists() and export:
             export_notebook(nb, figures / "html" / f"{stem}.html")
+        side = provenance.read(folder)
+        problems = folder_problems(folder, side)
+        broken += problems
+        bad = {p.name for p, _ in problems}
         links += [f'<a href="{_e(stem)}/{_e(p.name)}">{_e(p.name)}</a>'
-                  for p in sorted(folder.glob("*.csv"))]
+                  for p in sorted(folder.glob("*.csv")) if p.name not in bad]
         n_rows = len(card)
         counts = ", ".join(f"{n} {v}" for v, n in card["verdict"].value_counts()
                            .reindex(reproduction.VERDICTS).dropna().astype(int).items() if n)
@@ -305,7 +404,13 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
                 f"<h2>{_e(meta.get('paper', _title(nb) or stem))}</h2>",
                 f'<p class="citation">{_e(meta.get("citation", ""))}</p>',
                 f'<p class="links">{" ".join(links)}</p>']
-        if not n_rows:
+        out += [_problem_html(stem, p, why, "not linked") for p, why in problems
+                if output_kind(p) != "figure"]
+        rows = [("score-row", r) for _, r in card.iterrows()]
+        rows += [("measured-row", r) for _, r in measured[measured["notebook"] == stem].iterrows()]
+        if not rows and stem in index:  # a paper's folder without its scorecard
+            out.append("<p>No scorecard rows to show.</p><h3>Figures</h3>")
+        elif not rows:
             out.append("<p>No paper: no published value to score. The notebook's own checks are "
                        "its tables above.</p><h3>Figures</h3>")
         else:
@@ -316,8 +421,6 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
                     "<table><tr><th>item</th><th>quantity</th><th>published</th>"
                     "<th>reproduced</th><th>unit</th><th>tolerance</th><th>verdict</th>"
                     "<th>basis</th><th>note</th></tr>"]
-        rows = [("score-row", r) for _, r in card.iterrows()]
-        rows += [("measured-row", r) for _, r in measured[measured["notebook"] == stem].iterrows()]
         for cls, r in rows:
             out.append(f'<tr class="{cls}" data-notebook="{_e(stem)}" '
                        f'data-verdict="{_e(r["verdict"])}" data-basis="{_e(r["basis"])}">'
@@ -329,17 +432,10 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
                        + (" <em>(measured on the machine that ran it: changes from run to "
                           "run; not counted in the summary)</em>" if cls == "measured-row" else "")
                        + "</td></tr>")
-        if n_rows:
+        if rows:
             out.append("</table></details><h3>Figures</h3>")
-        side = provenance.read(folder)
-        for fig in sorted([*folder.glob("*.png"), *folder.glob("*.svg")]):
-            why = figure_problem(fig, side)
-            if why:
-                broken.append((fig, why))
-                out.append(f'<p class="broken"><strong>Broken figure</strong> '
-                           f"<code>{_e(stem)}/{_e(fig.name)}</code> {_e(why)}: not shown; run "
-                           f"<code>make reproduce NB={_e(stem[:2])}</code> again.</p>")
-        bad = {p.name for p, _ in broken}
+        out += [_problem_html(stem, p, why, "not shown") for p, why in problems
+                if output_kind(p) == "figure"]
         for png in sorted(folder.glob("*.png")):
             if png.name in bad:
                 continue
@@ -363,20 +459,41 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
     path = figures / "index.html"
     text = "\n".join(out) + "\n"
     if not path.exists() or path.read_text(encoding="utf-8") != text:
-        path.write_text(text, encoding="utf-8")
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # whole or not at all
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
     return path
 
 
 def main(argv=None) -> int:
+    """``python -m mtaccuracy.compendium.report``: build the report and name every file it
+    marked (:func:`build`).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The command line (default: ``sys.argv[1:]``); ``--figures DIR`` reports on another
+        figures folder.
+
+    Returns
+    -------
+    int
+        0, or 1 when a figure or table was marked as broken or missing.
+    """
     ap = argparse.ArgumentParser(prog="python -m mtaccuracy.compendium.report")
     ap.add_argument("--figures", default=None, help="figures folder (default: figures/)")
     args = ap.parse_args(argv)
     broken: list = []
-    path = build(args.figures, broken=broken)
+    try:
+        path = build(args.figures, broken=broken)
+    except PermissionError as exc:  # a read-only checkout
+        print(f"error: cannot write {exc.filename or exc} ({exc.strerror}); the report is "
+              f"built inside figures/, which needs a checkout you can write", file=sys.stderr)
+        return 2
     shown = path.relative_to(paths.ROOT) if path.is_relative_to(paths.ROOT) else path
     print(f"report: {shown}")
-    for fig, why in broken:
-        print(f"error: figure {fig} {why}; marked as broken in the report", file=sys.stderr)
+    for bad, why in broken:
+        print(f"error: {output_kind(bad)} {bad} {why}; marked in the report", file=sys.stderr)
     return 1 if broken else 0
 
 

@@ -21,11 +21,14 @@ checks run inside the notebook (:func:`check_parameters`), so an interactive run
 refuses a bad value too.
 
 All or nothing: a run executes the notebook into ``notebooks/.running/`` and writes its
-figures and tables into a staging folder; only when every cell succeeded is the notebook
-replaced in place and the staging folder moved into the output folder, so that a notebook and
-its ``figures/<stem>/`` (``reproduction.csv``, figures, ``provenance.json``) always come from
-one run.  A run with ``output_dir`` elsewhere leaves ``notebooks/`` and ``figures/`` untouched:
-the executed notebook is stored with its outputs, as ``<output_dir>/<stem>.ipynb``.  A failed
+figures and tables into a staging folder (``<output>/.staging-<pid>/``); only when every cell
+succeeded are the notebook and the output folder switched to the new run, by the journalled
+commit of :mod:`mtaccuracy.compendium.commit`, so that a notebook and its ``figures/<stem>/``
+(``reproduction.csv``, figures, ``provenance.json``) always come from one run, even after a
+kill at any step.  A commit replaces only the files the previous run wrote (the folder's
+manifest): what a user put in an output folder is left alone and named.  A run with
+``output_dir`` elsewhere leaves ``notebooks/`` and ``figures/`` untouched: the executed
+notebook is stored with its outputs, as ``<output_dir>/<stem>.ipynb``.  A failed
 or interrupted run (Ctrl-C, SIGTERM) leaves the committed notebook and figures byte-identical
 and is kept in ``notebooks/.failed/`` (the executed notebook and a ``<stem>.figures/`` folder
 with what it had written); it ends with one line saying so.
@@ -38,7 +41,10 @@ Command line (``make reproduce NB=03 PARAMS="n_samples=1000 seed=2"`` calls this
 ``NB`` and ``PARAMS`` through the environment, never through a shell)::
 
     python -m mtaccuracy.compendium.runner all|03|notebooks/03_....ipynb [name=value ...] [--check]
-                                [--list] [--jobs N]
+                                [--list] [--jobs N] [--copy-to DIR]
+
+Several notebooks with one ``output_dir=X`` write one folder each, ``X/<stem>``; ``--copy-to``
+takes a folder outside the repository and goes through the same checks, staging and commit.
 
 ``all`` runs the notebooks two at a time on a machine with two cores or more (each kernel with
 one BLAS thread, so that they do not compete), the longest first.
@@ -60,6 +66,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -123,17 +130,26 @@ def _parse_constraints(text: str, where: str) -> list[tuple[str, object]]:
 
 
 def notebook_path(name: str | Path) -> Path:
-    """Resolve ``03``, a stem or a path to a notebook file."""
-    p = Path(name)
-    if p.suffix == ".ipynb" and p.exists():
-        return p.resolve()
-    hits = sorted(paths.NOTEBOOKS.glob(f"{name}*.ipynb")) if str(name).strip() else []
+    """Resolve ``03``, a stem (or its start) or a path to one of the compendium's notebooks
+    (``notebooks/NN_*.ipynb``).  Names are compared as text, never as patterns: ``*`` matches
+    nothing."""
+    text = str(name).strip()
+    known = all_notebooks()
+    names = ", ".join(h.stem for h in known)
+    if text.endswith(".ipynb") or "/" in text or os.sep in text:
+        p = Path(os.path.expanduser(text))
+        p = (p if p.is_absolute() else Path.cwd() / p).resolve()
+        if p in known:
+            return p
+        raise ParameterError(f"{text!r} is not one of the compendium's notebooks "
+                             f"(notebooks/NN_*.ipynb): {names}")
+    hits = [h for h in known if text and h.stem.startswith(text)]
     if len(hits) == 1:
         return hits[0]
-    known = ", ".join(h.stem for h in sorted(paths.NOTEBOOKS.glob("[0-9]*.ipynb")))
+    shown = text if len(text) <= 60 else text[:57] + "..."
     if not hits:
-        raise ParameterError(f"no notebook matches {str(name)!r}; notebooks: {known}")
-    raise ParameterError(f"{str(name)!r} matches several notebooks: "
+        raise ParameterError(f"no notebook matches {shown!r}; notebooks: {names}")
+    raise ParameterError(f"{shown!r} matches several notebooks: "
                          f"{', '.join(h.stem for h in hits)}")
 
 
@@ -231,36 +247,34 @@ def memory_estimate(notebook: str | Path, values: dict) -> float | None:
 
 
 def memory_available() -> tuple[float, str]:
-    """Bytes this process may still use, and where that limit comes from."""
-    limits = []
-    try:
-        import psutil
+    """Bytes a new run may still use, and which limit that is: the smallest headroom of the
+    machine's available memory, every cgroup level's limit and the per-process limits
+    (``ulimit -v``, ``ulimit -d``; :func:`mtaccuracy.compendium.memory.available`)."""
+    from . import memory
 
-        limits.append((float(psutil.virtual_memory().available), "available memory"))
-    except ImportError:  # pragma: no cover - psutil is in the lock
-        pass
-    for f, used in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),):
-        try:
-            cap = Path(f).read_text().strip()
-            if cap != "max":
-                limits.append((float(cap) - float(Path(used).read_text()), "the cgroup limit"))
-        except (OSError, ValueError):
-            pass
-    return min(limits) if limits else (math.inf, "no known limit")
+    return memory.available()
 
 
 def _check_memory(notebook: str, values: dict, share: int = 1) -> None:
+    """Refuse a run whose declared peak memory does not fit.  ``share`` runs at once divide
+    the machine's memory and the cgroups' limits between them; a per-process limit
+    (``ulimit -v``) holds for each run whole."""
+    from . import memory
+
     need = memory_estimate(notebook, values)
     if need is None:
         return
-    have, what = memory_available()
-    have /= share
+    have, what, shared = math.inf, "no known limit", False
+    for lim in memory.limits():
+        b = lim.bytes if lim.per_process else lim.bytes / share
+        if b < have:
+            have, what, shared = b, lim.what, not lim.per_process
     if need > have:
         raise ParameterError(
             f"{notebook}: these parameters need about {need / 1e9:.3g} GB of memory, more "
-            f"than the {have / 1e9:.3g} GB {what}"
-            f"{f' (shared by {share} runs at once)' if share > 1 else ''} on this machine; "
-            f"lower the sample sizes")
+            f"than the {max(have, 0) / 1e9:.3g} GB left under {what}"
+            f"{f' (shared by {share} runs at once)' if share > 1 and shared else ''} on this "
+            f"machine; lower the sample sizes")
 
 
 # --- checking values -------------------------------------------------------------------------
@@ -444,7 +458,13 @@ def _rel(p: Path) -> str:
         return str(p)
 
 
+#: The signals :func:`_on_signal` received during the current run (a library may wrap the
+#: :class:`Interrupted` it raised in an error of its own, nbformat's ``VisitError`` say).
+_RECEIVED: list[int] = []
+
+
 def _on_signal(signum, frame):
+    _RECEIVED.append(signum)
     raise Interrupted(signal.Signals(signum).name)
 
 
@@ -458,51 +478,114 @@ def _install(handler) -> dict:
     return old
 
 
-def _replace_folder(staging: Path, target: Path) -> None:
-    """Move ``staging`` to ``target``, replacing it (rename when on one file system)."""
-    target.parent.mkdir(parents=True, exist_ok=True)
-    old = target.with_name(f".{target.name}.old-{os.getpid()}")
-    if target.exists():
-        os.replace(target, old)
+@contextlib.contextmanager
+def _deferred_signals():
+    """SIGINT and SIGTERM held back while a commit switches the files (a few renames); yields
+    the list of the signals that arrived meanwhile."""
+    got: list[int] = []
+    old = _install(lambda signum, frame: got.append(signum))
     try:
-        shutil.move(str(staging), str(target))
-    except BaseException:
-        if old.exists() and not target.exists():
-            os.replace(old, target)
-        raise
-    shutil.rmtree(old, ignore_errors=True)
+        yield got
+    finally:
+        for sig, h in old.items():
+            signal.signal(sig, h)
+
+
+def _unwritable(exc: OSError, what: Path) -> ParameterError:
+    return ParameterError(f"cannot write in {_rel(what)} ({exc.strerror or exc}); nothing was "
+                          f"run or changed: a run needs a checkout it can write (its notebooks/ "
+                          f"and the output folder)")
+
+
+@contextlib.contextmanager
+def _setenv(name: str, value: str | None):
+    """``os.environ[name] = value`` while the block runs (nothing when ``value`` is None)."""
+    if value is None:
+        yield
+        return
+    old = os.environ.get(name)
+    os.environ[name] = value
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = old
+
+
+def _output_base(base: Path | None):
+    """Relative output folders taken from ``base`` (``--copy-to``) while the block runs."""
+    return _setenv(paths.OUTPUT_BASE_ENV, None if base is None else str(base))
 
 
 def run(notebook: str | Path, overrides: dict | None = None, progress: bool = True,
-        share: int = 1, export: bool = True) -> float:
-    """Validate, execute with papermill and, only if every cell succeeds, replace the notebook
-    in place and move its outputs into the output folder; returns seconds.
+        share: int = 1, export: bool = True, copy_to: str | Path | None = None) -> float:
+    """Validate, execute with papermill and, only if every cell succeeds, commit the executed
+    notebook and its outputs (:func:`mtaccuracy.compendium.commit.commit`); returns seconds.
 
-    Raises :class:`RuntimeError` (failed) or :class:`Interrupted` (SIGINT/SIGTERM), both with a
-    one-line message; the committed notebook and output folder are then unchanged and the
-    partial run is kept in ``notebooks/.failed/``.  With ``export``, a run into the default
-    folder also writes the report's HTML export of the notebook (``figures/html/``)."""
+    ``copy_to``: store the executed notebook as ``<copy_to>/<stem>.ipynb`` and take relative
+    output folders from ``copy_to`` (``<copy_to>/figures/<stem>/`` by default), touching
+    nothing in the repository; the folder must lie outside it.  The same checks, staging and
+    commit as a run in place.
+
+    Raises :class:`RuntimeError` (failed), :class:`Interrupted` (SIGINT/SIGTERM) or
+    :class:`ParameterError` (refused before it ran), each with a one-line message; the committed
+    notebook and output folder are then unchanged and the partial run is kept in
+    ``notebooks/.failed/``.  With ``export``, a run into the default folder also writes the
+    report's HTML export of the notebook (``figures/html/``)."""
+    from . import commit
+
     path = notebook_path(notebook)
-    params = validate(path, overrides or {}, share)
-    target = output_target(path, params)
-    running, failed = paths.NOTEBOOKS / ".running", paths.NOTEBOOKS / ".failed"
-    for d in (running, failed):
-        d.mkdir(exist_ok=True)
-    out = running / path.name
-    staging = (target.parent / f".{target.name}.staging-{os.getpid()}") if target else None
-    if staging is not None:
-        shutil.rmtree(staging, ignore_errors=True)
-    old_env = os.environ.get(paths.STAGING_ENV)
-    old_handlers = _install(_on_signal)
-    try:
-        seconds = _execute_and_replace(path, params, out, staging, target, failed, progress)
-    finally:
-        if old_env is None:
-            os.environ.pop(paths.STAGING_ENV, None)
-        else:
-            os.environ[paths.STAGING_ENV] = old_env
-        for sig, h in old_handlers.items():
-            signal.signal(sig, h)
+    base = paths.check_copy_dir(copy_to) if copy_to is not None else None
+    with _output_base(base):
+        params = validate(path, overrides or {}, share)
+        target = output_target(path, params)
+        dest = written_notebook(path, params, copy_to=base)
+        for folder in {dest.parent, *([target] if target is not None else [])}:
+            commit.remove_stale(folder)  # what a killed run of this folder left
+        for folder in [target] if target is not None else []:
+            changed = commit.modified_outputs(folder, path.stem)
+            if changed:
+                raise ParameterError(
+                    f"{path.stem}: {', '.join(changed)} in {_rel(folder)} changed since the "
+                    f"compendium wrote it; the run would overwrite it: move it away first")
+        if base is not None and dest.exists() and not commit.written_notebook_is_ours(
+                dest, path.name):
+            raise ParameterError(f"{path.stem}: {dest} exists and is not a notebook the "
+                                 f"compendium stored; nothing there is overwritten")
+        running, failed = paths.NOTEBOOKS / ".running", paths.NOTEBOOKS / ".failed"
+        for d in (running, failed):
+            try:
+                d.mkdir(exist_ok=True)
+                with tempfile.TemporaryFile(dir=d):  # it may exist and still refuse a file
+                    pass
+            except OSError as exc:
+                raise _unwritable(exc, d) from None
+        staging = None
+        created = False
+        if target is not None:
+            try:
+                created = not target.exists()
+                target.mkdir(parents=True, exist_ok=True)
+                staging = target / f"{commit.STAGING_PREFIX}{os.getpid()}"
+                shutil.rmtree(staging, ignore_errors=True)
+                staging.mkdir()
+            except OSError as exc:
+                raise _unwritable(exc, target) from None
+        old_handlers = _install(_on_signal)
+        try:
+            with _setenv(paths.STAGING_ENV, None if staging is None else str(staging)):
+                seconds = _execute_and_commit(path, params, running / path.name, staging,
+                                              target, dest, failed, progress)
+        except BaseException:
+            if created and target is not None and target.is_dir() and not any(
+                    target.iterdir()):
+                target.rmdir()  # a folder this run made, left empty
+            raise
+        finally:
+            for sig, h in old_handlers.items():
+                signal.signal(sig, h)
     if _in_place(path, target):
         _record_run(path.stem, seconds)
     if export:
@@ -517,9 +600,12 @@ def _in_place(path: Path, target: Path | None) -> bool:
     return target is None or target == paths.FIGURES / path.stem
 
 
-def written_notebook(notebook: str | Path, params: dict) -> Path:
-    """Where a run with ``params`` stores the executed notebook."""
+def written_notebook(notebook: str | Path, params: dict, copy_to: Path | None = None) -> Path:
+    """Where a run with ``params`` stores the executed notebook (``copy_to``: the folder of
+    ``--copy-to``, where it always goes)."""
     path = notebook_path(notebook)
+    if copy_to is not None:
+        return Path(copy_to) / path.name
     target = output_target(path, params)
     return path if _in_place(path, target) else target / path.name
 
@@ -537,37 +623,19 @@ def _export(path: Path, target: Path | None) -> None:
     if target == paths.FIGURES / path.stem:
         from .report import export_notebook
 
-        export_notebook(path, paths.FIGURES / "html" / f"{path.stem}.html")
+        try:
+            export_notebook(path, paths.FIGURES / "html" / f"{path.stem}.html")
+        except OSError as exc:
+            print(f"note: the HTML export of {path.stem} was not written: {exc}",
+                  file=sys.stderr)
 
 
 def execute_copy(notebook: str | Path, dest: str | Path, overrides: dict | None = None) -> Path:
-    """Execute a notebook into ``dest/<stem>.ipynb`` (normalised as a run in place would store
-    it) with relative output folders taken from ``dest`` (``$MTACCURACY_OUTPUT_BASE``): nothing
-    in the repository is touched.  Used by the tests and by ``--copy-to``; raises papermill's
-    error when a cell fails."""
-    import papermill as pm
-
-    path = notebook_path(notebook)
-    dest = Path(dest).resolve()
-    dest.mkdir(parents=True, exist_ok=True)
-    old = os.environ.get(paths.OUTPUT_BASE_ENV)
-    os.environ[paths.OUTPUT_BASE_ENV] = str(dest)
-    staging = os.environ.pop(paths.STAGING_ENV, None)  # a copy is never staged
-    try:
-        params = validate(path, overrides or {})
-        out = dest / path.name
-        pm.execute_notebook(_parameterised(path, params), str(out), cwd=str(paths.NOTEBOOKS),
-                            kernel_name="python3", progress_bar=False, log_output=False)
-        nb = _normalise(json.loads(out.read_text(encoding="utf-8")), _rel(path))
-        out.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
-    finally:
-        if old is None:
-            os.environ.pop(paths.OUTPUT_BASE_ENV, None)
-        else:
-            os.environ[paths.OUTPUT_BASE_ENV] = old
-        if staging is not None:
-            os.environ[paths.STAGING_ENV] = staging
-    return out
+    """Execute a notebook into ``dest/<stem>.ipynb`` with relative output folders taken from
+    ``dest`` (a folder outside the repository), through the same checks, staging and commit
+    as :func:`run`; returns the notebook written."""
+    run(notebook, overrides, progress=False, export=False, copy_to=dest)
+    return Path(dest).resolve() / notebook_path(notebook).name
 
 
 @contextlib.contextmanager
@@ -591,56 +659,90 @@ def _kernel_stderr(log: Path):
         os.close(saved)
 
 
-def _execute_and_replace(path, params, out, staging, target, failed, progress) -> float:
-    import papermill as pm
+def _keep_failed(path: Path, out: Path, log: Path, staging: Path | None, failed: Path) -> str:
+    """Move what a failed run left into ``notebooks/.failed/``; say what was kept."""
+    kept = []
+    if out.exists():
+        shutil.move(str(out), failed / path.name)
+        kept.append(path.name)
+    if log.exists():
+        shutil.move(str(log), failed / log.name)
+    if staging is not None and staging.is_dir() and not any(staging.iterdir()):
+        staging.rmdir()
+    if staging is not None and staging.exists():
+        dest = failed / f"{path.stem}.figures"
+        shutil.rmtree(dest, ignore_errors=True)
+        shutil.move(str(staging), dest)
+        kept.append(dest.name)
+    return f"partial run kept in {_rel(failed)}/" if kept else "nothing of it was kept"
+
+
+def _execute_and_commit(path, params, out, staging, target, dest, failed, progress) -> float:
+    from . import commit
 
     t0 = time.perf_counter()
     log = out.with_suffix(".kernel.log")
-    log.unlink(missing_ok=True)
+    for stale in (out, log):
+        stale.unlink(missing_ok=True)
+    source = path.read_bytes()
+    tmp = None
+    _RECEIVED.clear()
     try:
-        if staging is not None:
-            os.environ[paths.STAGING_ENV] = str(staging)
+        import papermill as pm
+
         with _kernel_stderr(log):
             pm.execute_notebook(_parameterised(path, params), str(out),
                                 cwd=str(paths.NOTEBOOKS), kernel_name="python3",
                                 progress_bar=progress, log_output=False)
+        seconds = time.perf_counter() - t0
+        nb = _normalise(json.loads(out.read_text(encoding="utf-8")), _rel(path))
+        text = json.dumps(nb, indent=1, ensure_ascii=False) + "\n"
+        if dest == path and path.read_bytes() != source:
+            raise commit.CommitConflict(f"{_rel(path)} was changed while it ran; nothing was "
+                                        f"changed: run it again")
+        if staging is not None and dest.parent == target:
+            (staging / dest.name).write_text(text, encoding="utf-8")
+            notebook = None
+        else:
+            tmp = dest.with_name(f".{dest.name}.commit-{os.getpid()}.tmp")
+            tmp.write_text(text, encoding="utf-8")
+            notebook = (tmp, dest)
+        with _deferred_signals() as late:
+            if staging is not None and any(staging.iterdir()):
+                done = commit.commit(staging, target, stem=path.stem, notebook=notebook)
+            else:  # a notebook that wrote nothing leaves its folder as it is
+                if staging is not None:
+                    staging.rmdir()
+                done = commit.Result()
+                if notebook is not None:
+                    os.replace(tmp, dest)
     except BaseException as exc:
         _install(signal.SIG_IGN)  # a second Ctrl-C must not interrupt the clean-up
-        kept = failed / path.name
-        if out.exists():
-            shutil.move(str(out), kept)
-        if log.exists():
-            shutil.move(str(log), failed / log.name)
-        if staging is not None and staging.exists():
-            dest = failed / f"{path.stem}.figures"
-            shutil.rmtree(dest, ignore_errors=True)
-            shutil.move(str(staging), dest)
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
+        where = _keep_failed(path, out, log, staging, failed)
         unchanged = f"{_rel(path)}{f' and {_rel(target)}' if target else ''} unchanged"
-        where = f"partial run kept in {_rel(failed)}/"
-        if isinstance(exc, Interrupted | KeyboardInterrupt):
-            raise Interrupted(f"{path.stem} interrupted ({exc or 'SIGINT'}): {unchanged}; "
+        if isinstance(exc, Interrupted | KeyboardInterrupt) or _RECEIVED:
+            name = signal.Signals(_RECEIVED[0]).name if _RECEIVED else "SIGINT"
+            raise Interrupted(f"{path.stem} interrupted ({name}): {unchanged}; "
                               f"{where}") from None
+        if isinstance(exc, commit.CommitConflict):
+            raise RuntimeError(f"{path.stem} not committed: {exc}; {where}") from None
         msg = getattr(exc, "evalue", None) or (str(exc).strip().splitlines() or [""])[-1]
         cell = getattr(exc, "exec_count", None)
         raise RuntimeError(
             f"{path.stem} failed{f' in cell [{cell}]' if cell else ''}: "
             f"{getattr(exc, 'ename', type(exc).__name__)}: {msg}\n  {unchanged}; {where}"
         ) from None
-    seconds = time.perf_counter() - t0
-    nb = _normalise(json.loads(out.read_text(encoding="utf-8")), _rel(path))
-    text = json.dumps(nb, indent=1, ensure_ascii=False) + "\n"
-    if _in_place(path, target):
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        tmp.write_text(text, encoding="utf-8")
-        if staging is not None and staging.exists():  # a notebook that wrote nothing leaves it
-            _replace_folder(staging, target)
-        os.replace(tmp, path)
-    else:  # elsewhere: the executed notebook goes with its outputs, notebooks/ is untouched
-        staging.mkdir(parents=True, exist_ok=True)
-        (staging / path.name).write_text(text, encoding="utf-8")
-        _replace_folder(staging, target)
-    out.unlink()
+    out.unlink(missing_ok=True)
     log.unlink(missing_ok=True)
+    if done.left_alone:
+        print(f"left alone in {_rel(target)}/ (not written by the compendium, or changed "
+              f"since): {', '.join(done.left_alone)}", file=sys.stderr, flush=True)
+    if late:
+        raise Interrupted(f"{path.stem}: {signal.Signals(late[0]).name} arrived while the "
+                          f"finished run was being committed; the commit was completed: "
+                          f"{_rel(dest)} and {_rel(target) if target else ''} are the new run")
     return seconds
 
 
@@ -683,15 +785,16 @@ def _child_env() -> dict:
     return env
 
 
-def _run_parallel(targets: list[Path], items: list[str], jobs: int) -> int:
+def _run_parallel(plan: list[tuple[Path, list[str], dict]], jobs: int,
+                  copy_to: Path | None = None) -> int:
     """Run each notebook in its own ``python -m mtaccuracy.compendium.runner`` process,
-    ``jobs`` at a time, the longest (by the last recorded run) first; returns the number that
-    failed."""
+    ``jobs`` at a time, the longest (by the last recorded run) first; ``plan`` holds each
+    notebook with its command-line parameters and their parsed values.  Returns the number
+    that failed."""
     known = last_runs()
-    order = sorted(targets, key=lambda t: -float(known.get(t.stem, {}).get("seconds", 0)))
+    order = sorted(plan, key=lambda p: -float(known.get(p[0].stem, {}).get("seconds", 0)))
     pending, active, failures = list(order), {}, 0
     n, t0 = len(order), time.perf_counter()
-    overrides = {k.strip(): parse_value(v.strip()) for k, v in (i.split("=", 1) for i in items)}
     try:
         import nbconvert  # noqa: F401 - this process exports each notebook as its run ends
     except ImportError:  # pragma: no cover - nbconvert is in the lock
@@ -700,33 +803,34 @@ def _run_parallel(targets: list[Path], items: list[str], jobs: int) -> int:
     try:
         while pending or active:
             while pending and len(active) < jobs:
-                t = pending.pop(0)
+                t, items, overrides = pending.pop(0)
                 cmd = [sys.executable, "-m", "mtaccuracy.compendium.runner", str(t), *items,
                        "--quiet", f"--share={jobs}"]
-                active[t] = subprocess.Popen(cmd, env=_child_env())
+                if copy_to is not None:
+                    cmd.append(f"--copy-to={copy_to}")
+                active[t] = (subprocess.Popen(cmd, env=_child_env()), overrides)
                 print(f"[{n - len(pending)}/{n}] started "
                       f"{t.stem}", flush=True)
             time.sleep(0.2)
-            for t, proc in list(active.items()):
+            for t, (proc, overrides) in list(active.items()):
                 if proc.poll() is not None:
                     del active[t]
                     failures += proc.returncode != 0
                     if proc.returncode == 130:  # interrupted: stop the others too
                         raise Interrupted("")
-                    if proc.returncode == 0:  # while the other run goes on
+                    if proc.returncode == 0 and copy_to is None:  # while the other run goes on
                         _export(t, output_target(t, overrides))
     except (KeyboardInterrupt, Interrupted):
         _install(signal.SIG_IGN)
+        procs = [p for p, _ in active.values()]
         deadline = time.perf_counter() + 1.0  # a Ctrl-C reached the children too
-        while any(p.poll() is None for p in active.values()) and time.perf_counter() < deadline:
+        while any(p.poll() is None for p in procs) and time.perf_counter() < deadline:
             time.sleep(0.05)
-        for proc in active.values():  # each child ends its own run and says so
+        for proc in procs:  # each child ends its own run and says so
             if proc.poll() is None:
-                try:
+                with contextlib.suppress(OSError):
                     proc.send_signal(signal.SIGINT)
-                except OSError:
-                    pass
-        for proc in active.values():
+        for proc in procs:
             proc.wait()
         raise Interrupted("") from None
     finally:
@@ -751,6 +855,31 @@ def _arguments(argv) -> list[str]:
     return argv
 
 
+def _overrides(items: list[str]) -> dict:
+    out = {}
+    for item in items:
+        if "=" not in item:
+            raise ParameterError(f"parameter {item!r} must be written name=value")
+        k, v = item.split("=", 1)
+        out[k.strip()] = parse_value(v.strip())
+    return out
+
+
+def _per_notebook(targets: list[Path], items: list[str]) -> list[tuple[Path, list[str], dict]]:
+    """Each notebook's parameters.  Several notebooks with one ``output_dir=X`` write one
+    folder each, ``X/<stem>``: never one notebook's results over another's."""
+    overrides = _overrides(items)
+    if len(targets) == 1 or "output_dir" not in overrides:
+        return [(t, list(items), dict(overrides)) for t in targets]
+    base = str(overrides["output_dir"])
+    rest = [i for i in items if i.split("=", 1)[0].strip() != "output_dir"]
+    plan = []
+    for t in targets:
+        own = os.path.join(base, t.stem)
+        plan.append((t, [*rest, f"output_dir={own!r}"], {**overrides, "output_dir": own}))
+    return plan
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m mtaccuracy.compendium.runner",
                                  description="Validate parameters and run notebooks in place.")
@@ -761,53 +890,43 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=None,
                     help="notebooks run at once for 'all' (default: 2 on 2+ cores)")
     ap.add_argument("--copy-to", metavar="DIR", default=None,
-                    help="execute into DIR (notebook and figures/<stem>/ there), touching "
-                         "nothing in the repository")
+                    help="execute into DIR, a folder outside the repository (the notebook as "
+                         "DIR/<stem>.ipynb, outputs in DIR/figures/<stem>/), touching nothing "
+                         "in the repository")
     ap.add_argument("--quiet", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--share", type=int, default=1, help=argparse.SUPPRESS)
     try:
-        args = ap.parse_args(_arguments(argv))
+        from . import commit
+
+        commit.recover()
+        args = ap.parse_intermixed_args(_arguments(argv))
         targets = all_notebooks() if args.notebook == "all" else [notebook_path(args.notebook)]
-        overrides = {}
-        for item in args.params:
-            if "=" not in item:
-                raise ParameterError(f"parameter {item!r} must be written name=value")
-            k, v = item.split("=", 1)
-            overrides[k.strip()] = parse_value(v.strip())
+        plan = _per_notebook(targets, args.params)
         if args.list:
             for t in targets:
                 print(f"{t.stem}:")
                 for p in read_parameters(t).values():
                     print("  " + p.describe())
             return 0
+        copy_to = paths.check_copy_dir(args.copy_to) if args.copy_to is not None else None
         jobs = max(1, min(args.jobs or min(2, os.cpu_count() or 1), len(targets)))
-        for t in targets:  # validate everything before running anything
-            validate(t, overrides, share=max(jobs, args.share))
+        with _output_base(copy_to):
+            for t, _, overrides in plan:  # validate everything before running anything
+                validate(t, overrides, share=max(jobs, args.share))
         if args.check:
             print("parameters ok")
             return 0
-        if args.copy_to:
-            for t in targets:
-                try:
-                    execute_copy(t, args.copy_to, overrides)
-                except ParameterError:
-                    raise
-                except Exception as exc:  # papermill's execution error names the cell
-                    print(f"error: {t.stem} failed: {getattr(exc, 'ename', type(exc).__name__)}"
-                          f": {getattr(exc, 'evalue', exc)}", file=sys.stderr)
-                    return 1
-                print(f"{t.stem} executed into {args.copy_to}", flush=True)
-            return 0
         if jobs > 1:
-            return 1 if _run_parallel(targets, args.params, jobs) else 0
-        shown = " ".join(f"{k}={v!r}" for k, v in overrides.items()) or "defaults"
-        for t in targets:
+            return 1 if _run_parallel(plan, jobs, copy_to) else 0
+        for t, _, overrides in plan:
+            shown = " ".join(f"{k}={v!r}" for k, v in overrides.items()) or "defaults"
             if not args.quiet:
                 print(f"{_rel(t)} ({shown})", flush=True)
             s = run(t, overrides, progress=not args.quiet, share=args.share,
-                    export=not args.quiet)
-            print(f"{t.stem} done in {s:.1f} s -> {_rel(written_notebook(t, overrides))}",
-                  flush=True)
+                    export=not args.quiet and copy_to is None, copy_to=copy_to)
+            with _output_base(copy_to):
+                where = written_notebook(t, overrides, copy_to=copy_to)
+            print(f"{t.stem} done in {s:.1f} s -> {_rel(where)}", flush=True)
     except Interrupted as exc:
         if str(exc):
             print(f"interrupted: {exc}", file=sys.stderr, flush=True)
@@ -815,7 +934,7 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("interrupted before any run started; nothing changed", file=sys.stderr)
         return 130
-    except (ParameterError, RuntimeError) as exc:
+    except (ParameterError, RuntimeError, paths.OutputDirError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     return 0

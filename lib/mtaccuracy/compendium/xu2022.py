@@ -19,6 +19,7 @@ __all__ = [
     "DEFAULT_DIR", "LSTSQ_TOLERANCE", "SVR_TOLERANCE", "published_targets", "published_models",
     "published_metrics",
     "reconstruct", "noise_replicates", "calibrate", "read", "is_default_dir", "prepare",
+    "EditedDataError",
 ]
 
 #: Where the committed reconstruction lives (relative to the repository root).
@@ -91,16 +92,84 @@ def is_default_dir(data_dir) -> bool:
     return p.resolve() == (paths.ROOT / DEFAULT_DIR).resolve()
 
 
+class EditedDataError(RuntimeError):
+    """A file of the reconstruction folder no longer holds the bytes the compendium last wrote
+    there (a user edited it): regenerating would overwrite the edit, so nothing is written."""
+
+
+def _shown(folder: Path, out=None):
+    """How a message names ``folder``: relative to the repository, ``<output_dir>/...``, or as
+    it is."""
+    return (folder.relative_to(paths.ROOT).as_posix() if folder.is_relative_to(paths.ROOT)
+            else f"<output_dir>/{folder.name}" if out is not None and folder.parent == Path(out)
+            else folder)
+
+
+def _refuse_edited(folder: Path, files, out=None) -> None:
+    """Refuse (:class:`EditedDataError`) to overwrite any of ``files`` whose bytes are not the
+    ones the folder's ``provenance.json`` records for the compendium's last write.
+
+    The rule "a run never overwrites a file it did not write": a user who edits
+    ``data/thermal/temperatures.csv`` in place and runs notebook 04 again with
+    ``regenerate_data = True`` gets this one-line message, naming the file and both ways on,
+    instead of losing the edit.  A file without a record (no ``provenance.json``, or one that
+    does not list it) is not known to be ours either, and is refused the same way.
+    """
+    recorded = provenance.read(folder).get("files", {})
+    edited = [p for p in files
+              if recorded.get(p.name, {}).get("sha256") != provenance.sha256(p)]
+    if not edited:
+        return
+    where = _shown(folder, out)
+    names = ", ".join(f"{where}/{p.name}" for p in edited)
+    if folder.resolve() == (paths.ROOT / DEFAULT_DIR).resolve():
+        how = (f"run with regenerate_data = False to use the edited data, or restore the "
+               f"committed files with `git checkout {DEFAULT_DIR}` and run again")
+    else:
+        how = (f"run with data_dir = '{folder}' to use the edited data (read, never written), "
+               f"or delete the edited file(s) to regenerate them")
+    raise EditedDataError(
+        f"{names}: edited since the compendium wrote it (its SHA-256 is not the one recorded in "
+        f"{where}/{provenance.SIDECAR}); regenerating would overwrite the edit, so nothing was "
+        f"written: {how}")
+
+
+def _save(df, path, **kwargs) -> None:
+    """:func:`reproduction.save_table`, with the run's record of ``path`` brought to the bytes
+    on disk before the folder's ``provenance.json`` keeps it.
+
+    ``provenance.start`` hashes the files of ``data_dir`` (``data/thermal``) as inputs of the
+    run *before* :func:`prepare` regenerates them, and ``save_table`` stamps the folder's
+    sidecar with the run's record as it stands: after a file was rewritten, that record still
+    held the hash of the bytes the write replaced.  So the file is tracked again here (as
+    :func:`read` does right after) and, when that changed the record, saved again: the same
+    bytes, so nothing is written, only the sidecar re-recorded.
+    """
+    reproduction.save_table(df, path, **kwargs)
+    before = provenance.record()["inputs"]
+    provenance.track(path)
+    if provenance.record()["inputs"] != before:
+        reproduction.save_table(df, path, **kwargs)
+
+
 def prepare(data_dir: str = DEFAULT_DIR, regenerate: bool = True,
             seed: int = synthetic.DEFAULT_SEED, out=None) -> tuple[Path, list[Path], str]:
     """Decide where to read from and, for the reconstruction only, regenerate it first.
 
     * ``data_dir`` is the default ``data/thermal``, ``regenerate`` is true and ``seed`` is the
       committed one: the generator writes into it (resolved like an output folder, so under the
-      tests it goes to ``.test-output/data/thermal``), a file only when its bytes change.
+      tests it goes to ``$MTACCURACY_OUTPUT_BASE/data/thermal``), a file only when its bytes
+      change.
     * the same with another ``seed``: the reconstruction goes to ``<out>/reconstruction`` (the
       run's own output folder), never over the committed data.
     * any other ``data_dir`` is the reader's own measurements: read, **never written**.
+
+    A file of the reconstruction folder whose bytes are not those the folder's
+    ``provenance.json`` records for the compendium's last write (a user edited it) is never
+    overwritten: :class:`EditedDataError`, before anything is written, saying how to use the
+    edit (``regenerate_data = False``) or drop it.  A missing file is simply written.  The
+    sidecar records the hashes of the bytes on disk, in its file entries and in the run's
+    inputs.
 
     Returns (folder to read, files that changed, a sentence saying what happened).
     """
@@ -121,12 +190,10 @@ def prepare(data_dir: str = DEFAULT_DIR, regenerate: bool = True,
     else:
         folder = Path(out) / "reconstruction"
     folder.mkdir(parents=True, exist_ok=True)
-    changed = thermal.write_measurements(reconstruct(seed), folder,
-                                         save=reproduction.save_table)
-    where = (folder.relative_to(paths.ROOT) if folder.is_relative_to(paths.ROOT)
-             else f"<output_dir>/{folder.name}" if out is not None and folder.parent == Path(out)
-             else folder)
-    what = (f"{where}: reconstruction regenerated with seed {seed}: "
+    changed = thermal.write_measurements(
+        reconstruct(seed), folder, save=_save,
+        before_overwrite=lambda files: _refuse_edited(folder, files, out))
+    what = (f"{_shown(folder, out)}: reconstruction regenerated with seed {seed}: "
             + (f"{len(changed)} file(s) rewritten ({', '.join(p.name for p in changed)})"
                if changed else "every file byte-identical, nothing rewritten"))
     return folder, changed, what

@@ -66,6 +66,7 @@ redundant location errors removed by a rank test (:func:`iso_catalogue`,
 from __future__ import annotations
 
 import re
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -143,6 +144,30 @@ _GRAMMAR = ("a topology is read from the workpiece to the tool: 'w', the workpie
             "(the one carrying the workpiece first), 'b' (the bed), the tool-side axes (from "
             "the bed out), an optional 's' (spindle) and 't'; axes are X, Y, Z (linear) and "
             "A, B, C (rotary, about x, y, z), each at most once; e.g. 'w C A b Y X Z t'")
+_TOKENS = frozenset((*LINEAR, *ROTARY, "w", "b", "s", "t"))
+#: Size caps of a topology string.  The longest valid topology has 10 tokens (``w``, the six
+#: axes, ``b``, ``s``, ``t``), 19 characters with single spaces, a few more with primes.  The
+#: caps leave a wide margin for irregular spacing and refuse at once, before any parsing, a
+#: string that cannot be a topology (a file's content or a repeated string pasted by mistake),
+#: so that the parse and its messages stay small.
+MAX_TOPOLOGY_CHARS = 200
+MAX_TOPOLOGY_TOKENS = 64
+
+
+def _excerpt(text: str, n: int = 60) -> str:
+    """``repr`` of ``text``, or of its first ``n`` characters followed by ``...`` and its
+    length: what an error message quotes of an input of any size."""
+    if len(text) <= n:
+        return repr(text)
+    return f"{text[:n]!r}... ({len(text)} characters)"
+
+
+def _listed(items, n: int = 10) -> str:
+    """``['A', 'B']`` of the first ``n`` items (each cut to 20 characters), then how many
+    more: a list of any length quoted in a message."""
+    shown = [s if len(s) <= 20 else s[:20] + "..." for s in map(str, items[:n])]
+    more = f" and {len(items) - n} more" if len(items) > n else ""
+    return f"{shown}{more}"
 
 
 def parse_topology(text: str) -> Topology:
@@ -155,7 +180,8 @@ def parse_topology(text: str) -> Topology:
         carrying the workpiece first), ``b`` (the bed), the tool-side axes (from the bed out),
         an optional ``s`` and ``t``; axes ``X Y Z`` (linear) and ``A B C`` (rotary about x, y,
         z), each at most once, separated by spaces (or written without spaces, ``wCAbYXZt``);
-        a trailing prime (``C'``) is allowed and ignored.
+        a trailing prime (``C'``) is allowed and ignored.  At most
+        :data:`MAX_TOPOLOGY_CHARS` characters and :data:`MAX_TOPOLOGY_TOKENS` tokens.
 
     Returns
     -------
@@ -164,9 +190,12 @@ def parse_topology(text: str) -> Topology:
 
     Raises
     ------
+    TypeError
+        When ``text`` is not a string.
     ValueError
-        For an unknown letter, a missing or repeated ``w``, ``b`` or ``t``, a repeated axis or
-        no axis, with the grammar in the message.
+        For a string longer than the caps, an unknown letter, a missing or repeated ``w``,
+        ``b`` or ``t``, a repeated axis or no axis, with the grammar in the message; a
+        message quotes at most the first 60 characters of ``text``.
 
     Examples
     --------
@@ -178,28 +207,38 @@ def parse_topology(text: str) -> Topology:
     """
     if not isinstance(text, str):
         raise TypeError(f"topology must be a string, got {type(text).__name__}; {_GRAMMAR}")
-    tokens = text.split() if re.search(r"\s", text.strip()) else list(text.strip())
+    shown = _excerpt(text)
+    if len(text) > MAX_TOPOLOGY_CHARS:
+        raise ValueError(f"topology {shown} is longer than {MAX_TOPOLOGY_CHARS} characters; a "
+                         f"machine has at most six axes; {_GRAMMAR}")
+    stripped = text.strip()
+    tokens = stripped.split() if re.search(r"\s", stripped) else list(stripped)
+    if len(tokens) > MAX_TOPOLOGY_TOKENS:
+        raise ValueError(f"topology {shown} has {len(tokens)} tokens, more than "
+                         f"{MAX_TOPOLOGY_TOKENS}; a machine has at most six axes; {_GRAMMAR}")
     tokens = [t.rstrip("'") for t in tokens]
     if not tokens:
         raise ValueError(f"empty topology; {_GRAMMAR}")
-    bad = [t for t in tokens if t not in (*LINEAR, *ROTARY, "w", "b", "s", "t")]
+    bad = list(dict.fromkeys(t for t in tokens if t not in _TOKENS))
     if bad:
-        raise ValueError(f"unknown axis letter(s) {bad} in topology {text!r}; {_GRAMMAR}")
-    if tokens[0] != "w" or tokens[-1] != "t" or tokens.count("w") != 1 or tokens.count("t") != 1:
-        raise ValueError(f"topology {text!r} must start with 'w' and end with 't'; {_GRAMMAR}")
-    if tokens.count("b") != 1:
-        raise ValueError(f"topology {text!r} must contain the bed 'b' exactly once; {_GRAMMAR}")
-    if "s" in tokens and (tokens.count("s") != 1 or tokens[-2] != "s"):
-        raise ValueError(f"topology {text!r}: 's' (spindle) may only come just before 't'")
+        raise ValueError(f"unknown axis letter(s) {_listed(bad)} in topology {shown}; "
+                         f"{_GRAMMAR}")
+    count = Counter(tokens)
+    if tokens[0] != "w" or tokens[-1] != "t" or count["w"] != 1 or count["t"] != 1:
+        raise ValueError(f"topology {shown} must start with 'w' and end with 't'; {_GRAMMAR}")
+    if count["b"] != 1:
+        raise ValueError(f"topology {shown} must contain the bed 'b' exactly once; {_GRAMMAR}")
+    if count["s"] and (count["s"] != 1 or tokens[-2] != "s"):
+        raise ValueError(f"topology {shown}: 's' (spindle) may only come just before 't'")
     body = [t for t in tokens[1:-1] if t != "s"]
     cut = body.index("b")
     work, tool = tuple(reversed(body[:cut])), tuple(body[cut + 1:])
     axes = work + tool
     if not axes:
-        raise ValueError(f"topology {text!r} has no axis; {_GRAMMAR}")
-    dup = sorted({a for a in axes if axes.count(a) > 1})
+        raise ValueError(f"topology {shown} has no axis; {_GRAMMAR}")
+    dup = sorted(a for a, k in Counter(axes).items() if k > 1)
     if dup:
-        raise ValueError(f"axis {dup} appears more than once in topology {text!r}")
+        raise ValueError(f"axis {dup} appears more than once in topology {shown}")
     return Topology(text, work, tool)
 
 
@@ -960,18 +999,40 @@ def redundant_location_errors(machine: ChainMachine, n_poses: int = 64, seed=0,
     Returns
     -------
     list of (str, str)
-        (symbol, reason) of every redundant location error.
+        (symbol, reason) of every redundant location error; a reason is never blank.
+
+    Raises
+    ------
+    ValueError
+        When a travel is not finite, or the tool position or the Jacobian at the sampled poses
+        is not (travels, pivots or tool offsets beyond the range of floating point).
+
+    Notes
+    -----
+    Each column is scaled by its largest entry before it is normalised: the squares of a
+    column with entries above about 1e154 (a travel of 1e300 mm) overflow, its norm is then
+    infinite and the unit column all zeros, which the least-squares fit explains with no term
+    at all.  Travels that large are not a machine (:func:`read_axis_table` refuses them), and
+    the rank test of columns mixing such entries with ordinary ones is not meaningful; the
+    scaling only keeps the arithmetic finite.
     """
     rng = np.random.default_rng(seed)
     pose = {}
     for a, name in machine._axis_pose.items():
         lo, hi = machine.travels.get(name, (-300.0, 300.0) if a in LINEAR else (-np.pi, np.pi))
+        if not np.isfinite(float(hi) - float(lo)):
+            raise ValueError(f"{machine.name}: the travel {(lo, hi)} of {name} is not finite "
+                             f"(or its width overflows); no poses can be drawn from it")
         pose[name] = rng.uniform(lo, hi, n_poses)
     for t in machine.tool_offsets:
         pose[t] = rng.uniform(50.0, 150.0, n_poses)
     jac = machine.linear_jacobian(pose)                      # (P, 6, n)
     zero = np.zeros((n_poses, machine.n_errors))
     rt, tt = machine.relative(zero, pose, with_errors=False)
+    if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(tt))):
+        raise ValueError(f"{machine.name}: the tool position or the first-order effects of the "
+                         f"errors are not finite at the sampled poses; check the travels, "
+                         f"pivots and tool offsets (travels {machine.travels})")
     axis_out = machine.orientation == "tool_axis"
 
     def as_error(dt, dr):
@@ -1003,10 +1064,9 @@ def redundant_location_errors(machine: ChainMachine, n_poses: int = 64, seed=0,
         labels.append(f"the tool offset along {'xyz'[c]}")
     basis, names_b = [], []
     for col, lab in zip(nuisance, labels, strict=True):
-        vec = col.reshape(-1)
-        nrm = np.linalg.norm(vec)
-        if nrm > 0:
-            basis.append(vec / nrm)
+        vec = _unit(col.reshape(-1))
+        if vec is not None:
+            basis.append(vec)
             names_b.append(lab)
     out = []
 
@@ -1020,18 +1080,37 @@ def redundant_location_errors(machine: ChainMachine, n_poses: int = 64, seed=0,
     for j, spec in enumerate(machine.catalogue):
         if spec.position_dependent:
             continue
-        vec = jac[:, :, j].reshape(-1)
-        norm = np.linalg.norm(vec)
-        if norm == 0.0:
+        vec = _unit(jac[:, :, j].reshape(-1))
+        if vec is None:
             out.append((spec.symbol, "no effect on the pose error"))
             continue
-        res, used = explain(vec / norm)
+        res, used = explain(vec)
         if res < rtol:
-            out.append((spec.symbol, "same effect as " + " + ".join(used)))
+            out.append((spec.symbol, _same_effect(used)))
             continue
-        basis.append(vec / norm)
+        basis.append(vec)
         names_b.append(spec.symbol)
     return out
+
+
+def _unit(vec):
+    """``vec`` scaled to unit length, or None when it is zero.  Scaled by its largest entry
+    first: the squares in the norm of a vector with entries above about 1e154 overflow (its
+    norm is then infinite and ``vec / norm`` all zeros)."""
+    big = np.max(np.abs(vec), initial=0.0)
+    if big == 0.0:
+        return None
+    vec = vec / big
+    return vec / np.linalg.norm(vec)
+
+
+def _same_effect(used) -> str:
+    """The reason given for a redundant error: the effects its column is a combination of,
+    or, when the fit names none, that in words (never a blank reason)."""
+    if not used:
+        return ("same effect as a combination of the other effects, none of which could be "
+                "named (check the travels, pivots and tool offsets for extreme values)")
+    return "same effect as " + " + ".join(used)
 
 
 def iso_machine(topology: str, *, name: str = "iso_machine", keep_redundant: bool = False,
@@ -1097,23 +1176,221 @@ def iso_machine(topology: str, *, name: str = "iso_machine", keep_redundant: boo
 
 AXIS_TABLE_COLUMNS = ("axis", "low", "high", "unit", "pivot_x_mm", "pivot_y_mm", "pivot_z_mm")
 RANGE_COLUMNS = ("symbol", "low", "high", "unit")
+#: Size caps of the input files, checked before (bytes) and while (rows) they are parsed.  An
+#: axis table has one row per axis (at most six); a range file one per error of the catalogue
+#: (51 for six axes with ISO 230-1/230-7: 36 error motions, 3 squareness errors, 12 location
+#: errors).  1000 data rows leave a margin of twenty times that (a range file may hold up to
+#: twice its machine's catalogue when that is larger); 2 MiB, 2000 rows of 1000 characters,
+#: leaves ample room for comments.  A larger file is not a machine's description (a wrong
+#: file, a log, a data dump) and is refused at once, naming the file and the limit.
+MAX_TABLE_BYTES = 2 * 1024 * 1024
+MAX_TABLE_ROWS = 1000
+#: Bounds of a travel and of a pivot in the axis table.  The longest axes of machine tools
+#: (gantry mills for ship hulls and aircraft spars) travel a few tens of metres, so no
+#: coordinate of a linear axis or a pivot exceeds 100 m (1e5 mm).  A rotary axis repeats every
+#: turn; ten turns either way (3600 deg) leave room for a multi-turn count.  Values far beyond
+#: these are not a machine: from about 1e154 mm the squares in the rank test of
+#: :func:`redundant_location_errors` overflow.
+MAX_LINEAR_MM = 1e5
+MAX_ROTARY_DEG = 3600.0
 
 
-def _read_csv(path, columns, what):
-    import pandas as pd
+@dataclass(frozen=True)
+class _Row:
+    """One data record of a CSV file: its first and last physical line (1-based, as an
+    editor numbers them; a quoted field may span lines) and its values by column."""
+
+    first: int
+    last: int
+    values: dict
+
+    @property
+    def where(self) -> str:
+        return f"line {self.first}" if self.first == self.last else \
+            f"lines {self.first}-{self.last}"
+
+
+@dataclass(frozen=True)
+class _Table:
+    """A checked CSV file: its header line, its data records and where they stand."""
+
+    header_line: int
+    rows: list
+
+    def span(self) -> str:
+        """Where the header and the rows stand, for a message about a missing entry."""
+        if not self.rows:
+            return f"header on line {self.header_line}, no data rows"
+        return (f"header on line {self.header_line}, rows on lines {self.rows[0].first}-"
+                f"{self.rows[-1].last}")
+
+
+# One CSV field, quoted ("..." with "" for a quote, then anything up to the delimiter: the csv
+# module's reading) or not, after the spaces ``skipinitialspace`` skips; the quantifiers are
+# possessive and every alternative starts on a different character, so a line is scanned once.
+_QUOTED = r'"(?:[^"]|"")*+"'
+_FIELD = rf'[ ]*+(?:{_QUOTED}[^,#]*+|(?!")[^,#]*+)'
+_OPEN = r'[ ]*+"(?:[^"]|"")*+\Z'                  # a quoted field the line does not close
+_LINE = re.compile(rf'(?:{_FIELD},)*+(?:(?P<open>{_OPEN})|{_FIELD})')
+_IN_QUOTES = re.compile(r'(?:[^"]|"")*+(?P<close>"[^,#]*+)?')
+
+
+def _strip_comment(line: str, quoted: bool) -> tuple[str, bool]:
+    """``line`` without its comment (``#`` outside a quoted field to the end of the line) and
+    whether a quoted field is still open at its end (``quoted``: open at its start), by the
+    quoting rules of the csv module (a field is quoted when ``"`` opens it, after the
+    delimiter and spaces; ``""`` inside it is a quote).  Linear in the line's length, at the
+    speed of the regular-expression engine."""
+    pos = 0
+    if quoted:
+        m = _IN_QUOTES.match(line)
+        if m.group("close") is None:
+            return line, True
+        pos = m.end()
+        if pos == len(line):
+            return line, False
+        if line[pos] == "#":
+            return line[:pos] + "\n", False
+        pos += 1                                     # the delimiter
+    elif '"' not in line:
+        cut = line.find("#")
+        return (line if cut < 0 else line[:cut] + "\n"), False
+    m = _LINE.match(line, pos)
+    if m.group("open") is not None:
+        return line, True
+    return (line if m.end() == len(line) else line[:m.end()] + "\n"), False
+
+
+def _read_csv(path, columns, what, max_rows=None) -> _Table:
+    """Read a small CSV file with the physical line of every record, checked.
+
+    ``#`` starts a comment (outside quotes) and lines left blank are skipped, like
+    ``pandas.read_csv(comment="#", skip_blank_lines=True, skipinitialspace=True)``; records
+    whose fields are all empty are skipped too.  Values are stripped strings; a short record
+    is padded with empty strings.  The file must be UTF-8 (a byte-order mark is allowed).
+    Refused before parsing: more than :data:`MAX_TABLE_BYTES` bytes or ``10 * max_rows``
+    lines; while parsing: more than ``max_rows`` data rows (default
+    :data:`MAX_TABLE_ROWS`)."""
+    import csv
+    import io
+    import os
 
     path = str(path)
+    max_rows = MAX_TABLE_ROWS if max_rows is None else max_rows
     try:
-        table = pd.read_csv(path, dtype={columns[0]: str}, comment="#", skipinitialspace=True)
+        size = os.path.getsize(path)
     except FileNotFoundError:
         raise FileNotFoundError(f"{what} {path!r} not found") from None
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{what} {path!r} is not a readable CSV: {exc}") from None
-    missing = [c for c in columns if c not in table.columns]
-    if missing:
-        raise ValueError(f"{what} {path!r} lacks column(s) {missing}; it needs "
-                         f"{', '.join(columns)}")
-    return table
+    if size > MAX_TABLE_BYTES:
+        raise ValueError(f"{what} {path!r} is {size} bytes, more than the {MAX_TABLE_BYTES} "
+                         f"bytes allowed; it should hold a few dozen rows (is it the right "
+                         f"file?)")
+    with open(path, "rb") as handle:
+        raw = handle.read(MAX_TABLE_BYTES + 1)
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        raise ValueError(f"{what} {path!r}, line {line}: not UTF-8 text ({exc.reason})") from None
+    text = text.replace("\r\n", "\n").replace("\r", "\n")   # as an editor counts lines
+    n_lines = text.count("\n") + (not text.endswith("\n"))
+    if n_lines > 10 * max_rows:
+        raise ValueError(f"{what} {path!r} has {n_lines} lines, more than the {10 * max_rows} "
+                         f"allowed ({max_rows} data rows, with comments); it should hold a few "
+                         f"dozen rows (is it the right file?)")
+    fed = []                        # the physical line of every line handed to the csv reader
+    opened = [0]                    # where the quoted field open at the end of a line opened
+
+    def lines():
+        quoted = False
+        for number, line in enumerate(io.StringIO(text, newline="\n"), 1):
+            was = quoted
+            kept, quoted = _strip_comment(line, quoted)
+            if quoted and not was:
+                opened[0] = number
+            if not was and not kept.strip():
+                continue
+            fed.append(number)
+            yield kept
+        if quoted:
+            raise ValueError(f"{what} {path!r}, line {opened[0]}: a quoted field opens here "
+                             f"and is never closed")
+
+    header, index, rows = None, {}, []
+    reader = csv.reader(lines(), skipinitialspace=True)
+    while True:
+        k = len(fed)
+        try:
+            fields = next(reader)
+        except StopIteration:
+            break
+        except csv.Error as exc:
+            raise ValueError(f"{what} {path!r}, line {fed[-1] if fed else 1}: not a readable "
+                             f"CSV: {exc}") from None
+        first, last = fed[k], fed[-1]
+        if header is None:
+            header = [h.strip() for h in fields]
+            header_line = first
+            where = f"{what} {path!r}, line {first} (the header)"
+            twice = sorted(c for c in columns if header.count(c) > 1)
+            if twice:
+                raise ValueError(f"{where}: column(s) {twice} given more than once")
+            missing = [c for c in columns if c not in header]
+            if missing:
+                raise ValueError(f"{where}: lacks column(s) {missing}; it needs "
+                                 f"{', '.join(columns)}")
+            index = {c: header.index(c) for c in columns}
+            continue
+        if not "".join(fields).strip():
+            continue
+        if len(rows) == max_rows:
+            raise ValueError(f"{what} {path!r}, line {first}: more than {max_rows} data rows; "
+                             f"it should hold one row per "
+                             f"{'axis' if what == 'axis table' else 'error'} (is it the right "
+                             f"file?)")
+        row = _Row(first, last, {c: fields[i].strip() if i < len(fields) else ""
+                                 for c, i in index.items()})
+        if len(fields) > len(header) and any(f.strip() for f in fields[len(header):]):
+            raise ValueError(f"{what} {path!r}, {row.where}: {len(fields)} fields, but the "
+                             f"header (line {header_line}) names {len(header)} columns")
+        rows.append(row)
+    if header is None:
+        raise ValueError(f"{what} {path!r} has no header line (it is empty or all comments); "
+                         f"it needs the columns {', '.join(columns)}")
+    return _Table(header_line, rows)
+
+
+def _at(groups, n: int = 5) -> str:
+    """Where entries stand, from ``(name, [lines])`` pairs: ``line 7 (A)``, ``lines 3 and 8
+    (X)``, ... at most ``n`` names and ``n`` lines each, then how many more."""
+    parts = []
+    for name, lines in groups[:n]:
+        name = "empty" if not name else name if len(name) <= 20 else name[:20] + "..."
+        if len(lines) == 1:
+            parts.append(f"line {lines[0]} ({name})")
+        elif len(lines) == 2:
+            parts.append(f"lines {lines[0]} and {lines[1]} ({name})")
+        else:
+            more = f", ... ({len(lines)} lines)" if len(lines) > n else ""
+            parts.append(f"lines {', '.join(map(str, lines[:n]))}{more} ({name})")
+    if len(groups) > n:
+        parts.append(f"... ({len(groups) - n} more)")
+    return ", ".join(parts)
+
+
+def _check_entries(table: _Table, column: str, wanted):
+    """How the entries of ``column`` fail to name each of ``wanted`` exactly once: the
+    unknown entries (in file order) and the repeated ones (sorted), each as ``(name, [lines
+    where it stands])``, and the missing names (in ``wanted``'s order).  Linear in the rows
+    (one dictionary of lines per name; no ``list.count`` per row)."""
+    lines: dict[str, list[int]] = {}
+    for row in table.rows:
+        lines.setdefault(row.values[column], []).append(row.first)
+    allowed = set(wanted)
+    unknown = [(s, ls) for s, ls in lines.items() if s not in allowed]
+    dup = sorted((s, ls) for s, ls in lines.items() if len(ls) > 1 and s in allowed)
+    missing = [s for s in wanted if s not in lines]
+    return unknown, dup, missing
 
 
 def read_axis_table(path, topology: str) -> tuple[dict, dict]:
@@ -1123,10 +1400,12 @@ def read_axis_table(path, topology: str) -> tuple[dict, dict]:
     ----------
     path : str or Path
         A CSV with the columns ``axis, low, high, unit, pivot_x_mm, pivot_y_mm, pivot_z_mm``
-        (:data:`AXIS_TABLE_COLUMNS`): one row per axis of the topology; the travel in ``mm``
-        (linear) or ``deg`` (rotary); for a rotary axis a point its axis line passes through,
-        mm, in the frame of the body it rides on (empty: the origin; must be empty for a
-        linear axis).
+        (:data:`AXIS_TABLE_COLUMNS`; others are ignored, ``#`` starts a comment, blank lines
+        are skipped): one row per axis of the topology; the travel in ``mm`` (linear, within
+        +-:data:`MAX_LINEAR_MM`) or ``deg`` (rotary, within +-:data:`MAX_ROTARY_DEG`); for a
+        rotary axis a point its axis line passes through, mm, in the frame of the body it
+        rides on (empty: the origin; must be empty for a linear axis).  At most
+        :data:`MAX_TABLE_BYTES` bytes and :data:`MAX_TABLE_ROWS` rows.
     topology : str
         The machine's topology (:func:`parse_topology`).
 
@@ -1140,46 +1419,58 @@ def read_axis_table(path, topology: str) -> tuple[dict, dict]:
     Raises
     ------
     ValueError
-        Naming the file and the row, for a missing or extra axis, a repeated axis, a wrong
-        unit, a travel that is not finite with low < high, a pivot on a linear axis, half a
-        pivot, a missing column.
+        Naming the file and the line (1-based, as an editor numbers them) of the offending
+        row, for a missing or extra axis, a repeated axis (both lines), a wrong unit, a travel
+        that is not finite with low < high or beyond the bounds, a pivot on a linear axis,
+        half a pivot, a pivot beyond the bound, a missing column (the header's line), a file
+        too large or with too many rows, a malformed CSV.
+    FileNotFoundError
+        When the file does not exist.
     """
     topo = parse_topology(topology)
     table = _read_csv(path, AXIS_TABLE_COLUMNS, "axis table")
     where = f"axis table {str(path)!r}"
-    letters = [str(a).strip() for a in table["axis"]]
-    unknown = [a for a in letters if a not in topo.axes]
+    unknown, dup, missing = _check_entries(table, "axis", topo.axes)
     if unknown:
-        raise ValueError(f"{where}: axis/axes {unknown} not in the topology {topology!r} "
-                         f"(its axes: {', '.join(topo.axes)})")
-    dup = sorted({a for a in letters if letters.count(a) > 1})
+        raise ValueError(f"{where}, {_at(unknown)}: axis/axes {_listed([s for s, _ in unknown])}"
+                         f" not in the topology {topology!r} (its axes: "
+                         f"{', '.join(topo.axes)})")
     if dup:
-        raise ValueError(f"{where}: axis/axes {dup} given more than once")
-    missing = [a for a in topo.axes if a not in letters]
+        raise ValueError(f"{where}, {_at(dup)}: axis/axes {_listed([s for s, _ in dup])} given "
+                         f"more than once")
     if missing:
-        raise ValueError(f"{where}: no row for axis/axes {missing} of the topology {topology!r}")
+        raise ValueError(f"{where} ({table.span()}): no row for axis/axes {missing} of the "
+                         f"topology {topology!r}")
     travels, pivots = {}, {}
-    for i, (a, row) in enumerate(zip(letters, table.itertuples(index=False), strict=True)):
-        line = f"{where}, row {i + 2} ({a})"
-        unit = str(row.unit).strip()
+    for row in table.rows:
+        v = row.values
+        a = v["axis"]
+        line = f"{where}, {row.where} ({a})"
+        unit = v["unit"]
         want = "mm" if a in LINEAR else "deg"
         if unit != want:
             kind = "linear" if a in LINEAR else "rotary"
-            raise ValueError(f"{line}: unit must be {want!r} for a {kind} axis, got {unit!r}")
+            raise ValueError(f"{line}: unit must be {want!r} for a {kind} axis, got "
+                             f"{_excerpt(unit, 20)}")
         try:
-            lo, hi = float(row.low), float(row.high)
-        except (TypeError, ValueError):
-            raise ValueError(f"{line}: low and high must be numbers, got {row.low!r}, "
-                             f"{row.high!r}") from None
+            lo, hi = float(v["low"]), float(v["high"])
+        except ValueError:
+            raise ValueError(f"{line}: low and high must be numbers, got "
+                             f"{_excerpt(v['low'], 20)}, {_excerpt(v['high'], 20)}") from None
         if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
             raise ValueError(f"{line}: the travel must be finite with high > low, got "
                              f"({lo}, {hi})")
+        bound = MAX_LINEAR_MM if a in LINEAR else MAX_ROTARY_DEG
+        if max(-lo, hi) > bound:
+            why = ("no machine axis travels more than 100 m" if a in LINEAR
+                   else "a rotary axis repeats every turn; ten turns either way at most")
+            raise ValueError(f"{line}: the travel ({lo:g}, {hi:g}) {unit} goes beyond "
+                             f"+-{bound:g} {unit} ({why})")
         scale = 1.0 if a in LINEAR else np.pi / 180.0
         name = a.lower() if a in LINEAR else a
         travels[name] = (lo * scale, hi * scale)
-        piv = [row.pivot_x_mm, row.pivot_y_mm, row.pivot_z_mm]
-        given = [not (isinstance(v, float) and np.isnan(v)) and str(v).strip() != ""
-                 for v in piv]
+        piv = [v["pivot_x_mm"], v["pivot_y_mm"], v["pivot_z_mm"]]
+        given = [p != "" for p in piv]
         if a in LINEAR:
             if any(given):
                 raise ValueError(f"{line}: a linear axis has no pivot; leave pivot_*_mm empty")
@@ -1188,11 +1479,15 @@ def read_axis_table(path, topology: str) -> tuple[dict, dict]:
             raise ValueError(f"{line}: give all three pivot_*_mm or none")
         if all(given):
             try:
-                point = np.array([float(v) for v in piv])
-            except (TypeError, ValueError):
-                raise ValueError(f"{line}: pivot_*_mm must be numbers, got {piv}") from None
+                point = np.array([float(p) for p in piv])
+            except ValueError:
+                raise ValueError(f"{line}: pivot_*_mm must be numbers, got "
+                                 f"{[_excerpt(p, 20) for p in piv]}") from None
             if not np.all(np.isfinite(point)):
                 raise ValueError(f"{line}: pivot_*_mm must be finite, got {piv}")
+            if np.abs(point).max() > MAX_LINEAR_MM:
+                raise ValueError(f"{line}: the pivot {point.tolist()} mm lies beyond "
+                                 f"+-{MAX_LINEAR_MM:g} mm (no machine is larger than 100 m)")
             pivots[a] = point
     return travels, pivots
 
@@ -1204,8 +1499,10 @@ def read_ranges(path, machine: ChainMachine) -> np.ndarray:
     ----------
     path : str or Path
         A CSV with the columns ``symbol, low, high, unit`` (:data:`RANGE_COLUMNS`; others are
-        ignored, ``#`` starts a comment): one row per error of the catalogue; units ``um``,
-        ``mm`` for translations and ``urad``, ``rad``, ``arcsec``, ``um/m`` for angles.
+        ignored, ``#`` starts a comment, blank lines are skipped): one row per error of the
+        catalogue; units ``um``, ``mm`` for translations and ``urad``, ``rad``, ``arcsec``,
+        ``um/m`` for angles.  At most :data:`MAX_TABLE_BYTES` bytes and
+        :data:`MAX_TABLE_ROWS` rows (or twice the catalogue, when that is more).
     machine : ChainMachine
         Whose catalogue the rows must match.
 
@@ -1217,47 +1514,56 @@ def read_ranges(path, machine: ChainMachine) -> np.ndarray:
     Raises
     ------
     ValueError
-        Naming the file and the row, for: an error the catalogue lacks (with why, when it is a
-        redundant location error the catalogue removed), a missing or repeated error, an
-        unknown unit or one of the wrong kind, a range that is not finite with low < high.
+        Naming the file and the line (1-based, as an editor numbers them) of the offending
+        row, for: an error the catalogue lacks (with why, when it is a redundant location
+        error the catalogue removed), a repeated error (both lines), an unknown unit or one of
+        the wrong kind, a range that is not finite with low < high; and for a missing error, a
+        missing column (the header's line), a file too large or with too many rows, a
+        malformed CSV.
     FileNotFoundError
         When the file does not exist.
     """
-    table = _read_csv(path, RANGE_COLUMNS, "range file")
-    where = f"range file {str(path)!r}"
     names = machine.error_names
-    syms = [str(s).strip() for s in table["symbol"]]
+    table = _read_csv(path, RANGE_COLUMNS, "range file",
+                      max_rows=max(MAX_TABLE_ROWS, 2 * len(names)))
+    where = f"range file {str(path)!r}"
+    column = {s: j for j, s in enumerate(names)}
     removed = dict(getattr(machine, "removed", []))
-    unknown = [s for s in syms if s not in names]
+    unknown, dup, missing = _check_entries(table, "symbol", names)
     if unknown:
-        why = [f"{s} (removed: {removed[s]})" for s in unknown if s in removed]
-        raise ValueError(f"{where}: error(s) {unknown} not in the catalogue of {machine.name}"
+        shown = [s for s, _ in unknown]
+        why = [f"{s} (removed: {removed[s]})" for s in shown[:10] if s in removed]
+        raise ValueError(f"{where}, {_at(unknown)}: error(s) {_listed(shown)} not in the "
+                         f"catalogue of {machine.name}"
                          + (f"; {'; '.join(why)}" if why else "")
                          + f"; its errors: {', '.join(names)}")
-    dup = sorted({s for s in syms if syms.count(s) > 1})
     if dup:
-        raise ValueError(f"{where}: error(s) {dup} given more than once")
-    missing = [s for s in names if s not in syms]
+        raise ValueError(f"{where}, {_at(dup)}: error(s) {_listed([s for s, _ in dup])} given "
+                         f"more than once")
     if missing:
-        raise ValueError(f"{where}: no range for error(s) {missing}")
+        raise ValueError(f"{where} ({table.span()}): no range for error(s) {missing}")
     bounds = np.empty((2, len(names)))
-    for i, (s, row) in enumerate(zip(syms, table.itertuples(index=False), strict=True)):
-        line = f"{where}, row {i + 2} ({s})"
-        unit = str(row.unit).strip()
+    for row in table.rows:
+        v = row.values
+        s = v["symbol"]
+        line = f"{where}, {row.where} ({s})"
+        unit = v["unit"]
         if unit not in _errors.UNIT_SCALE:
-            raise ValueError(f"{line}: unknown unit {unit!r}; allowed: "
+            raise ValueError(f"{line}: unknown unit {_excerpt(unit, 20)}; allowed: "
                              f"{', '.join(_errors.UNIT_SCALE)}")
-        spec = machine.catalogue[names.index(s)]
+        spec = machine.catalogue[column[s]]
         if spec.translational != (unit in ("um", "mm")):
             what = "a translation" if spec.translational else "an angle"
             raise ValueError(f"{line}: {s} is {what}, unit {unit!r} is not")
         try:
-            lo, hi = float(row.low), float(row.high)
-        except (TypeError, ValueError):
-            raise ValueError(f"{line}: low and high must be numbers") from None
+            lo, hi = float(v["low"]), float(v["high"])
+        except ValueError:
+            raise ValueError(f"{line}: low and high must be numbers, got "
+                             f"{_excerpt(v['low'], 20)}, {_excerpt(v['high'], 20)}") from None
         if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
             raise ValueError(f"{line}: the range must be finite with high > low, got ({lo}, {hi})")
-        bounds[:, names.index(s)] = lo * _errors.UNIT_SCALE[unit], hi * _errors.UNIT_SCALE[unit]
+        scale = _errors.UNIT_SCALE[unit]
+        bounds[:, column[s]] = lo * scale, hi * scale
     return bounds
 
 

@@ -160,7 +160,111 @@ def _problem(path, message) -> DataFormatError:
     return DataFormatError(f"{path}: {message}")
 
 
+# Line numbers.  pandas numbers the rows it keeps, not the file's lines: it skips blank lines
+# (empty or only spaces and tabs) and a quoted field may hold line breaks.  Every message about a
+# bad row names the line an editor shows, found by :func:`_records`, which splits the file into
+# records by the rules of pandas' tokenizer (the defaults plus ``skipinitialspace``).  It runs
+# only when a message is written, so reading a good file costs nothing extra.
+
+_FIELD, _UNQUOTED, _QUOTED, _QUOTE_IN_QUOTED = range(4)
+
+
+def _records(path: Path):
+    r"""Yield ``(first line, number of fields, closed)`` for every record pandas reads from
+    ``path``, the header first; line numbers are 1-based, counting every line of the file.
+
+    The states are those of pandas' tokenizer (``delimiter=','``, ``quotechar='"'``,
+    ``doublequote``, ``skipinitialspace``, ``skip_blank_lines``): a line that is empty or holds
+    only spaces and tabs between records is skipped; a field opens a quote only at its start
+    (after spaces), ``""`` inside quotes is a quote, a quote elsewhere is a character; a line
+    break ends the record unless it is inside quotes.  Lines end with ``\n``, ``\r\n`` or
+    ``\r``.  ``closed`` is False for a record still inside quotes at the end of the file.
+    """
+    with open(path, encoding="utf-8-sig", errors="replace", newline="") as f:
+        start, state, fields = 0, None, 0
+        for number, line in enumerate(f, start=1):
+            if state is None:                        # between records
+                if not line.strip(" \t\r\n"):
+                    continue                         # a blank line: pandas skips it
+                start, state, fields = number, _FIELD, 1
+                if '"' not in line:                  # no quote: one line, one record
+                    yield start, line.count(",") + 1, True
+                    state = None
+                    continue
+            for c in line.rstrip("\r\n"):
+                if state == _QUOTED:
+                    state = _QUOTE_IN_QUOTED if c == '"' else _QUOTED
+                elif c == ",":
+                    state, fields = _FIELD, fields + 1
+                elif state == _FIELD:
+                    state = (_FIELD if c == " " else _QUOTED if c == '"' else _UNQUOTED)
+                elif state == _QUOTE_IN_QUOTED:
+                    state = _QUOTED if c == '"' else _UNQUOTED
+            if state != _QUOTED:                     # the line break ends the record
+                yield start, fields, True
+                state = None
+        if state is not None:
+            yield start, fields, False
+
+
+def _line_numbers(path: Path, rows) -> list[int]:
+    """The file's line numbers (1-based, as an editor shows them) of data rows ``rows``
+    (positions in the table pandas read, header excluded), in the order given."""
+    wanted = {int(r) for r in rows}
+    found: dict[int, int] = {}
+    records = _records(path)
+    next(records, None)                              # the header
+    for row, (line, _, _) in enumerate(records):
+        if row in wanted:
+            found[row] = line
+            if len(found) == len(wanted):
+                break
+    return [found.get(int(r), -1) for r in rows]
+
+
+def _lines(path: Path, mask) -> str:
+    """The file's line numbers of the data rows where ``mask`` holds, at most ten shown."""
+    rows = np.flatnonzero(np.asarray(mask))
+    return f"{_line_numbers(path, rows[:10])}{' ...' if len(rows) > 10 else ''}"
+
+
+def _unreadable(path: Path, exc: Exception) -> DataFormatError:
+    """The message for a file pandas cannot tokenise or decode, naming the line at fault (the
+    line pandas names counts records, not lines)."""
+    if isinstance(exc, UnicodeDecodeError):
+        data = path.read_bytes()
+        try:
+            data.decode("utf-8")
+        except UnicodeDecodeError as e:
+            head = data[:e.start]
+            line = head.count(b"\n") + head.count(b"\r") - head.count(b"\r\n") + 1
+            return _problem(path, f"not UTF-8 text: byte 0x{data[e.start]:02x} on line {line}; "
+                                  f"save the file as UTF-8")
+    if isinstance(exc, pd.errors.ParserError):
+        problem = _ragged(path)
+        if problem is not None:
+            return problem
+    return _problem(path, f"not a readable CSV file ({exc})")
+
+
+def _ragged(path: Path) -> DataFormatError | None:
+    """The first row with more fields than the header, or a quote never closed (None if
+    neither)."""
+    records = _records(path)
+    header = next(records, None)
+    for line, fields, closed in records:
+        if not closed:
+            return _problem(path, f"a quoted field of the row starting on line {line} is never "
+                                  f"closed (a '\"' is missing)")
+        if header is not None and fields > header[1]:
+            return _problem(path, f"line {line} has {fields} fields, the header (line "
+                                  f"{header[0]}) has {header[1]}")
+    return None
+
+
 def _read_csv(path: Path, on_read=None) -> pd.DataFrame:
+    """Read one file of the schema as text; its data rows are numbered by position (the file's
+    line numbers of any of them: :func:`_line_numbers`)."""
     if not path.exists():
         raise _problem(path, "file not found (the schema needs temperatures.csv and errors.csv; "
                              "see data/thermal/README.md)")
@@ -173,7 +277,11 @@ def _read_csv(path: Path, on_read=None) -> pd.DataFrame:
         if on_read is not None:
             on_read(path)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise _problem(path, f"not a readable CSV file ({exc})") from None
+        raise _unreadable(path, exc) from None
+    if not isinstance(df.index, pd.RangeIndex):
+        # pandas takes a first data row with more fields than the header as the sign of an
+        # index column and shifts every column; the schema has none
+        raise _ragged(path) or _problem(path, "has more fields in its rows than in its header")
     df.columns = [c.strip() for c in df.columns]
     if df.empty:
         raise _problem(path, "has a header but no data rows")
@@ -200,25 +308,18 @@ def _require(path, df, columns) -> None:
 def _numeric(path, df, column, integer=False) -> np.ndarray:
     text = df[column].str.strip()
     values = pd.to_numeric(text, errors="coerce")
-    bad = values.isna() | ~np.isfinite(values.fillna(0.0))
+    bad = (values.isna() | ~np.isfinite(values.fillna(0.0))).to_numpy()
     if bad.any():
-        rows = (np.flatnonzero(bad.to_numpy()) + 2).tolist()  # file line numbers (header = 1)
         shown = ", ".join(repr(t) for t in text[bad].head(3))
         raise _problem(path, f"column {column!r} has a missing, NaN or non-numeric value "
-                             f"({shown}) on line(s) {rows[:10]}{' ...' if len(rows) > 10 else ''}")
+                             f"({shown}) on line(s) {_lines(path, bad)}")
     out = values.to_numpy(dtype=float)
     if integer:
         if not np.all(out == np.round(out)):
-            rows = (np.flatnonzero(out != np.round(out)) + 2).tolist()
-            raise _problem(path, f"column {column!r} must hold whole numbers (line(s) {rows[:10]})")
+            raise _problem(path, f"column {column!r} must hold whole numbers (line(s) "
+                                 f"{_lines(path, out != np.round(out))})")
         return out.astype(int)
     return out
-
-
-def _lines(mask) -> str:
-    """File line numbers (header = line 1) of the rows where ``mask`` holds, at most ten."""
-    rows = (np.flatnonzero(np.asarray(mask)) + 2).tolist()
-    return f"{rows[:10]}{' ...' if len(rows) > 10 else ''}"
 
 
 def _check_range(path, column, values, lo, hi, unit, hint) -> None:
@@ -227,7 +328,7 @@ def _check_range(path, column, values, lo, hi, unit, hint) -> None:
     if bad.any():
         shown = ", ".join(f"{v:g}" for v in values[bad][:3])
         raise _problem(path, f"column {column!r} has value(s) {shown} {unit} on line(s) "
-                             f"{_lines(bad)}, outside the plausible range {lo:g} .. {hi:g} "
+                             f"{_lines(path, bad)}, outside the plausible range {lo:g} .. {hi:g} "
                              f"{unit}; {hint}")
 
 
@@ -282,7 +383,8 @@ def read_measurements(folder, on_read=None) -> ThermalData:
     Raises
     ------
     DataFormatError
-        Naming the file and the problem.
+        Naming the file and the problem; a problem of some rows names their lines as an
+        editor shows them (1-based, blank lines and line breaks inside quoted fields counted).
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -316,12 +418,13 @@ def read_measurements(folder, on_read=None) -> ThermalData:
                      "the range of a machine shop's air, structure, drives and motors; "
                      "kelvin? (degC = K - 273.15)")
     keys = pd.DataFrame({"experiment": t_exp, "measurement": t_meas, "time_min": t_time,
-                         "line": np.arange(len(t)) + 2})
-    dup = keys.duplicated(["experiment", "measurement"])
+                         "row": np.arange(len(t))})
+    dup = keys.duplicated(["experiment", "measurement"], keep=False)
     if dup.any():
         r = keys[dup].iloc[0]
+        twice = dup & (keys.experiment == r.experiment) & (keys.measurement == r.measurement)
         raise _problem(tp, f"experiment {int(r.experiment)} measurement {int(r.measurement)} "
-                           f"appears more than once (line {int(r.line)})")
+                           f"appears more than once (lines {_lines(tp, twice)})")
     # measurement numbers give the order; the times must agree with it
     order = keys.sort_values(["experiment", "measurement"], kind="stable").index
     keys = keys.loc[order].reset_index(drop=True)
@@ -333,14 +436,15 @@ def read_measurements(folder, on_read=None) -> ThermalData:
         back = np.flatnonzero(np.diff(tm) <= 0)
         if back.size:
             a, b = g.iloc[back[0]], g.iloc[back[0] + 1]
+            line_a, line_b = _line_numbers(tp, [a.row, b.row])
             raise _problem(tp, f"experiment {e}: time_min must increase with the measurement "
                                f"number, but measurement {int(b.measurement)} (line "
-                               f"{int(b.line)}, {b.time_min:g} min) does not come after "
-                               f"measurement {int(a.measurement)} (line {int(a.line)}, "
+                               f"{line_b}, {b.time_min:g} min) does not come after "
+                               f"measurement {int(a.measurement)} (line {line_a}, "
                                f"{a.time_min:g} min); times in measurement order: "
                                f"{' -> '.join(f'{v:g}' for v in tm[:12])}"
                                f"{' ...' if len(tm) > 12 else ''}")
-    keys = keys.drop(columns="line")
+    keys = keys.drop(columns="row")
 
     er = _read_csv(ep, on_read)
     _check_units(ep, er.columns, "position", "position_mm")
@@ -360,12 +464,14 @@ def read_measurements(folder, on_read=None) -> ThermalData:
                 "between target positions; m? (mm = m x 1000)")
     long = pd.DataFrame({"experiment": e_exp, "measurement": e_meas, "position_mm": e_pos,
                          "error_um": e_val})
-    dup = long.duplicated(["experiment", "measurement", "position_mm"])
+    dup = long.duplicated(["experiment", "measurement", "position_mm"], keep=False)
     if dup.any():
         r = long[dup].iloc[0]
+        twice = dup & (long.experiment == r.experiment) & (long.measurement == r.measurement) \
+            & (long.position_mm == r.position_mm)
         raise _problem(ep, f"experiment {int(r.experiment)} measurement {int(r.measurement)} "
                            f"lists position {r.position_mm:g} mm twice "
-                           f"(line {int(np.flatnonzero(dup)[0]) + 2})")
+                           f"(lines {_lines(ep, twice)})")
     sizes = long.groupby(["experiment", "measurement"]).size()
     positions = np.sort(long.position_mm.unique())
     if len(positions) < 2:
@@ -406,7 +512,7 @@ def read_measurements(folder, on_read=None) -> ThermalData:
         if dup.any():
             twice = sorted(set(x_exp[dup].tolist()))
             raise _problem(xp, f"experiment(s) {twice} listed more than once (lines "
-                               f"{_lines(dup)}); each experiment needs one row")
+                               f"{_lines(xp, dup)}); each experiment needs one row")
         feeds = dict(zip(x_exp.tolist(), x_feed.tolist(), strict=True))
     return ThermalData(keys, temps, errors, positions, feeds, source=str(folder))
 
@@ -437,6 +543,11 @@ def _check_zeroing(path, experiments: np.ndarray, errors: np.ndarray, positions)
                                  f"resolution)")
 
 
+def _csv_bytes(df: pd.DataFrame, float_format: str) -> bytes:
+    """The bytes :func:`save_csv` writes for ``df``."""
+    return df.to_csv(index=False, float_format=float_format, lineterminator="\n").encode("utf-8")
+
+
 def save_csv(df: pd.DataFrame, path, float_format: str = "%.6g") -> None:
     """Write a table as CSV with fixed bytes; rewrite the file only when its bytes change.
 
@@ -452,7 +563,7 @@ def save_csv(df: pd.DataFrame, path, float_format: str = "%.6g") -> None:
         printf-style format of floats.
     """
     path = Path(path)
-    data = df.to_csv(index=False, float_format=float_format, lineterminator="\n").encode("utf-8")
+    data = _csv_bytes(df, float_format)
     if not path.exists() or path.read_bytes() != data:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
@@ -461,8 +572,10 @@ def save_csv(df: pd.DataFrame, path, float_format: str = "%.6g") -> None:
 
 
 def write_measurements(data: ThermalData, folder, temperature_decimals: int = 2,
-                       error_decimals: int = 3, save=None) -> list[Path]:
+                       error_decimals: int = 3, save=None, before_overwrite=None) -> list[Path]:
     """Write ``data`` in the schema of :func:`read_measurements`.
+
+    Every table is formatted first; a file whose bytes would not change is not touched.
 
     Parameters
     ----------
@@ -474,9 +587,15 @@ def write_measurements(data: ThermalData, folder, temperature_decimals: int = 2,
     temperature_decimals, error_decimals : int
         Decimals written for temperatures (degC) and errors (um).
     save : callable, optional
-        ``save(df, path, float_format=...)`` writes one table; default :func:`save_csv`
-        (deterministic bytes, a file rewritten only when its bytes change).  The compendium
-        passes its ``reproduction.save_table``, which also records provenance.
+        ``save(df, path, float_format=...)`` writes one table, with the bytes of
+        :func:`save_csv` (the default: deterministic bytes, a file rewritten only when its
+        bytes change).  The compendium passes its ``reproduction.save_table``, which also
+        records provenance.
+    before_overwrite : callable, optional
+        Called once as ``before_overwrite(paths)`` with the list of existing files whose bytes
+        would change, before any file is written, when there are some; an exception raised
+        there leaves every file as it was.  The compendium refuses to overwrite a file a user
+        edited.
 
     Returns
     -------
@@ -504,12 +623,17 @@ def write_measurements(data: ThermalData, folder, temperature_decimals: int = 2,
         feeds = pd.DataFrame({"experiment": list(data.feeds),
                               "feed_mm_per_min": list(data.feeds.values())})
         tables.append((EXPERIMENTS_FILE, feeds, "%.0f"))
+    before = {name: (folder / name).read_bytes() if (folder / name).exists() else None
+              for name, _, _ in tables}
+    overwritten = [folder / name for name, df, fmt in tables
+                   if before[name] is not None and before[name] != _csv_bytes(df, fmt)]
+    if overwritten and before_overwrite is not None:
+        before_overwrite(overwritten)
     changed = []
     for name, df, fmt in tables:
         p = folder / name
-        before = p.read_bytes() if p.exists() else None
         (save or save_csv)(df, p, float_format=fmt)
-        if p.read_bytes() != before:
+        if p.read_bytes() != before[name]:
             changed.append(p)
     return changed
 
