@@ -327,3 +327,13 @@ def test_a_figure_is_captioned_with_the_rows_it_declares(run_record, tmp_path):
     text = report.build(figs, notebooks=tmp_path, export=False).read_text()
     assert "Scorecard rows for Fig. 5: 1 reproduced (independent)." in text
     assert "No scorecard row is tied to this figure" in text
+
+
+def test_a_report_it_cannot_write_is_one_clear_line(run_record, tmp_path, capsys):
+    """A read-only checkout crashed with a PermissionError traceback on figures/html; any
+    error writing the report now ends in one line (here index.html is a folder)."""
+    figs = tmp_path / "figures"
+    (figs / "index.html").mkdir(parents=True)
+    assert report.main(["--figures", str(figs)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "index.html" in err and "Traceback" not in err

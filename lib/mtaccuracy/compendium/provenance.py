@@ -144,6 +144,8 @@ def register_output(path, measured: bool = False, tolerance: dict | None = None)
     p = Path(path)
     side = p.parent / SIDECAR
     data = json.loads(side.read_text(encoding="utf-8")) if side.exists() else {}
+    if _rel(p) in _state["inputs"]:  # an input the run rewrites (notebook 04's data/thermal):
+        track(p)                     # the record holds the bytes on disk, not those replaced
     rec = record()
     files = data.get("files", {}) if data.get("run", {}).get("notebook") == rec["notebook"] \
         else {}

@@ -486,9 +486,10 @@ def main(argv=None) -> int:
     broken: list = []
     try:
         path = build(args.figures, broken=broken)
-    except PermissionError as exc:  # a read-only checkout
-        print(f"error: cannot write {exc.filename or exc} ({exc.strerror}); the report is "
-              f"built inside figures/, which needs a checkout you can write", file=sys.stderr)
+    except OSError as exc:  # a read-only checkout, a full disk
+        print(f"error: cannot write {exc.filename or 'the report'} ({exc.strerror or exc}); "
+              f"the report is built inside figures/, which needs a checkout you can write",
+              file=sys.stderr)
         return 2
     shown = path.relative_to(paths.ROOT) if path.is_relative_to(paths.ROOT) else path
     print(f"report: {shown}")

@@ -134,24 +134,6 @@ def _refuse_edited(folder: Path, files, out=None) -> None:
         f"written: {how}")
 
 
-def _save(df, path, **kwargs) -> None:
-    """:func:`reproduction.save_table`, with the run's record of ``path`` brought to the bytes
-    on disk before the folder's ``provenance.json`` keeps it.
-
-    ``provenance.start`` hashes the files of ``data_dir`` (``data/thermal``) as inputs of the
-    run *before* :func:`prepare` regenerates them, and ``save_table`` stamps the folder's
-    sidecar with the run's record as it stands: after a file was rewritten, that record still
-    held the hash of the bytes the write replaced.  So the file is tracked again here (as
-    :func:`read` does right after) and, when that changed the record, saved again: the same
-    bytes, so nothing is written, only the sidecar re-recorded.
-    """
-    reproduction.save_table(df, path, **kwargs)
-    before = provenance.record()["inputs"]
-    provenance.track(path)
-    if provenance.record()["inputs"] != before:
-        reproduction.save_table(df, path, **kwargs)
-
-
 def prepare(data_dir: str = DEFAULT_DIR, regenerate: bool = True,
             seed: int = synthetic.DEFAULT_SEED, out=None) -> tuple[Path, list[Path], str]:
     """Decide where to read from and, for the reconstruction only, regenerate it first.
@@ -191,7 +173,7 @@ def prepare(data_dir: str = DEFAULT_DIR, regenerate: bool = True,
         folder = Path(out) / "reconstruction"
     folder.mkdir(parents=True, exist_ok=True)
     changed = thermal.write_measurements(
-        reconstruct(seed), folder, save=_save,
+        reconstruct(seed), folder, save=reproduction.save_table,
         before_overwrite=lambda files: _refuse_edited(folder, files, out))
     what = (f"{_shown(folder, out)}: reconstruction regenerated with seed {seed}: "
             + (f"{len(changed)} file(s) rewritten ({', '.join(p.name for p in changed)})"
