@@ -180,23 +180,40 @@ def test_a_paper_folder_that_lost_its_scorecard_is_still_reported(run_record, tm
 
 
 def test_outputs_are_checked_against_the_sidecar(run_record):
-    """folder_problems: a table written without the library is not listed; a measured one
-    is only required to exist; a hashed one must keep its bytes."""
+    """folder_problems: a measured table is only required to exist; a hashed one must keep
+    its bytes; a file the sidecar does not list is the user's (an input, notes): not judged,
+    named by not_outputs."""
     folder = run_record / "out"
     reproduction.save_table(pd.DataFrame({"a": [1.5]}), folder / "t.csv")
     reproduction.save_table(pd.DataFrame({"s": [0.25]}), folder / "timing.csv", measured=True)
-    assert report.folder_problems(folder) == []
+    assert report.folder_problems(folder) == [] and report.not_outputs(folder) == []
     (folder / "timing.csv").write_text("s\n0.5\n")
-    (folder / "by_hand.csv").write_text("a\n1\n")
-    assert report.folder_problems(folder) == [
-        (folder / "by_hand.csv",
-         "is not listed in provenance.json (not written by this folder's run)")]
+    (folder / "my_ranges.csv").write_text("a\n1\n")
+    assert report.folder_problems(folder) == []
+    assert report.not_outputs(folder) == ["my_ranges.csv"]
     (folder / "timing.csv").unlink()
     (folder / "t.csv").write_text("a\n1.6\n")
     assert [(p.name, why.split(" (")[0]) for p, why in report.folder_problems(folder)] == [
-        ("by_hand.csv", "is not listed in provenance.json"),
         ("t.csv", "does not match the hash in provenance.json"),
         ("timing.csv", "is missing")]
+
+
+def test_a_users_file_in_an_output_folder_neither_fails_nor_shows_in_the_report(
+        committed_report, tmp_path, capsys):
+    """``make reproduce NB=06 PARAMS="ranges_file=figures/06_your_machine/my_ranges.csv"``
+    left the range file alone, then failed in the report, which called it broken."""
+    figs = tmp_path / "figures"
+    shutil.copytree(committed_report, figs)
+    folder = figs / "06_your_machine"
+    shutil.copy(paths.DATA / "machines" / "swivel_head_ranges.csv", folder / "my_ranges.csv")
+    fig, ax = plt.subplots()
+    ax.plot([0, 1])
+    fig.savefig(folder / "my_sketch.png")  # the user's own figure, not through plotting.save
+    plt.close(fig)
+    assert report.main(["--figures", str(figs)]) == 0, capsys.readouterr().err
+    text = (figs / "index.html").read_text()
+    assert "my_ranges.csv" in text and 'href="06_your_machine/my_ranges.csv"' not in text
+    assert 'src="06_your_machine/my_sketch.png"' not in text
 
 
 def _convergence_like(noise: float):

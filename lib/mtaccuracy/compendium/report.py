@@ -235,8 +235,9 @@ figure_problem = output_problem
 
 
 def folder_problems(folder: Path, side: dict | None = None) -> list[tuple[Path, str]]:
-    """Every problem (:func:`output_problem`) of an output folder, by file name: the files its
-    ``provenance.json`` lists and the figures and tables on disk.
+    """Every problem (:func:`output_problem`) of the files an output folder's
+    ``provenance.json`` lists (its outputs); a file it does not list is not the compendium's
+    (:func:`not_outputs`) and is not judged.
 
     Parameters
     ----------
@@ -252,12 +253,33 @@ def folder_problems(folder: Path, side: dict | None = None) -> list[tuple[Path, 
     """
     folder = Path(folder)
     side = provenance.read(folder) if side is None else side
-    names = set(side.get("files", {}))
-    if folder.is_dir():
-        names |= {p.name for p in folder.iterdir()
-                  if p.is_file() and p.suffix in CHECKED_SUFFIXES and not p.name.startswith(".")}
-    found = ((folder / n, output_problem(folder / n, side)) for n in sorted(names))
+    found = ((folder / n, output_problem(folder / n, side)) for n in sorted(side.get("files", {})))
     return [(p, why) for p, why in found if why]
+
+
+def not_outputs(folder: Path, side: dict | None = None) -> list[str]:
+    """The files in an output folder that its ``provenance.json`` does not list: put there by
+    someone else (notes, an input file), left alone by every run, never shown or linked as
+    results.
+
+    Parameters
+    ----------
+    folder : Path
+        A notebook's output folder.
+    side : dict, optional
+        Its ``provenance.json`` (read when not given).
+
+    Returns
+    -------
+    list of str
+        Their names, sorted.
+    """
+    folder = Path(folder)
+    side = provenance.read(folder) if side is None else side
+    listed = set(side.get("files", {})) | {provenance.SIDECAR}
+    return sorted(p.name for p in folder.iterdir() if p.is_file()
+                  and not p.name.startswith(".") and p.name not in listed) \
+        if folder.is_dir() else []
 
 
 def _problem_html(stem: str, path: Path, why: str, action: str) -> str:
@@ -392,7 +414,7 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
         side = provenance.read(folder)
         problems = folder_problems(folder, side)
         broken += problems
-        bad = {p.name for p, _ in problems}
+        bad = {p.name for p, _ in problems} | set(not_outputs(folder, side))
         links += [f'<a href="{_e(stem)}/{_e(p.name)}">{_e(p.name)}</a>'
                   for p in sorted(folder.glob("*.csv")) if p.name not in bad]
         n_rows = len(card)
@@ -406,6 +428,10 @@ def build(figures=None, notebooks=None, broken: list | None = None, export: bool
                 f'<p class="links">{" ".join(links)}</p>']
         out += [_problem_html(stem, p, why, "not linked") for p, why in problems
                 if output_kind(p) != "figure"]
+        theirs = not_outputs(folder, side)
+        if theirs:
+            out.append(f"<p>Not written by this notebook's run, so neither shown nor linked "
+                       f"here (runs leave them alone): {_e(', '.join(theirs))}.</p>")
         rows = [("score-row", r) for _, r in card.iterrows()]
         rows += [("measured-row", r) for _, r in measured[measured["notebook"] == stem].iterrows()]
         if not rows and stem in index:  # a paper's folder without its scorecard
