@@ -373,6 +373,20 @@ def test_a_rerun_leaves_alone_what_it_did_not_write_and_says_so(tmp_path, monkey
     assert set(side["files"]) == {"table.csv"}  # a file written without provenance is listed
 
 
+def test_a_new_output_folder_outside_the_repository_passes_the_notebooks_own_check(
+        tmp_path, monkeypatch):
+    """The run stages inside its output folder; the notebook's own check of ``output_dir``
+    (``check_parameters`` -> ``paths.check_output_dir``, in the kernel) must not take that
+    staging folder for a file of someone else's."""
+    check = ("from mtaccuracy.compendium import paths as P\n"
+             "P.check_output_dir(output_dir, '01_tiny')\n")
+    path = _tiny(tmp_path, monkeypatch, check + WRITE)
+    away = tmp_path.parent / f"{tmp_path.name}-new"
+    runner.run(path, {"output_dir": str(away)}, progress=False)
+    assert (away / "table.csv").read_text() == "n\n3\n"
+    shutil.rmtree(away)
+
+
 def test_notes_in_an_output_folder_outside_the_repository_survive_a_rerun(tmp_path, monkeypatch):
     path = _tiny(tmp_path, monkeypatch, WRITE)
     away = tmp_path.parent / f"{tmp_path.name}-away"

@@ -34,6 +34,9 @@ FIGURES = ROOT / "figures"
 OUTPUT_BASE_ENV = "MTACCURACY_OUTPUT_BASE"
 #: Set by the runner for the kernel: the folder a run writes into before it is moved in place.
 STAGING_ENV = "MTACCURACY_STAGING"
+#: A run's staging folder inside its output folder is ``<output>/.staging-<pid>/``: the
+#: runner's own, not a file that makes the folder "not empty".
+STAGING_PREFIX = ".staging-"
 
 
 class OutputDirError(ValueError):
@@ -88,7 +91,7 @@ def check_output_dir(path: str | os.PathLike, notebook: str) -> Path:
         raise OutputDirError(f"{notebook}: output_dir {str(path)!r} is {p}, {what}; {allowed}")
     if p.exists() and not p.is_dir():
         raise OutputDirError(f"{notebook}: output_dir {str(path)!r} is a file ({p}); {allowed}")
-    if p.is_dir() and any(p.iterdir()):
+    if p.is_dir() and any(not c.name.startswith(STAGING_PREFIX) for c in p.iterdir()):
         owner = _written_by(p)
         if owner != notebook:
             why = (f"it holds the outputs of {owner}" if owner else
