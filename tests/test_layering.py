@@ -9,8 +9,8 @@ import mtaccuracy
 
 LIB = Path(mtaccuracy.__file__).parent
 MACHINERY = {"compendium"}   # runner, report, provenance, reproduction, paths, plotting, lab, bench
-SCIENCE = ["kinematics.py", "errors.py", "roundness.py", "machines", "sensitivity", "spindle",
-           "optimise", "thermal"]
+SCIENCE = ["kinematics.py", "errors.py", "roundness.py", "csvlines.py", "machines",
+           "sensitivity", "spindle", "optimise", "thermal"]
 
 
 def _imports(path: Path) -> set[str]:

@@ -17,6 +17,7 @@ Science (usable without this repository; none of it imports :mod:`mtaccuracy.com
 ``roundness``            roundness of a profile (least squares, minimum zone, filters)
 ``thermal``              thermal error modelling: data, clustering, estimators, validation
 ``optimise``             a genetic algorithm over real or binary encodings
+``csvlines``             CSV records with the lines an editor shows (the readers' messages)
 =======================  ================================================================
 
 The compendium's machinery (runner, report, provenance, published values, paths, plotting,

@@ -30,7 +30,6 @@ Standard library only, so that ``make clean`` can recover without the virtual en
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import re
@@ -40,11 +39,9 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 
 from . import paths
+from .provenance import SIDECAR, sha256, write_sidecar
 
-#: The manifest of an output folder (written by :mod:`mtaccuracy.compendium.provenance`).
-SIDECAR = "provenance.json"
-STAGING_PREFIX = ".staging-"
-_STAGING = re.compile(r"^\.staging-(\d+)$")
+STAGING_PREFIX = paths.STAGING_PREFIX
 
 
 class CommitConflict(RuntimeError):
@@ -54,15 +51,6 @@ class CommitConflict(RuntimeError):
 def journal_dir() -> Path:
     """Where pending commits are journalled (``notebooks/.commits/``)."""
     return paths.NOTEBOOKS / ".commits"
-
-
-def sha256(path: Path) -> str:
-    """SHA-256 of a file's bytes, hex."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def _safe_rel(name) -> str | None:
@@ -147,11 +135,7 @@ def complete_manifest(staging: Path, stem: str) -> None:
         return
     for rel in extra:
         data["files"][rel] = {"sha256": sha256(staging / rel)}
-    data["files"] = dict(sorted(data["files"].items()))
-    text = json.dumps(data, sort_keys=True, indent=1, default=str) + "\n"
-    tmp = side.with_name(f".{SIDECAR}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, side)
+    write_sidecar(staging, data)
 
 
 @dataclass

@@ -407,8 +407,27 @@ def available(*, proc_root="/proc", cgroup_root="/sys/fs/cgroup") -> tuple[float
         as "available memory", "the cgroup limit (memory.max of /user.slice)" or "the
         address-space limit (ulimit -v)"; ties go to the first in :func:`limits`' order.
     """
-    found = limits(proc_root=proc_root, cgroup_root=cgroup_root)
-    if not found:
-        return math.inf, "no known limit"
-    best = min(found, key=lambda lim: lim.bytes)
+    best = tightest(limits(proc_root=proc_root, cgroup_root=cgroup_root))
     return best.bytes, best.what
+
+
+def tightest(found: list[Limit], *, share: int = 1) -> Limit:
+    """The limit that leaves a run the fewest bytes when ``share`` runs start at once: they
+    divide the machine's memory and the cgroups' headroom, while each has a per-process limit
+    (``ulimit -v``) whole.
+
+    Parameters
+    ----------
+    found : list of Limit
+        From :func:`limits`.
+    share : int
+        Runs at once.
+
+    Returns
+    -------
+    Limit
+        Its bytes for one run (``inf`` and "no known limit" when ``found`` is empty); ties go
+        to the first in ``found``.
+    """
+    each = [lim if lim.per_process else lim._replace(bytes=lim.bytes / share) for lim in found]
+    return min(each, key=lambda lim: lim.bytes, default=Limit(math.inf, "no known limit"))

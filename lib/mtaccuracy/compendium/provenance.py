@@ -153,7 +153,14 @@ def register_output(path, measured: bool = False, tolerance: dict | None = None)
     if tolerance:
         entry["tolerance"] = tolerance
     files[p.name] = entry
-    data = {"run": rec, "files": dict(sorted(files.items()))}
+    write_sidecar(p.parent, {"run": rec, "files": files})
+
+
+def write_sidecar(folder, data: dict) -> None:
+    """Write ``folder/provenance.json`` (files sorted, fixed format), replaced whole, and only
+    when its bytes change."""
+    side = Path(folder) / SIDECAR
+    data = {**data, "files": dict(sorted(data.get("files", {}).items()))}
     text = json.dumps(data, sort_keys=True, indent=1, default=str) + "\n"
     if not side.exists() or side.read_text(encoding="utf-8") != text:
         tmp = side.with_name(f".{SIDECAR}.{os.getpid()}.tmp")

@@ -230,10 +230,6 @@ def output_problem(path: Path, side: dict) -> str | None:
     return None
 
 
-#: The name this check had when it covered figures only.
-figure_problem = output_problem
-
-
 def folder_problems(folder: Path, side: dict | None = None) -> list[tuple[Path, str]]:
     """Every problem (:func:`output_problem`) of the files an output folder's
     ``provenance.json`` lists (its outputs); a file it does not list is not the compendium's

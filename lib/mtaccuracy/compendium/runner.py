@@ -246,15 +246,6 @@ def memory_estimate(notebook: str | Path, values: dict) -> float | None:
     return None
 
 
-def memory_available() -> tuple[float, str]:
-    """Bytes a new run may still use, and which limit that is: the smallest headroom of the
-    machine's available memory, every cgroup level's limit and the per-process limits
-    (``ulimit -v``, ``ulimit -d``; :func:`mtaccuracy.compendium.memory.available`)."""
-    from . import memory
-
-    return memory.available()
-
-
 def _check_memory(notebook: str, values: dict, share: int = 1) -> None:
     """Refuse a run whose declared peak memory does not fit.  ``share`` runs at once divide
     the machine's memory and the cgroups' limits between them; a per-process limit
@@ -264,17 +255,13 @@ def _check_memory(notebook: str, values: dict, share: int = 1) -> None:
     need = memory_estimate(notebook, values)
     if need is None:
         return
-    have, what, shared = math.inf, "no known limit", False
-    for lim in memory.limits():
-        b = lim.bytes if lim.per_process else lim.bytes / share
-        if b < have:
-            have, what, shared = b, lim.what, not lim.per_process
-    if need > have:
+    have = memory.tightest(memory.limits(), share=share)
+    if need > have.bytes:
         raise ParameterError(
             f"{notebook}: these parameters need about {need / 1e9:.3g} GB of memory, more "
-            f"than the {max(have, 0) / 1e9:.3g} GB left under {what}"
-            f"{f' (shared by {share} runs at once)' if share > 1 and shared else ''} on this "
-            f"machine; lower the sample sizes")
+            f"than the {max(have.bytes, 0) / 1e9:.3g} GB left under {have.what}"
+            f"{f' (shared by {share} runs at once)' if share > 1 and not have.per_process else ''}"
+            f" on this machine; lower the sample sizes")
 
 
 # --- checking values -------------------------------------------------------------------------
@@ -628,14 +615,6 @@ def _export(path: Path, target: Path | None) -> None:
         except OSError as exc:
             print(f"note: the HTML export of {path.stem} was not written: {exc}",
                   file=sys.stderr)
-
-
-def execute_copy(notebook: str | Path, dest: str | Path, overrides: dict | None = None) -> Path:
-    """Execute a notebook into ``dest/<stem>.ipynb`` with relative output folders taken from
-    ``dest`` (a folder outside the repository), through the same checks, staging and commit
-    as :func:`run`; returns the notebook written."""
-    run(notebook, overrides, progress=False, export=False, copy_to=dest)
-    return Path(dest).resolve() / notebook_path(notebook).name
 
 
 @contextlib.contextmanager

@@ -122,7 +122,7 @@ def _refuse_edited(folder: Path, files, out=None) -> None:
         return
     where = _shown(folder, out)
     names = ", ".join(f"{where}/{p.name}" for p in edited)
-    if folder.resolve() == (paths.ROOT / DEFAULT_DIR).resolve():
+    if is_default_dir(folder):
         how = (f"run with regenerate_data = False to use the edited data, or restore the "
                f"committed files with `git checkout {DEFAULT_DIR}` and run again")
     else:

@@ -72,6 +72,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import csvlines
 from .. import errors as _errors
 from ..kinematics import matmul3
 from ._base import Machine
@@ -1225,42 +1226,6 @@ class _Table:
                 f"{self.rows[-1].last}")
 
 
-# One CSV field, quoted ("..." with "" for a quote, then anything up to the delimiter: the csv
-# module's reading) or not, after the spaces ``skipinitialspace`` skips; the quantifiers are
-# possessive and every alternative starts on a different character, so a line is scanned once.
-_QUOTED = r'"(?:[^"]|"")*+"'
-_FIELD = rf'[ ]*+(?:{_QUOTED}[^,#]*+|(?!")[^,#]*+)'
-_OPEN = r'[ ]*+"(?:[^"]|"")*+\Z'                  # a quoted field the line does not close
-_LINE = re.compile(rf'(?:{_FIELD},)*+(?:(?P<open>{_OPEN})|{_FIELD})')
-_IN_QUOTES = re.compile(r'(?:[^"]|"")*+(?P<close>"[^,#]*+)?')
-
-
-def _strip_comment(line: str, quoted: bool) -> tuple[str, bool]:
-    """``line`` without its comment (``#`` outside a quoted field to the end of the line) and
-    whether a quoted field is still open at its end (``quoted``: open at its start), by the
-    quoting rules of the csv module (a field is quoted when ``"`` opens it, after the
-    delimiter and spaces; ``""`` inside it is a quote).  Linear in the line's length, at the
-    speed of the regular-expression engine."""
-    pos = 0
-    if quoted:
-        m = _IN_QUOTES.match(line)
-        if m.group("close") is None:
-            return line, True
-        pos = m.end()
-        if pos == len(line):
-            return line, False
-        if line[pos] == "#":
-            return line[:pos] + "\n", False
-        pos += 1                                     # the delimiter
-    elif '"' not in line:
-        cut = line.find("#")
-        return (line if cut < 0 else line[:cut] + "\n"), False
-    m = _LINE.match(line, pos)
-    if m.group("open") is not None:
-        return line, True
-    return (line if m.end() == len(line) else line[:m.end()] + "\n"), False
-
-
 def _read_csv(path, columns, what, max_rows=None) -> _Table:
     """Read a small CSV file with the physical line of every record, checked.
 
@@ -1271,8 +1236,6 @@ def _read_csv(path, columns, what, max_rows=None) -> _Table:
     Refused before parsing: more than :data:`MAX_TABLE_BYTES` bytes or ``10 * max_rows``
     lines; while parsing: more than ``max_rows`` data rows (default
     :data:`MAX_TABLE_ROWS`)."""
-    import csv
-    import io
     import os
 
     path = str(path)
@@ -1290,44 +1253,23 @@ def _read_csv(path, columns, what, max_rows=None) -> _Table:
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        line = raw[:exc.start].count(b"\n") + 1
-        raise ValueError(f"{what} {path!r}, line {line}: not UTF-8 text ({exc.reason})") from None
-    text = text.replace("\r\n", "\n").replace("\r", "\n")   # as an editor counts lines
-    n_lines = text.count("\n") + (not text.endswith("\n"))
+        raise ValueError(f"{what} {path!r}, line {csvlines.bad_byte_line(raw, exc)}: not UTF-8 "
+                         f"text ({exc.reason})") from None
+    flat = text.replace("\r\n", "\n").replace("\r", "\n")  # as an editor counts lines
+    n_lines = flat.count("\n") + (not flat.endswith("\n"))
     if n_lines > 10 * max_rows:
         raise ValueError(f"{what} {path!r} has {n_lines} lines, more than the {10 * max_rows} "
                          f"allowed ({max_rows} data rows, with comments); it should hold a few "
                          f"dozen rows (is it the right file?)")
-    fed = []                        # the physical line of every line handed to the csv reader
-    opened = [0]                    # where the quoted field open at the end of a line opened
-
-    def lines():
-        quoted = False
-        for number, line in enumerate(io.StringIO(text, newline="\n"), 1):
-            was = quoted
-            kept, quoted = _strip_comment(line, quoted)
-            if quoted and not was:
-                opened[0] = number
-            if not was and not kept.strip():
-                continue
-            fed.append(number)
-            yield kept
-        if quoted:
-            raise ValueError(f"{what} {path!r}, line {opened[0]}: a quoted field opens here "
-                             f"and is never closed")
-
     header, index, rows = None, {}, []
-    reader = csv.reader(lines(), skipinitialspace=True)
+    found = csvlines.records(text, comment="#")
     while True:
-        k = len(fed)
         try:
-            fields = next(reader)
+            first, last, fields = next(found)
         except StopIteration:
             break
-        except csv.Error as exc:
-            raise ValueError(f"{what} {path!r}, line {fed[-1] if fed else 1}: not a readable "
-                             f"CSV: {exc}") from None
-        first, last = fed[k], fed[-1]
+        except csvlines.CSVLineError as exc:
+            raise ValueError(f"{what} {path!r}, line {exc.line}: {exc.reason}") from None
         if header is None:
             header = [h.strip() for h in fields]
             header_line = first

@@ -9,12 +9,15 @@ Units: positions in mm, errors in um, temperatures in degrees Celsius, times in 
 
 from __future__ import annotations
 
+import contextlib
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from .. import csvlines
 
 __all__ = [
     "DataFormatError", "ThermalData", "read_measurements", "write_measurements", "save_csv",
@@ -161,50 +164,15 @@ def _problem(path, message) -> DataFormatError:
 
 
 # Line numbers.  pandas numbers the rows it keeps, not the file's lines: it skips blank lines
-# (empty or only spaces and tabs) and a quoted field may hold line breaks.  Every message about a
-# bad row names the line an editor shows, found by :func:`_records`, which splits the file into
-# records by the rules of pandas' tokenizer (the defaults plus ``skipinitialspace``).  It runs
-# only when a message is written, so reading a good file costs nothing extra.
-
-_FIELD, _UNQUOTED, _QUOTED, _QUOTE_IN_QUOTED = range(4)
+# and a quoted field may hold line breaks.  Every message about a bad row names the line an
+# editor shows, from :func:`mtaccuracy.csvlines.records` (the schema has no comment lines).  It
+# runs only when a message is written, so reading a good file costs nothing extra.
 
 
 def _records(path: Path):
-    r"""Yield ``(first line, number of fields, closed)`` for every record pandas reads from
-    ``path``, the header first; line numbers are 1-based, counting every line of the file.
-
-    The states are those of pandas' tokenizer (``delimiter=','``, ``quotechar='"'``,
-    ``doublequote``, ``skipinitialspace``, ``skip_blank_lines``): a line that is empty or holds
-    only spaces and tabs between records is skipped; a field opens a quote only at its start
-    (after spaces), ``""`` inside quotes is a quote, a quote elsewhere is a character; a line
-    break ends the record unless it is inside quotes.  Lines end with ``\n``, ``\r\n`` or
-    ``\r``.  ``closed`` is False for a record still inside quotes at the end of the file.
-    """
-    with open(path, encoding="utf-8-sig", errors="replace", newline="") as f:
-        start, state, fields = 0, None, 0
-        for number, line in enumerate(f, start=1):
-            if state is None:                        # between records
-                if not line.strip(" \t\r\n"):
-                    continue                         # a blank line: pandas skips it
-                start, state, fields = number, _FIELD, 1
-                if '"' not in line:                  # no quote: one line, one record
-                    yield start, line.count(",") + 1, True
-                    state = None
-                    continue
-            for c in line.rstrip("\r\n"):
-                if state == _QUOTED:
-                    state = _QUOTE_IN_QUOTED if c == '"' else _QUOTED
-                elif c == ",":
-                    state, fields = _FIELD, fields + 1
-                elif state == _FIELD:
-                    state = (_FIELD if c == " " else _QUOTED if c == '"' else _UNQUOTED)
-                elif state == _QUOTE_IN_QUOTED:
-                    state = _QUOTED if c == '"' else _UNQUOTED
-            if state != _QUOTED:                     # the line break ends the record
-                yield start, fields, True
-                state = None
-        if state is not None:
-            yield start, fields, False
+    """The file's records with their lines (:func:`mtaccuracy.csvlines.records`), the header
+    first."""
+    return csvlines.records(path.read_bytes().decode("utf-8-sig", errors="replace"))
 
 
 def _line_numbers(path: Path, rows) -> list[int]:
@@ -213,12 +181,13 @@ def _line_numbers(path: Path, rows) -> list[int]:
     wanted = {int(r) for r in rows}
     found: dict[int, int] = {}
     records = _records(path)
-    next(records, None)                              # the header
-    for row, (line, _, _) in enumerate(records):
-        if row in wanted:
-            found[row] = line
-            if len(found) == len(wanted):
-                break
+    with contextlib.suppress(csvlines.CSVLineError):
+        next(records, None)                          # the header
+        for row, rec in enumerate(records):
+            if row in wanted:
+                found[row] = rec.first
+                if len(found) == len(wanted):
+                    break
     return [found.get(int(r), -1) for r in rows]
 
 
@@ -236,10 +205,8 @@ def _unreadable(path: Path, exc: Exception) -> DataFormatError:
         try:
             data.decode("utf-8")
         except UnicodeDecodeError as e:
-            head = data[:e.start]
-            line = head.count(b"\n") + head.count(b"\r") - head.count(b"\r\n") + 1
-            return _problem(path, f"not UTF-8 text: byte 0x{data[e.start]:02x} on line {line}; "
-                                  f"save the file as UTF-8")
+            return _problem(path, f"not UTF-8 text: byte 0x{data[e.start]:02x} on line "
+                                  f"{csvlines.bad_byte_line(data, e)}; save the file as UTF-8")
     if isinstance(exc, pd.errors.ParserError):
         problem = _ragged(path)
         if problem is not None:
@@ -251,14 +218,17 @@ def _ragged(path: Path) -> DataFormatError | None:
     """The first row with more fields than the header, or a quote never closed (None if
     neither)."""
     records = _records(path)
-    header = next(records, None)
-    for line, fields, closed in records:
-        if not closed:
-            return _problem(path, f"a quoted field of the row starting on line {line} is never "
-                                  f"closed (a '\"' is missing)")
-        if header is not None and fields > header[1]:
-            return _problem(path, f"line {line} has {fields} fields, the header (line "
-                                  f"{header[0]}) has {header[1]}")
+    try:
+        header = next(records, None)
+        for line, _, fields in records:
+            if header is not None and len(fields) > len(header.fields):
+                return _problem(path, f"line {line} has {len(fields)} fields, the header (line "
+                                      f"{header.first}) has {len(header.fields)}")
+    except csvlines.UnclosedQuote as exc:
+        return _problem(path, f"a quoted field of the row starting on line {exc.line} is never "
+                              f"closed (a '\"' is missing)")
+    except csvlines.CSVLineError:
+        return None
     return None
 
 
