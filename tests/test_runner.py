@@ -460,6 +460,22 @@ def test_all_notebooks_into_one_output_dir_get_a_folder_each(tmp_path, monkeypat
     shutil.rmtree(x)
 
 
+def test_a_run_leaves_the_working_files_of_other_runs_alone(tmp_path, monkeypatch):
+    """The tests run notebook 03 three times at once with --copy-to; the runs shared
+    ``notebooks/.running/<stem>.ipynb`` (each unlinked and rewrote it) and one read the
+    other's half-written JSON.  Each run now works in a file of its own."""
+    path = _tiny(tmp_path, monkeypatch, WRITE)
+    running = tmp_path / "notebooks" / ".running"
+    running.mkdir()
+    others = [running / "01_tiny.ipynb", running / "01_tiny.999999.ipynb",
+              running / "01_tiny.kernel.log"]
+    for f in others:
+        f.write_text("another run's, being written\n")
+    runner.run(path, {}, progress=False)
+    assert [f.read_text() for f in others] == ["another run's, being written\n"] * 3
+    assert sorted(p.name for p in running.iterdir()) == sorted(f.name for f in others)
+
+
 def test_a_signal_during_the_commit_waits_for_the_commit_to_be_whole(tmp_path, monkeypatch):
     from mtaccuracy.compendium import commit
 

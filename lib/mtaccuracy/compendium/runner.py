@@ -563,7 +563,10 @@ def run(notebook: str | Path, overrides: dict | None = None, progress: bool = Tr
         old_handlers = _install(_on_signal)
         try:
             with _setenv(paths.STAGING_ENV, None if staging is None else str(staging)):
-                seconds = _execute_and_commit(path, params, running / path.name, staging,
+                # one file per process: two runs of one notebook at once (the tests run 03
+                # three times in parallel) must not write papermill's output into one file
+                out = running / f"{path.stem}.{os.getpid()}.ipynb"
+                seconds = _execute_and_commit(path, params, out, staging,
                                               target, dest, failed, progress)
         except BaseException:
             if created and target is not None and target.is_dir() and not any(
@@ -645,7 +648,7 @@ def _keep_failed(path: Path, out: Path, log: Path, staging: Path | None, failed:
         shutil.move(str(out), failed / path.name)
         kept.append(path.name)
     if log.exists():
-        shutil.move(str(log), failed / log.name)
+        shutil.move(str(log), failed / f"{path.stem}.kernel.log")
     if staging is not None and staging.is_dir() and not any(staging.iterdir()):
         staging.rmdir()
     if staging is not None and staging.exists():
@@ -660,7 +663,7 @@ def _execute_and_commit(path, params, out, staging, target, dest, failed, progre
     from . import commit
 
     t0 = time.perf_counter()
-    log = out.with_suffix(".kernel.log")
+    log = out.with_suffix(".kernel.log")  # <stem>.<pid>.kernel.log
     for stale in (out, log):
         stale.unlink(missing_ok=True)
     source = path.read_bytes()
