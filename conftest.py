@@ -36,7 +36,8 @@ GUARDED = [ROOT / "figures", ROOT / "notebooks"]
 _UNGUARDED = {".runs.json", "index.html", "html", ".running", ".failed", ".backup", ".commits",
               ".ipynb_checkpoints"}
 NOTEBOOK_TIMEOUT_S = 1200
-#: The extra runs of tests/test_notebooks.py: notebook 03 twice with small parameters.
+#: The extra runs of tests/test_notebooks.py: notebook 03 twice with small parameters, notebook
+#: 04 on a reader's own data and on a copy of the reconstruction (:func:`own_data_runs`).
 SMALL_03 = ["n_samples=40", "n_repeats=3", "n_search_poses=16", "n_search_samples=100",
             "grid_step_mm=250.0"]
 
@@ -150,7 +151,22 @@ def pytest_collection_finish(session):
         _RUNS.add(stem, stem, [])
     for k in (1, 2):
         _RUNS.add(f"03_small_{k}", "03", SMALL_03)
+    for name, params in own_data_runs(TEST_OUTPUT / "own_data").items():
+        _RUNS.add(name, name.split("_")[0], params)
     _RUNS.start()
+
+
+def own_data_runs(base: Path) -> dict[str, list[str]]:
+    """Notebook 04 on a reader's own measurements (the tests' own physical model,
+    ``tests/thermal_lab.py``: experiments 11-15, 19 measurements, 9 sensors of any name,
+    25 targets over 960 mm) and on a byte-identical copy of the reconstruction elsewhere."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    import thermal_lab
+
+    thermal_lab.write(base / "lab", **thermal_lab.NOTEBOOK_RUN)
+    shutil.copytree(ROOT / "data" / "thermal", base / "copy_of_thermal")
+    return {"04_own": [f"data_dir={base / 'lab'}", "n_replicates=2"],
+            "04_copy": [f"data_dir={base / 'copy_of_thermal'}", "n_replicates=20"]}
 
 
 @pytest.fixture(scope="session")

@@ -1,17 +1,24 @@
 """The readers of a researcher's own machine (machines.chain, notebook 06): the topology string,
 the axis table and the range file.  A message about a bad row names the file and the line an
 editor shows.  Inputs no machine could need are refused at once, by their size. A travel too
-large for any machine is refused, and a redundancy explanation is never blank.
+large for any machine is refused, and a redundancy explanation is never blank.  A value that
+makes sense only in another unit (metres or inches labelled mm, radians labelled deg, microns
+labelled mm, an angle in a length unit) is refused when no machine tool has it, warned when only
+a rare one does, with the file, the line, the limit and the likely unit (issue 22).
 
 The large inputs are built in tmp_path.  No test measures time, but each runs in well under a
 second only while the checks are linear (the quadratic ones took minutes on these inputs)."""
 
 import re
+import warnings
 
 import numpy as np
 import pytest
 
+from mtaccuracy import errors
+from mtaccuracy.compendium import paths
 from mtaccuracy.machines import chain as C
+from mtaccuracy.machines import units as U
 
 TOPOLOGY = "w C b X Y Z B t"
 
@@ -303,3 +310,335 @@ def test_a_travel_beyond_floating_point_is_refused_by_the_rank_test():
     with pytest.raises(ValueError, match=r"travel \(-1e\+308, 1e\+308\) of x is not finite "
                                          r"\(or its width overflows\)"):
         C.iso_machine(TOPOLOGY, travels={"x": (-1e308, 1e308)})
+
+
+# -- units: a value that makes sense only in another unit (issue 22) ------------------------
+# Refused: what no machine tool has in the unit written; warned: what only a rare one has.
+# Every message names the file, the line, the value and unit, the limit and the likely unit
+# with the numbers to write.
+
+@pytest.mark.parametrize("old, new, message", [
+    # metres labelled mm: a 0.8 m travel
+    ("X,-400,400,mm", "X,-0.4,0.4,mm",
+     r"the travel \(-0.4, 0.4\) mm spans 0.8 mm, less than the 1 mm any slide of a machine "
+     r"tool travels \(sub-millimetre strokes are those of fine-positioning actuators.*\); "
+     r"likely in m \(write -400, 400 mm\)$"),
+    ("Z,-250,250,mm", "Z,0,0.4,mm", r"the travel \(0, 0.4\) mm spans 0.4 mm, less than the "
+                                    r"1 mm .*likely in m \(write 0, 400 mm\)$"),
+    # radians labelled deg: a +-110 deg swivel, a +-30 deg tilt
+    ("B,-110,110,deg", "B,-1.92,1.92,deg",
+     r"the travel \(-1.92, 1.92\) deg spans 3.84 deg, less than the 5 deg any rotary axis of "
+     r"a machine tool turns through \(.*\); likely in rad \(write -110, 110 deg\)$"),
+    ("B,-110,110,deg", "B,-0.5236,0.5236,deg", r".*; likely in rad \(write -30, 30 deg\)$"),
+    # a full turn in radians: 5-15 deg would only be warned, but its ends are 0 and 2 pi
+    ("C,0,360,deg", "C,0,6.2832,deg",
+     r"the travel \(0, 6.2832\) deg spans 6.2832 deg, less than the 15 deg of a grinder's "
+     r"table swivel, and read in radians its ends are whole multiples of 5 deg; likely in "
+     r"rad \(write 0, 360 deg\)$"),
+    ("C,0,360,deg", "C,-3.1416,3.1416,deg", r".*; likely in rad \(write -180, 180 deg\)$"),
+    # a unit the table does not take: converted, or judged in it
+    ("B,-110,110,deg", "B,-1.92,1.92,rad", r"unit must be 'deg' for a rotary axis, got 'rad'; "
+                                           r"\(-1.92, 1.92\) rad is \(-110, 110\) deg$"),
+    ("B,-110,110,deg", "B,-110,110,rad", r".*got 'rad'; read in rad, the travel \(-110, 110\) rad "
+                                         r"spans 220 rad, beyond \+-62.83 rad; likely in deg "
+                                         r"\(write -110, 110 deg\)$"),
+    ("X,-400,400,mm", "X,-0.4,0.4,m", r"unit must be 'mm' for a linear axis, got 'm'; "
+                                      r"\(-0.4, 0.4\) m is \(-400, 400\) mm$"),
+    ("X,-400,400,mm", "X,-16,16,in", r".*got 'in'; \(-16, 16\) inch is \(-406.4, 406.4\) mm$"),
+    ("C,0,360,deg", "C,0,360,°", r"unit must be 'deg' for a rotary axis, got '°'; '°' is "
+                                 r"written 'deg'$"),
+    ("C,0,360,deg", "C,0,x,°", r".*got '°'; '°' is written 'deg'$"),
+    # microns labelled mm: beyond 100 m
+    ("X,-400,400,mm", "X,-400000,400000,mm", r".* goes beyond \+-100000 mm \(no machine axis "
+                                             r"travels more than 100 m\); if it is in um, "
+                                             r"write -400, 400 mm$"),
+])
+def test_a_travel_in_another_unit_is_refused_with_the_likely_unit(tmp_path, old, new, message):
+    text = AXES.replace(old, new)
+    f = _write(tmp_path, text)
+    with pytest.raises(ValueError, match=rf"^axis table '{re.escape(str(f))}', line "
+                                         rf"{_line_of(text, new[:2])} \({new[0]}\): {message}"):
+        C.read_axis_table(f, TOPOLOGY)
+
+
+@pytest.mark.parametrize("old, new, message", [
+    # 4 mm: a micro machine's slide, or a 4 m travel in metres
+    ("Y,-300,300,mm", "Y,-2,2,mm",
+     r"the travel \(-2, 2\) mm spans 4 mm, less than the 10 mm of the smallest machine-tool "
+     r"slides \(micro machine tools\); a travel of 1-10 m written in metres reads as this; if "
+     r"it is in m, write -2000, 2000 mm; if it is in inch, write -50.8, 50.8 mm; used as "
+     r"written$"),
+    # the table swivel of a cylindrical grinder (+-6 deg), or +-344 deg in radians
+    ("B,-110,110,deg", "B,-6,6,deg",
+     r"the travel \(-6, 6\) deg spans 12 deg, less than the 15 deg that only the table swivel "
+     r"of a grinder turns through \(.*\); if it is in rad, write -343.8, 343.8 deg; used as "
+     r"written$"),
+])
+def test_a_travel_only_a_rare_machine_has_is_warned_and_used(tmp_path, old, new, message):
+    text = AXES.replace(old, new)
+    f = _write(tmp_path, text)
+    with pytest.warns(C.SuspectUnitWarning) as record:
+        travels, _ = C.read_axis_table(f, TOPOLOGY)
+    assert len(record) == 1 and record[0].filename == __file__          # the caller's line
+    assert re.match(rf"^axis table '{re.escape(str(f))}', line {_line_of(text, new[:2])} "
+                    rf"\({new[0]}\): {message}", str(record[0].message)), str(record[0].message)
+    lo, hi = (float(x) for x in new.split(",")[1:3])
+    name = new[0].lower() if new[0] in C.LINEAR else new[0]
+    scale = 1.0 if new[0] in C.LINEAR else np.pi / 180
+    assert travels[name] == pytest.approx((lo * scale, hi * scale))   # used as written
+
+
+# Travels of real kinds of machine (mm, deg), read quietly; in metres and radians, caught.
+REAL_MACHINES = {
+    "micro milling machine": ("w b X Y Z t", {"X": (0, 50), "Y": (0, 50), "Z": (0, 10)}),
+    "ultra-precision lathe": ("w C b X Z t", {"C": (0, 360), "X": (-110, 110), "Z": (0, 150)}),
+    "trunnion five-axis mill": ("w C A b X Y Z t", {"C": (-3600, 3600), "A": (-120, 30),
+                                                    "X": (0, 650), "Y": (0, 520),
+                                                    "Z": (0, 475)}),
+    "swivel head over a table": ("w C b X Y Z B t", {"C": (0, 360), "X": (-400, 400),
+                                                     "Y": (-300, 300), "Z": (-250, 250),
+                                                     "B": (-30, 30)}),
+    "gantry mill": ("w b X Y Z A C t", {"X": (0, 20000), "Y": (0, 4000), "Z": (0, 1500),
+                                       "A": (-110, 110), "C": (-360, 360)}),
+}
+#: What no check catches (data/machines/README.md): a travel of 10 m or more in metres, a
+#: rotary axis of more than two turns in radians.
+BLIND_SPOTS = {"gantry mill": {"X"}, "trunnion five-axis mill": {"C"}}
+
+
+def _axis_table(travels, si=None):
+    """An axis table of ``travels`` (mm, deg), the axis ``si`` written in metres or radians
+    (still labelled mm or deg)."""
+    rows = []
+    for a, (lo, hi) in travels.items():
+        k = 1.0 if a != si else 1e-3 if a in C.LINEAR else np.pi / 180
+        rows.append(f"{a},{lo * k:.5g},{hi * k:.5g},{'mm' if a in C.LINEAR else 'deg'},,,")
+    return ",".join(C.AXIS_TABLE_COLUMNS) + "\n" + "\n".join(rows) + "\n"
+
+
+@pytest.mark.parametrize("kind", REAL_MACHINES)
+def test_real_machines_are_read_quietly_and_their_metres_and_radians_are_caught(tmp_path, kind):
+    topology, travels = REAL_MACHINES[kind]
+    f = _write(tmp_path, _axis_table(travels), "real.csv")
+    got, _ = _read_axes_quietly(f, topology)
+    assert len(got) == len(travels)
+    missed = set()
+    for a, (lo, hi) in travels.items():
+        f = _write(tmp_path, _axis_table(travels, si=a), "si.csv")
+        linear = a in C.LINEAR
+        span = (hi - lo) * (1e-3 if linear else np.pi / 180)     # as the file now reads
+        likely = "m" if linear else "rad"
+        if span < (1 if linear else 5) or (not linear and span < 15):
+            # refused: a span no machine has (for a rotary axis of 5-15 "deg": ends that read
+            # as whole multiples of 5 deg in radians, true of every machine here)
+            with pytest.raises(ValueError, match=rf"line \d+ \({a}\): the travel .* likely in "
+                                                 rf"{likely} \(write "):
+                C.read_axis_table(f, topology)
+        elif span < (10 if linear else 15):
+            with pytest.warns(C.SuspectUnitWarning, match=rf"\({a}\): .*if it is in {likely}"):
+                C.read_axis_table(f, topology)
+        else:
+            _read_axes_quietly(f, topology)
+            missed.add(a)
+    assert missed == BLIND_SPOTS.get(kind, set())
+
+
+def _read_axes_quietly(f, topology=TOPOLOGY):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return C.read_axis_table(f, topology)
+
+
+def _edit_row(symbol, new):
+    """An edit of :func:`_ranges`' rows: the row of ``symbol`` replaced by ``new``."""
+    return lambda rows: [new if r.startswith(f"{symbol},") else r for r in rows]
+
+
+@pytest.mark.parametrize("symbol, new, message", [
+    # a translation of 15 mm: microns labelled mm
+    ("EXX", "EXX,-15,15,mm",
+     r"the range \(-15, 15\) mm reaches 15 mm, more than the 10 mm any machine tool in "
+     r"service is off by \(.*\); likely in um \(write -15, 15 um\)$"),
+    # an angle of 15 rad: urad or arcsec labelled rad
+    ("EAX", "EAX,-15,15,rad",
+     r"the range \(-15, 15\) rad reaches 15 rad, more than the 0.01 rad of a misalignment "
+     r"seen by eye \(10 mm/m, 0.57 deg\); .*; likely in urad \(write -15, 15 urad\) or "
+     r"arcsec \(write -15, 15 arcsec\)$"),
+    ("EC0Y", "EC0Y,-5000,5000,arcsec",
+     r"the range \(-5000, 5000\) arcsec reaches 5000 arcsec, more than the 2063 arcsec "
+     r"\(0.01 rad\) of a misalignment seen by eye .*\(0.1-100 arcsec\)$"),   # no unit fits
+    # an angle in a linear unit, a translation in an angular one: the units of the kind
+    ("EXX", "EXX,-15,15,arcsec",
+     r"EXX is a translation, unit 'arcsec' is not \(positioning: write it in um or mm\)$"),
+    ("EC0Y", "EC0Y,-12,12,um",
+     r"EC0Y is an angle, unit 'um' is not \(squareness: write it in urad, rad, arcsec or "
+     r"um/m\); a deviation over a length is an angle: divide by the length, um/m$"),
+    # 15 deg is no angular error; 0.001 deg is, and is said in urad
+    ("EAX", "EAX,-15,15,deg",
+     r"unknown unit 'deg'; allowed: um, mm, rad, urad, um/m, arcsec; EAX is an angle "
+     r"\(angular\): write it in urad, rad, arcsec or um/m; read in deg, the range \(-15, 15\) "
+     r"deg reaches 15 deg, more than the 0.573 deg \(0.01 rad\) .*; likely in urad \(write "
+     r"-15, 15 urad\) or arcsec \(write -15, 15 arcsec\)$"),
+    ("EBY", "EBY,-0.001,0.001,deg", r"unknown unit 'deg'.*; \(-0.001, 0.001\) deg is "
+                                    r"\(-17.45, 17.45\) urad$"),
+    ("EC0Y", "EC0Y,-0.02,0.02,mm/m", r"unknown unit 'mm/m'.*EC0Y is an angle \(squareness\).*; "
+                                     r"\(-0.02, 0.02\) mm/m is \(-20, 20\) urad$"),
+    ("EZZ", "EZZ,-6,6,µm", r"unknown unit 'µm'; allowed: um, mm, rad, urad, um/m, arcsec; EZZ "
+                           r"is a translation \(positioning\): write it in um or mm; 'µm' is "
+                           r"written 'um'$"),
+])
+def test_a_range_in_another_unit_is_refused_with_the_likely_unit(tmp_path, machine, symbol,
+                                                                 new, message):
+    text = _ranges(machine, _edit_row(symbol, new))
+    f = _write(tmp_path, text, "ranges.csv")
+    with pytest.raises(ValueError, match=rf"^range file '{re.escape(str(f))}', line "
+                                         rf"{_line_of(text, symbol + ',')} \({symbol}\): "
+                                         rf"{message}"):
+        C.read_ranges(f, machine)
+
+
+@pytest.mark.parametrize("symbol, new, message", [
+    # 6 mm: the thermal growth of a huge machine, or 6 um labelled mm
+    ("EXX", "EXX,-6,6,mm",
+     r"the range \(-6, 6\) mm reaches 6 mm, more than the 1 mm a geometric error of a machine "
+     r"tool reaches \(ISO 230-1 errors are 0.1-100 um; .*\); if it is in um, write -6, 6 um; "
+     r"used as written$"),
+    ("EAZ", "EAZ,-0.002,0.002,rad",
+     r"the range \(-0.002, 0.002\) rad reaches 0.002 rad, more than the 0.001 rad an angular "
+     r"error of a machine tool reaches \(1 mm/m, 206 arcsec; .*\); if it is in mrad, write "
+     r"-2, 2 urad; if it is in deg, write -34.91, 34.91 urad; used as written$"),
+    # smaller than anything measured: another unit, or meant to make the error negligible
+    ("EYZ", "EYZ,-6e-6,6e-6,um",
+     r"the range \(-6e-06, 6e-06\) um reaches only 6e-06 um, less than the 0.0001 um "
+     r"\(1e-07 mm\) of an atom \(0.1 nm\): .*; if it is in m, write -6, 6 um; used as "
+     r"written$"),
+    ("EBB", "EBB,-1.5e-5,1.5e-5,urad",
+     r"the range \(-1.5e-05, 1.5e-05\) urad reaches only 1.5e-05 urad, less than the "
+     r"0.001 urad \(1e-09 rad\) below which no "
+     r"angular error is measured .*; if it is in rad, write -1.5e-05, 1.5e-05 rad; used as "
+     r"written$"),
+])
+def test_a_range_only_a_rare_machine_has_is_warned_and_used(tmp_path, machine, symbol, new,
+                                                           message):
+    text = _ranges(machine, _edit_row(symbol, new))
+    f = _write(tmp_path, text, "ranges.csv")
+    with pytest.warns(C.SuspectUnitWarning) as record:
+        bounds = C.read_ranges(f, machine)
+    assert len(record) == 1 and record[0].filename == __file__
+    assert re.match(rf"^range file '{re.escape(str(f))}', line {_line_of(text, symbol + ',')} "
+                    rf"\({symbol}\): {message}", str(record[0].message)), str(record[0].message)
+    lo, hi, unit = new.split(",")[1:]
+    j = machine.error_names.index(symbol)
+    assert bounds[:, j] == pytest.approx(np.array([float(lo), float(hi)])
+                                         * errors.UNIT_SCALE[unit], rel=1e-12)
+
+
+def test_a_file_written_wholly_in_another_unit_warns_a_few_times_and_names_the_rest(
+        tmp_path, machine):
+    # every translation in mm instead of um: one warning per row for the first five, then one
+    text = _ranges(machine, lambda rows: [r.replace("-5,5,um", "-5,5,mm") for r in rows])
+    f = _write(tmp_path, text, "ranges.csv")
+    n = sum(e.translational for e in machine.catalogue)
+    with pytest.warns(C.SuspectUnitWarning) as record:
+        C.read_ranges(f, machine)
+    messages = [str(w.message) for w in record]
+    assert len(messages) == C.MAX_UNIT_WARNINGS + 1 and n > C.MAX_UNIT_WARNINGS
+    assert all("reaches 5 mm, more than the 1 mm" in m for m in messages[:-1])
+    lines = [i for i, line in enumerate(text.splitlines(), 1) if ",mm" in line]
+    assert messages[-1] == (f"range file {str(f)!r}: {n - C.MAX_UNIT_WARNINGS} more row(s) "
+                            f"with a value that suggests another unit, at "
+                            + ", ".join(f"line {i}" for i in lines[C.MAX_UNIT_WARNINGS:]))
+
+
+def test_a_refused_file_warns_of_nothing(tmp_path, machine):
+    text = _ranges(machine, lambda rows: [r.replace("EXC,-5,5,um", "EXC,-5,5,mm")
+                                          .replace("EZZ,-5,5,um", "EZZ,-50,50,mm") for r in rows])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"\(EZZ\): the range \(-50, 50\) mm reaches 50 mm"):
+            C.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
+
+
+def test_the_limits_themselves_and_typical_ranges_are_read_quietly(tmp_path, machine):
+    # 1 mm, 1e-3 rad: the warning limits, included; arcsec, um/m and rad of typical size
+    values = {"EXX": "-1,1,mm", "EYY": "-0.006,0.006,mm", "EZZ": "-0.0001,0.0001,um",
+              "EAX": "-15,15,arcsec", "EBX": "-0.001,0.001,rad", "ECX": "-1.5e-5,1.5e-5,rad",
+              "EC0Y": "-20,20,um/m", "EA0Z": "-1e-3,1e-3,urad", "EX0C": "100,200,um"}
+    text = _ranges(machine, lambda rows: [
+        f"{r.split(',')[0]},{values[r.split(',')[0]]}" if r.split(",")[0] in values else r
+        for r in rows])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        bounds = C.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
+    col = machine.error_names.index
+    assert bounds[1, col("EXX")] == 1.0 and bounds[1, col("EBX")] == 1e-3
+    assert bounds[1, col("EAX")] == pytest.approx(15 * np.pi / 180 / 3600)
+
+
+def test_edge_travels_of_real_axes_are_read_quietly(tmp_path):
+    # the smallest slide read without a word (10 mm), a tilting axis of +-30 deg, a table of
+    # one turn, a rotary span of exactly 15 deg, a pivot 0.2 mm off the origin (pivots are not
+    # judged by size: one may lie at the origin)
+    text = (AXES.replace("X,-400,400", "X,0,10").replace("B,-110,110,deg,0,0,150",
+                                                        "B,-30,30,deg,0,0.2,0")
+            .replace("Z,-250,250", "Z,-5,5"))
+    travels, pivots = _read_axes_quietly(_write(tmp_path, text))
+    assert travels["x"] == (0.0, 10.0) and travels["z"] == (-5.0, 5.0)
+    assert np.allclose(travels["B"], np.deg2rad([-30, 30])) and pivots["B"][1] == 0.2
+    text = AXES.replace("B,-110,110", "B,-7.5,7.5").replace("C,0,360", "C,-360,0")
+    travels, _ = _read_axes_quietly(_write(tmp_path, text))
+    assert np.allclose(travels["B"], np.deg2rad([-7.5, 7.5]))
+
+
+def test_the_shipped_machine_files_are_read_quietly():
+    folder = paths.DATA / "machines"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        travels, pivots = C.read_axis_table(folder / "swivel_head_axes.csv", TOPOLOGY)
+        machine = C.iso_machine(TOPOLOGY, pivots=pivots, travels=travels,
+                                tool_offsets=("tool_x", "tool_y", "tool_z"))
+        bounds = C.read_ranges(folder / "swivel_head_ranges.csv", machine)
+    assert bounds.shape == (2, machine.n_errors)
+
+
+@pytest.mark.parametrize("edit, refused", [
+    (("X,-400,400", "X,0,1"), False), (("X,-400,400", "X,0,0.999"), True),
+    (("B,-110,110", "B,0,5"), False), (("B,-110,110", "B,0,4.99"), True),
+], ids=["1 mm", "0.999 mm", "5 deg", "4.99 deg"])
+def test_a_travel_on_the_refusal_limit_is_warned_and_below_it_refused(tmp_path, edit, refused):
+    f = _write(tmp_path, AXES.replace(*edit))
+    if refused:
+        with pytest.raises(ValueError, match=rf"\({edit[1][0]}\): the travel .* less than the"):
+            C.read_axis_table(f, TOPOLOGY)
+    else:
+        with pytest.warns(C.SuspectUnitWarning, match=rf"\({edit[1][0]}\): the travel"):
+            C.read_axis_table(f, TOPOLOGY)
+
+
+@pytest.mark.parametrize("row, refused", [
+    ("EXX,-10,10,mm", False), ("EXX,-10000,10000,um", False), ("EXX,-10.01,10,mm", True),
+    ("EAX,-0.01,0.01,rad", False), ("EAX,-10000,10000,urad", False),
+    ("EAX,-0.0101,0.0101,rad", True),
+], ids=lambda v: str(v))
+def test_a_range_on_the_refusal_limit_is_warned_and_beyond_it_refused(tmp_path, machine, row,
+                                                                      refused):
+    f = _write(tmp_path, _ranges(machine, _edit_row(row[:3], row)), "ranges.csv")
+    if refused:
+        with pytest.raises(ValueError, match=rf"\({row[:3]}\): the range .* more than the "
+                                             r"(10 mm|0\.01 rad) "):
+            C.read_ranges(f, machine)
+    else:
+        with pytest.warns(C.SuspectUnitWarning, match=rf"\({row[:3]}\): the range .* more than "
+                                                      r"the (1 mm|1000 um \(1 mm\)|0\.001 rad|"
+                                                      r"1000 urad \(0\.001 rad\)) .*used as "
+                                                      r"written$"):
+            C.read_ranges(f, machine)
+
+
+def test_the_plausibility_limits_know_every_unit_the_range_file_takes():
+    taken = {**{u: (U.TRANSLATION_ERROR, 1.0) for u in U.TRANSLATION_ERROR.accepted},
+             **{u: (U.ANGULAR_ERROR, 1.0) for u in U.ANGULAR_ERROR.accepted}}
+    assert set(taken) == set(errors.UNIT_SCALE)
+    for unit, (lim, _) in taken.items():     # the same size: mm and rad are the library's units
+        assert lim.units[unit] == pytest.approx(errors.UNIT_SCALE[unit], rel=1e-15), unit
+    assert U.LINEAR_TRAVEL.bound == C.MAX_LINEAR_MM and U.ROTARY_TRAVEL.bound == C.MAX_ROTARY_DEG

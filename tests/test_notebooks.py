@@ -19,7 +19,9 @@ figures and ``provenance.json``.
 """
 
 import json
+import re
 
+import pandas as pd
 import pytest
 
 from mtaccuracy.compendium import paths, provenance, reproduction, runner
@@ -104,3 +106,51 @@ def test_committed_notebook_stores_no_measurement(stem):
     for c in nb["cells"]:
         if "measured" in c.get("metadata", {}).get("tags", []):
             assert _printed(c) == [runner.MEASURED_NOTE]
+
+
+# ------------------------------------------------ notebook 04 on data not in the repository
+
+STEM_04 = "04_xu2022_thermal_mlr_svr"
+
+
+def _svg_titles(folder) -> list[str]:
+    return [re.search(r"<dc:title>(.*?)</dc:title>", p.read_text(encoding="utf-8"), re.S).group(1)
+            for p in sorted(folder.glob("*.svg"))]
+
+
+def test_notebook_04_runs_on_a_readers_own_measurements(notebook_runs):
+    """Experiments 11-15, 19 measurements each, nine sensors named after their places, 25
+    targets over 960 mm (conftest.own_data_runs), with the documented defaults: the method's
+    figures and tables, no paper comparison, no reconstruction stamp."""
+    run = _ok(notebook_runs, "04_own")
+    out = run / "figures" / STEM_04
+    names = {p.name for p in out.iterdir()}
+    assert not names & {"reproduction.csv", "sampling_se.csv", "eq9_consistency.csv"}
+    assert {"table4_point_by_point_metrics.csv", "table7_mlr_metrics.csv", "table8_svr_metrics.csv",
+            "leave_one_experiment_out.csv", "selection_vs_baselines.csv",
+            "beyond_selection_vs_baselines.svg", "fig15_mlr_error_prediction.svg"} <= names
+    titles = _svg_titles(out)
+    assert titles and not any("reconstructed" in t for t in titles)
+    t7 = pd.read_csv(out / "table7_mlr_metrics.csv")
+    assert set(t7.split) == {"train 11 12 13 14, test 15"}
+    versus = pd.read_csv(out / "selection_vs_baselines.csv")
+    assert set(versus.held_out) == {"11", "12", "13", "14", "15", "all"}
+    pooled = versus[versus.held_out == "all"].set_index("model")
+    # the screw's expansion follows its temperatures: every model removes most of the error
+    assert (pooled.rmse.drop("uncompensated") < 0.5 * pooled.rmse["uncompensated"]).all()
+    assert (pooled.n_residuals == 5 * 19 * 25).all()
+    text = (run / f"{STEM_04}.ipynb").read_text(encoding="utf-8")
+    assert "not the paper&#x27;s reconstruction" in text or "not the paper's reconstruction" in text
+
+
+def test_notebook_04_on_a_copy_of_the_reconstruction_keeps_every_label(notebook_runs):
+    """A byte-identical copy of data/thermal elsewhere is the reconstruction: the same
+    scorecard (every row's verdict and basis) as the committed one, and every figure stamped."""
+    out = _ok(notebook_runs, "04_copy") / "figures" / STEM_04
+    fresh = pd.read_csv(out / "reproduction.csv")
+    committed = pd.read_csv(paths.FIGURES / STEM_04 / "reproduction.csv")
+    cols = ["item", "quantity", "verdict", "basis"]
+    assert fresh[cols].equals(committed[cols])
+    assert (committed.basis == "constructed").sum() >= 21
+    titles = _svg_titles(out)
+    assert titles and all("reconstructed data" in t for t in titles)

@@ -328,6 +328,9 @@ def _check_one(p: Parameter, value, notebook: str) -> object:
                     raise ParameterError(
                         f"{notebook}: parameter {p.name!r}: unknown error name {v!r}; allowed: "
                         f"{', '.join(build(bound).error_names)}")
+            elif isinstance(v, bool) or not isinstance(v, int | float):
+                raise ParameterError(f"{notebook}: parameter {p.name!r}: {v!r} is not a number "
+                                     f"(it must be {op} {bound:g})")
             else:
                 ok = {">=": v >= bound, ">": v > bound, "<=": v <= bound, "<": v < bound}[op]
             if not ok:

@@ -19,7 +19,8 @@ __all__ = [
     "DEFAULT_DIR", "LSTSQ_TOLERANCE", "SVR_TOLERANCE", "published_targets", "published_models",
     "published_metrics",
     "reconstruct", "noise_replicates", "calibrate", "read", "is_default_dir", "prepare",
-    "EditedDataError",
+    "EditedDataError", "reconstruction_seed", "resolve_split", "resolve_inputs", "Progress",
+    "reader_notes",
 ]
 
 #: Where the committed reconstruction lives (relative to the repository root).
@@ -205,6 +206,84 @@ ERROR = "thermal positioning error"
 METRIC_NAMES = {"rmse": "RMSE", "max_residual": "largest residual", "mae": "MAE"}
 
 
+#: The files whose content makes a folder the reconstruction (``experiments.csv`` may be absent).
+DATA_FILES = ("temperatures.csv", "errors.csv")
+
+
+def _same_numbers(data, other) -> bool:
+    """Whether two datasets hold the same measurements to the resolution the reconstruction is
+    written with (temperatures 0.01 degC, errors 0.001 um: half a unit, plus rounding)."""
+    import numpy as np
+
+    return (data.sensors == other.sensors and data.index.shape == other.index.shape
+            and np.array_equal(data.index.to_numpy(float), other.index.to_numpy(float))
+            and np.array_equal(data.positions_mm, other.positions_mm)
+            and np.allclose(data.temperatures.to_numpy(float), other.temperatures.to_numpy(float),
+                            rtol=0, atol=0.005 + 1e-9)
+            and np.allclose(data.errors, other.errors, rtol=0, atol=0.0005 + 1e-9))
+
+
+def reconstruction_seed(folder, data, *, seeds=()) -> int | None:
+    """The seed of the paper's reconstruction that ``folder`` holds, or None: decided by content.
+
+    The folder holds the committed reconstruction when its ``temperatures.csv`` and
+    ``errors.csv`` (and its ``experiments.csv``, if it has one) are byte-identical to the files
+    whose SHA-256 the repository's ``data/thermal/provenance.json`` records: a copy anywhere
+    is the reconstruction, and an edited file in ``data/thermal`` is not.  Otherwise, for each
+    of ``seeds`` (a run's own seed, whose reconstruction it wrote into its output folder), the
+    data ``read`` from the folder are compared number by number with
+    :func:`reconstruct` of that seed at the resolution of the files.  Where the folder is, never
+    matters.
+
+    Parameters
+    ----------
+    folder : path
+        The folder that was read.
+    data : ThermalData
+        What was read from it.
+    seeds : sequence of int
+        Other seeds to test (the committed one is tested by its hashes).
+
+    Returns
+    -------
+    int or None
+        :data:`synthetic.DEFAULT_SEED`, one of ``seeds``, or None for a reader's own data.
+    """
+    folder = Path(folder)
+    recorded = provenance.read(paths.ROOT / DEFAULT_DIR).get("files", {})
+    names = [*DATA_FILES, *(["experiments.csv"] if (folder / "experiments.csv").is_file() else [])]
+    if recorded and all((folder / n).is_file() and recorded.get(n, {}).get("sha256")
+                        == provenance.sha256(folder / n) for n in names):
+        return synthetic.DEFAULT_SEED
+    for s in dict.fromkeys(int(s) for s in seeds if int(s) != synthetic.DEFAULT_SEED):
+        if _same_numbers(data, reconstruct(s)):
+            return s
+    return None
+
+
+def resolve_split(stem: str, data, train, test) -> tuple[list[int], int]:
+    """The experiments of the notebook's split: ``test`` 0 is the last experiment, an empty
+    ``train`` every other one (on the reconstruction: train 1 2 3, test 4, as the paper).
+    Refuses (``ParameterError``) experiments the data lack, a test experiment also trained on,
+    and fewer than 2 training experiments (the SVR's cross-validation leaves one out)."""
+    from .runner import ParameterError
+
+    test = int(data.experiments[-1]) if test == 0 else int(test)
+    train = [int(e) for e in train] or [int(e) for e in data.experiments if e != test]
+    absent = sorted(set(train + [test]) - set(int(e) for e in data.experiments))
+    if absent:
+        raise ParameterError(f"{stem}: experiment(s) {absent} are not in the data; they have "
+                             f"{[int(e) for e in data.experiments]}")
+    check_experiments(stem, train, test)
+    return train, test
+
+
+def resolve_inputs(inputs: str, paper: bool) -> str:
+    """``auto``: the paper's sensitive points on its reconstruction, the ones the paper's
+    procedure selects on any other data; ``published`` and ``selected`` as they are."""
+    return ("published" if paper else "selected") if inputs == "auto" else inputs
+
+
 def check_experiments(stem: str, train, test) -> None:
     """Refuse a split whose test experiment is also trained on, or with < 2 training
     experiments (the SVR's cross-validation leaves one out)."""
@@ -234,6 +313,48 @@ def check_data(stem: str, data, folder, train, test, n_clusters: int, inputs: st
         raise ParameterError(f"{stem}: inputs = 'published' needs the paper's sensors, and "
                              f"{folder} lacks {lacking}; use inputs = 'selected'")
     return lacking
+
+
+def reader_notes(data) -> str:
+    """What the reader set aside in the data (dropped dead sensors, ignored columns), one line
+    each, or a line saying nothing was."""
+    notes = [f"sensor {name} dropped: {why}" for name, why in getattr(data, "dropped", {}).items()]
+    notes += [f"column {name} ignored: {why}" for name, why in
+              getattr(data, "ignored_columns", {}).items()]
+    return "\n".join(notes) or "the reader set nothing aside"
+
+
+class Progress:
+    """Progress of a long fit as one line that updates in place in the notebook (an IPython
+    display handle), for ``progress=`` of :func:`thermal.evaluate_split` and
+    :func:`thermal.leave_one_experiment_out`: each call shows the step and the seconds since
+    the start; :meth:`done` leaves a final line without times, so that the stored notebook does
+    not change from run to run."""
+
+    def __init__(self, what: str):
+        self.what, self.handle, self.t0 = what, None, None
+
+    def _show(self, text: str) -> None:
+        import time
+
+        from IPython.display import Pretty, display
+
+        if self.handle is None:
+            self.t0 = time.perf_counter()
+            self.handle = display(Pretty(text), display_id=True)
+        else:
+            self.handle.update(Pretty(text))
+
+    def __call__(self, text: str) -> None:
+        import time
+
+        elapsed = 0.0 if self.t0 is None else time.perf_counter() - self.t0
+        self._show(f"{self.what}: {text} ({elapsed:.0f} s)")
+
+    def done(self) -> None:
+        """Replace the line by "<what>: done" (nothing, if nothing was shown)."""
+        if self.handle is not None:
+            self._show(f"{self.what}: done")
 
 
 def sampling_se(rep_se, *key):
@@ -283,7 +404,8 @@ def prediction_figure(positions_mm, index, measured, predicted, title: str):
     for ax in axes:
         ax.set_xlabel("position (mm)")
         ax.set_ylabel("error (um)")
-    axes[0].legend(fontsize=6, ncol=2)
+    if len(index) <= 24:
+        axes[0].legend(fontsize=6, ncol=2)
     fig.suptitle(title)
     fig.tight_layout()
     return fig

@@ -66,6 +66,7 @@ redundant location errors removed by a rank test (:func:`iso_catalogue`,
 from __future__ import annotations
 
 import re
+import warnings
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -75,7 +76,9 @@ import numpy as np
 from .. import csvlines
 from .. import errors as _errors
 from ..kinematics import matmul3
+from . import units as _units
 from ._base import Machine
+from .units import SuspectUnitWarning  # noqa: F401  (the readers' warning, here for readers)
 
 LINEAR = "XYZ"
 ROTARY = "ABC"
@@ -1194,6 +1197,9 @@ MAX_TABLE_ROWS = 1000
 #: :func:`redundant_location_errors` overflow.
 MAX_LINEAR_MM = 1e5
 MAX_ROTARY_DEG = 3600.0
+#: At most this many :class:`SuspectUnitWarning` per file, one per row, then one naming the
+#: lines of the rest (a file written wholly in another unit would otherwise give one per row).
+MAX_UNIT_WARNINGS = 5
 
 
 @dataclass(frozen=True)
@@ -1335,6 +1341,37 @@ def _check_entries(table: _Table, column: str, wanted):
     return unknown, dup, missing
 
 
+def _in_unit(lim: _units.Limits, v, unit: str) -> str:
+    """``; `` and what a row written in a unit the file does not take says: another spelling
+    of an accepted unit, or its numbers in an accepted unit (:func:`.units.in_unit`); or
+    ``""``."""
+    canon = _units.canonical(unit)
+    if canon in lim.accepted:
+        return f"; {unit!r} is written {canon!r}"
+    try:
+        lo, hi = float(v["low"]), float(v["high"])
+    except ValueError:
+        return ""
+    if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
+        return ""
+    text = _units.in_unit(lim, lo, hi, unit)
+    return f"; {text}" if text else ""
+
+
+def _warn_rows(where: str, found: list) -> None:
+    """Emit the :class:`SuspectUnitWarning` of ``found`` (``(row, message)`` pairs): one per row
+    up to :data:`MAX_UNIT_WARNINGS`, then one naming the lines of the rest.  Attributed to the
+    reader's caller (a notebook cell shows them under it)."""
+    for _, message in found[:MAX_UNIT_WARNINGS]:
+        warnings.warn(message, _units.SuspectUnitWarning, stacklevel=3)
+    rest = found[MAX_UNIT_WARNINGS:]
+    if rest:
+        warnings.warn(f"{where}: {len(rest)} more row(s) with a value that suggests another "
+                      f"unit, at {', '.join(r.where for r, _ in rest[:20])}"
+                      + (", ..." if len(rest) > 20 else ""),
+                      _units.SuspectUnitWarning, stacklevel=3)
+
+
 def read_axis_table(path, topology: str) -> tuple[dict, dict]:
     """The travels and rotary pivots of a topology's axes from a CSV file, checked.
 
@@ -1362,12 +1399,24 @@ def read_axis_table(path, topology: str) -> tuple[dict, dict]:
     ------
     ValueError
         Naming the file and the line (1-based, as an editor numbers them) of the offending
-        row, for a missing or extra axis, a repeated axis (both lines), a wrong unit, a travel
-        that is not finite with low < high or beyond the bounds, a pivot on a linear axis,
-        half a pivot, a pivot beyond the bound, a missing column (the header's line), a file
-        too large or with too many rows, a malformed CSV.
+        row, for a missing or extra axis, a repeated axis (both lines), a wrong unit (with the
+        travel converted, when the unit is one of another name), a travel that is not finite
+        with low < high or beyond the bounds, a travel no machine tool has in the unit written
+        (a linear span below 1 mm, a rotary span below 5 deg, or below 15 deg with ends that
+        read as radians: :func:`.units.check`, naming the likely unit and the numbers to
+        write), a pivot on a linear axis, half a pivot, a pivot beyond the bound, a missing
+        column (the header's line), a file too large or with too many rows, a malformed CSV.
     FileNotFoundError
         When the file does not exist.
+
+    Warns
+    -----
+    SuspectUnitWarning
+        Once per row (at most :data:`MAX_UNIT_WARNINGS`, then one for the rest) whose travel
+        only a rare machine has in the unit written (a linear span of 1-10 mm, a rotary span
+        of 5-15 deg), naming the file, the line, the limit and the likely unit; the travel is
+        used as written.  Emitted after the whole file is checked (a refused file warns of
+        nothing).
     """
     topo = parse_topology(topology)
     table = _read_csv(path, AXIS_TABLE_COLUMNS, "axis table")
@@ -1383,17 +1432,18 @@ def read_axis_table(path, topology: str) -> tuple[dict, dict]:
     if missing:
         raise ValueError(f"{where} ({table.span()}): no row for axis/axes {missing} of the "
                          f"topology {topology!r}")
-    travels, pivots = {}, {}
+    travels, pivots, suspect = {}, {}, []
     for row in table.rows:
         v = row.values
         a = v["axis"]
         line = f"{where}, {row.where} ({a})"
         unit = v["unit"]
         want = "mm" if a in LINEAR else "deg"
+        lim = _units.LINEAR_TRAVEL if a in LINEAR else _units.ROTARY_TRAVEL
         if unit != want:
             kind = "linear" if a in LINEAR else "rotary"
             raise ValueError(f"{line}: unit must be {want!r} for a {kind} axis, got "
-                             f"{_excerpt(unit, 20)}")
+                             f"{_excerpt(unit, 20)}" + _in_unit(lim, v, unit))
         try:
             lo, hi = float(v["low"]), float(v["high"])
         except ValueError:
@@ -1406,8 +1456,14 @@ def read_axis_table(path, topology: str) -> tuple[dict, dict]:
         if max(-lo, hi) > bound:
             why = ("no machine axis travels more than 100 m" if a in LINEAR
                    else "a rotary axis repeats every turn; ten turns either way at most")
+            hint = _units.suggest(lim, lo, hi, unit, sure=False)
             raise ValueError(f"{line}: the travel ({lo:g}, {hi:g}) {unit} goes beyond "
-                             f"+-{bound:g} {unit} ({why})")
+                             f"+-{bound:g} {unit} ({why})" + (f"; {hint}" if hint else ""))
+        found = _units.check(lim, lo, hi, unit)
+        if found is not None and found.refuse:
+            raise ValueError(f"{line}: {found.message}")
+        if found is not None:
+            suspect.append((row, f"{line}: {found.message}"))
         scale = 1.0 if a in LINEAR else np.pi / 180.0
         name = a.lower() if a in LINEAR else a
         travels[name] = (lo * scale, hi * scale)
@@ -1431,6 +1487,7 @@ def read_axis_table(path, topology: str) -> tuple[dict, dict]:
                 raise ValueError(f"{line}: the pivot {point.tolist()} mm lies beyond "
                                  f"+-{MAX_LINEAR_MM:g} mm (no machine is larger than 100 m)")
             pivots[a] = point
+    _warn_rows(where, suspect)
     return travels, pivots
 
 
@@ -1458,12 +1515,25 @@ def read_ranges(path, machine: ChainMachine) -> np.ndarray:
     ValueError
         Naming the file and the line (1-based, as an editor numbers them) of the offending
         row, for: an error the catalogue lacks (with why, when it is a redundant location
-        error the catalogue removed), a repeated error (both lines), an unknown unit or one of
-        the wrong kind, a range that is not finite with low < high; and for a missing error, a
-        missing column (the header's line), a file too large or with too many rows, a
-        malformed CSV.
+        error the catalogue removed), a repeated error (both lines), an unknown unit (with
+        the units of the error's kind, and the range converted when the unit is a known one
+        the file does not take: ``deg``, ``mrad``, ``mm/m``, ``nm``, ``m``, ``µm``) or one of
+        the wrong kind (naming the units of its kind), a range that is not finite with low <
+        high, a range no machine tool has (a translation beyond 10 mm, an angle beyond 0.01
+        rad: :func:`.units.check`, naming the likely unit and the numbers to write); and for
+        a missing error, a missing column (the header's line), a file too large or with too
+        many rows, a malformed CSV.
     FileNotFoundError
         When the file does not exist.
+
+    Warns
+    -----
+    SuspectUnitWarning
+        Once per row (at most :data:`MAX_UNIT_WARNINGS`, then one for the rest) whose range
+        only a rare machine has in the unit written (a translation beyond 1 mm or below 0.1
+        nm, an angle beyond 1e-3 rad or below 1e-9 rad), naming the file, the line, the
+        limit and the likely unit; the range is used as written.  Emitted after the whole
+        file is checked.
     """
     names = machine.error_names
     table = _read_csv(path, RANGE_COLUMNS, "range file",
@@ -1484,19 +1554,25 @@ def read_ranges(path, machine: ChainMachine) -> np.ndarray:
                          f"more than once")
     if missing:
         raise ValueError(f"{where} ({table.span()}): no range for error(s) {missing}")
-    bounds = np.empty((2, len(names)))
+    bounds, suspect = np.empty((2, len(names))), []
     for row in table.rows:
         v = row.values
         s = v["symbol"]
         line = f"{where}, {row.where} ({s})"
         unit = v["unit"]
+        spec = machine.catalogue[column[s]]
+        what = "a translation" if spec.translational else "an angle"
+        lim = _units.TRANSLATION_ERROR if spec.translational else _units.ANGULAR_ERROR
+        takes = f"{', '.join(lim.accepted[:-1])} or {lim.accepted[-1]}"
         if unit not in _errors.UNIT_SCALE:
             raise ValueError(f"{line}: unknown unit {_excerpt(unit, 20)}; allowed: "
-                             f"{', '.join(_errors.UNIT_SCALE)}")
-        spec = machine.catalogue[column[s]]
-        if spec.translational != (unit in ("um", "mm")):
-            what = "a translation" if spec.translational else "an angle"
-            raise ValueError(f"{line}: {s} is {what}, unit {unit!r} is not")
+                             f"{', '.join(_errors.UNIT_SCALE)}; {s} is {what} ({spec.kind}): "
+                             f"write it in {takes}" + _in_unit(lim, v, unit))
+        if spec.translational != (unit in _units.TRANSLATION_ERROR.accepted):
+            length = "" if spec.translational else \
+                "; a deviation over a length is an angle: divide by the length, um/m"
+            raise ValueError(f"{line}: {s} is {what}, unit {unit!r} is not ({spec.kind}: write "
+                             f"it in {takes}){length}")
         try:
             lo, hi = float(v["low"]), float(v["high"])
         except ValueError:
@@ -1504,8 +1580,14 @@ def read_ranges(path, machine: ChainMachine) -> np.ndarray:
                              f"{_excerpt(v['low'], 20)}, {_excerpt(v['high'], 20)}") from None
         if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
             raise ValueError(f"{line}: the range must be finite with high > low, got ({lo}, {hi})")
+        found = _units.check(lim, lo, hi, unit)
+        if found is not None and found.refuse:
+            raise ValueError(f"{line}: {found.message}")
+        if found is not None:
+            suspect.append((row, f"{line}: {found.message}"))
         scale = _errors.UNIT_SCALE[unit]
         bounds[:, column[s]] = lo * scale, hi * scale
+    _warn_rows(where, suspect)
     return bounds
 
 

@@ -13,7 +13,15 @@ Modules:
     the genetic algorithms (fixed rates, and the adaptive rates of Eqs. 22-23) and differential
     evolution, batched over runs;
 ``simulate``
-    simulated measurements (Section 3).
+    simulated measurements (Section 3);
+``probes``
+    a reader's own multi-probe measurement: the probe file (``revolution``, ``angle_deg``,
+    ``probe_<angle>_um``), its checks, and the separation at any probe angles (the weighted
+    method with weights for the given angles, and least squares), with the shipped simulated
+    example;
+``errormotion``
+    radial error motion in ISO 230-7 terms: fixed and rotating sensitive directions,
+    synchronous, asynchronous and total error motion values about the LSC or MRS centre.
 
 Roundness (least-squares circle, minimum zone) is :mod:`mtaccuracy.roundness`.  Every public name
 is importable from here: ``from mtaccuracy import spindle as S; S.separate(...)``.
@@ -29,8 +37,10 @@ optimisation at a time, looping over the population in Python, and hundreds of r
 
 from .. import roundness  # noqa: F401
 from ..roundness import *  # noqa: F403
-from . import design, optimise, separation, simulate  # noqa: F401
+from . import design, errormotion, optimise, probes, separation, simulate  # noqa: F401
 from .design import *  # noqa: F403
+from .errormotion import *  # noqa: F403
 from .optimise import *  # noqa: F403
+from .probes import *  # noqa: F403
 from .separation import *  # noqa: F403
 from .simulate import *  # noqa: F403

@@ -9,8 +9,11 @@
                    estimators: :class:`PointByPointRegressor` (Eqs. 5, 8),
                    :class:`DecoupledRegressor` (Eq. 9), :class:`StandardisedSVR`,
                    :class:`GroupedSVR` (hyperparameters by ``GroupKFold``)
-``validation``     :func:`metrics`, :func:`evaluate_split`, :func:`leave_one_experiment_out`,
-                   :func:`replicate_split`
+``validation``     :func:`metrics` (the one RMSE: pooled over positions and measurements),
+                   :data:`POOLED_RMSE_SCORER`, :func:`evaluate_split`,
+                   :func:`leave_one_experiment_out`, :func:`replicate_split`
+``baselines``      no compensation and :class:`GroupedRidge` on all sensors, against which the
+                   paper's selected models are judged; :func:`pool_metrics`
 ``synthetic``      the seeded reconstruction of the paper's dataset (not the authors' data)
 =================  ========================================================================
 
@@ -25,13 +28,16 @@ Example: the decoupled MLR on arrays, composed with scikit-learn's model selecti
     from sklearn.model_selection import GroupKFold, cross_val_score
     model = DecoupledRegressor(offsets_mm, k_columns=[0, 1], b_columns=[2],
                                k_estimator=LinearRegression(), b_estimator=LinearRegression())
-    cross_val_score(model, X, errors, groups=experiment, cv=GroupKFold(4))
+    cross_val_score(model, X, errors, groups=experiment, cv=GroupKFold(4),
+                    scoring=POOLED_RMSE_SCORER)   # RMSE over all positions and measurements
 """
 
-from . import clustering, io, models, synthetic, validation  # noqa: F401
+from . import baselines, clustering, io, models, synthetic, validation  # noqa: F401
+from .baselines import *  # noqa: F403
 from .clustering import *  # noqa: F403
 from .io import *  # noqa: F403
 from .models import *  # noqa: F403
 from .validation import *  # noqa: F403
 
-__all__ = [*io.__all__, *clustering.__all__, *models.__all__, *validation.__all__]
+__all__ = [*io.__all__, *clustering.__all__, *models.__all__, *validation.__all__,
+           *baselines.__all__]

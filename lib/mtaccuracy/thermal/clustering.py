@@ -343,7 +343,8 @@ class Selection:
 
 
 def select_sensitive_points(temperatures: pd.DataFrame, target, n_clusters: int = 3,
-                            rho: float = 0.5) -> Selection:
+                            rho: float = 0.5, *, clustering: Clustering | None = None
+                            ) -> Selection:
     """Temperature-sensitive points: one sensor per fuzzy cluster (Xu et al. 2022, Section 2).
 
     Clusters the temperature sequences (Eqs. 1-3), then keeps in every cluster the sensor with
@@ -364,6 +365,11 @@ def select_sensitive_points(temperatures: pd.DataFrame, target, n_clusters: int 
         Clusters, so sensors selected.
     rho : float
         Distinguishing coefficient of the grade.
+    clustering : Clustering, optional
+        :func:`fuzzy_clusters` of these ``temperatures`` with ``n_clusters``, computed once and
+        passed to every call that selects on the same temperatures for another target (the
+        clusters do not depend on the target; :func:`mtaccuracy.thermal.evaluate_split` selects
+        at every position): the result is the same as without it.
 
     Returns
     -------
@@ -374,7 +380,12 @@ def select_sensitive_points(temperatures: pd.DataFrame, target, n_clusters: int 
     y = np.asarray(target, dtype=float).ravel()
     if len(y) != len(x):
         raise ValueError(f"target has {len(y)} values, temperatures {len(x)} rows")
-    cl = fuzzy_clusters(x, names, n_clusters)
+    if clustering is None:
+        cl = fuzzy_clusters(x, names, n_clusters)
+    elif sorted(s for g in clustering.groups for s in g) != sorted(names):
+        raise ValueError("clustering was computed for other sensors")
+    else:
+        cl = clustering
     xn = normalise_range(x)
     yn = normalise_range(y[:, None])[:, 0]
     corr = np.array([np.corrcoef(x[:, j], y)[0, 1] if np.ptp(x[:, j]) > 0 else 0.0

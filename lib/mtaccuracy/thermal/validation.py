@@ -19,14 +19,17 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 from sklearn.linear_model import LinearRegression
+from sklearn.metrics import make_scorer
 
-from .clustering import Selection, most_frequent, select_sensitive_points
+from .baselines import BASELINES, ridge_all_sensors
+from .clustering import Selection, fuzzy_clusters, most_frequent, select_sensitive_points
 from .io import ThermalData, rises_of
 from .models import (
     DecoupledRegressor,
     GroupedSVR,
     PointByPointRegressor,
     StandardisedSVR,
+    _prefixed,
     _svr_params,
     compose,
     decouple,
@@ -36,7 +39,8 @@ from .models import (
 )
 
 __all__ = [
-    "metrics", "batch_metrics", "design", "point_by_point", "decoupled", "eq8_table",
+    "metrics", "pooled_rmse", "POOLED_RMSE_SCORER", "batch_metrics", "design", "point_by_point",
+    "decoupled", "eq8_table",
     "eq9_table", "svr_hyperparameters", "SplitResult", "evaluate_split",
     "leave_one_experiment_out", "replicate_split", "metrics_by_experiment",
 ]
@@ -56,6 +60,32 @@ def metrics(residuals) -> dict:
         ``{"rmse", "max_residual", "mae"}`` as floats, in the unit of ``residuals``.
     """
     return {k: float(v[0]) for k, v in batch_metrics(np.asarray(residuals)[None]).items()}
+
+
+def pooled_rmse(y_true, y_pred) -> float:
+    """The RMSE of all residuals at once, pooled over positions and measurements (the one RMSE
+    of this package, :func:`metrics`).
+
+    scikit-learn's ``root_mean_squared_error`` on a multi-output target averages the RMSEs of
+    the outputs (positions) instead, which weighs a position of small errors like one of large
+    ones; the two differ whenever the positions' errors differ in size.
+
+    Parameters
+    ----------
+    y_true, y_pred : array (n, P) or (n,)
+        Measured and predicted errors (um).
+
+    Returns
+    -------
+    float
+        um.
+    """
+    return metrics(np.asarray(y_true, dtype=float) - np.asarray(y_pred, dtype=float))["rmse"]
+
+
+#: :func:`pooled_rmse` as a scikit-learn scorer (negated, greater is better), for
+#: ``cross_val_score(..., scoring=POOLED_RMSE_SCORER)`` and ``GridSearchCV``.
+POOLED_RMSE_SCORER = make_scorer(pooled_rmse, greater_is_better=False)
 
 
 def design(data: ThermalData, inputs: dict, model: str) -> np.ndarray:
@@ -103,7 +133,8 @@ def point_by_point(data: ThermalData, inputs: dict) -> PointByPointRegressor:
                                                          data.errors)
 
 
-def decoupled(data: ThermalData, inputs: dict, kind: str = "mlr") -> DecoupledRegressor:
+def decoupled(data: ThermalData, inputs: dict, kind: str = "mlr", *,
+              progress=None) -> DecoupledRegressor:
     """The decoupled model (Xu et al. 2022, Eq. 9) fitted on a dataset.
 
     Parameters
@@ -115,6 +146,9 @@ def decoupled(data: ThermalData, inputs: dict, kind: str = "mlr") -> DecoupledRe
         sensors whose rises are b's inputs.
     kind : {"mlr", "svr"}
         ``LinearRegression``, or :class:`GroupedSVR` with one fold per experiment.
+    progress : callable, optional
+        For ``"svr"``: called as ``progress("k: <i> of <n> candidates")`` (then ``"b: ..."``)
+        as the hyperparameter searches go.
 
     Returns
     -------
@@ -127,7 +161,8 @@ def decoupled(data: ThermalData, inputs: dict, kind: str = "mlr") -> DecoupledRe
     est = LinearRegression() if kind == "mlr" else GroupedSVR()
     model = DecoupledRegressor(data.offsets_mm(), list(range(nk)), list(range(nk, nk + nb)),
                                k_estimator=est, b_estimator=est)
-    return model.fit(design(data, inputs, "decoupled"), data.errors, groups=data.groups)
+    return model.fit(design(data, inputs, "decoupled"), data.errors, groups=data.groups,
+                     progress=progress)
 
 
 def eq8_table(model: PointByPointRegressor, sensors, positions_mm) -> pd.DataFrame:
@@ -189,8 +224,9 @@ def svr_hyperparameters(model: DecoupledRegressor) -> pd.DataFrame:
     -------
     DataFrame (2, 9)
         Per target: ``kernel``, ``C``, ``gamma``, ``epsilon`` of the chosen candidate, its mean
-        CV RMSE, the number of candidates, how many tied with the best (within its
-        ``tie_rtol``) and the distance of the nearest other one to the tie window's edge.
+        CV RMSE, the number of candidates tried (the grid within :data:`SVR_MAX_CN`: all 40
+        up to 30 training rows), how many tied with the best (within its ``tie_rtol``) and the
+        distance of the nearest other one to the tie window's edge.
     """
     rows = []
     for target, est in (("k", model.k_estimator_), ("b", model.b_estimator_)):
@@ -257,7 +293,8 @@ class SplitResult:
 
 
 def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: float = 0.5,
-                   kinds=("mlr", "svr"), sensors: dict | None = None) -> SplitResult:
+                   kinds=("mlr", "svr"), sensors: dict | None = None, *,
+                   progress=None, baselines=()) -> SplitResult:
     """One train/test split: sensitive points, models, held-out metrics (Xu et al. 2022, Sec. 5).
 
     Selects sensitive points on ``train`` only (:func:`select_sensitive_points`), fits the
@@ -278,6 +315,15 @@ def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: flo
     sensors : dict, optional
         ``{"point": [...], "k": [...], "b": [...]}`` fixes the inputs instead of selecting
         them; the selection is still computed and returned.
+    progress : callable, optional
+        Called with a short text as the work goes: ``"sensitive points: <i> of <P>
+        positions"`` (about ten times), then per model, e.g. ``"decoupled_svr, k: 12 of 40
+        candidates"``.  None (the default): silent.  ``print`` shows every step.
+    baselines : sequence of str
+        Models that need no sensor selection, fitted and judged on the same split
+        (:data:`BASELINES`): ``"uncompensated"`` (no model: the residual is the measured error)
+        and ``"ridge_all_sensors"`` (:func:`ridge_all_sensors`: k on every sensor's temperature,
+        b on every sensor's rise).
 
     Returns
     -------
@@ -290,22 +336,48 @@ def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: flo
     offsets = data.offsets_mm()
     k_tr, b_tr = decouple(offsets, tr.errors)
     rises = tr.rises()
-    pos_sel = [select_sensitive_points(rises, tr.errors[:, i], n_clusters, rho)
-               for i in range(tr.errors.shape[1])]
+    n_pos = tr.errors.shape[1]
+    # the clusters of the rises do not depend on the target: computed once for all positions
+    clusters = fuzzy_clusters(rises.to_numpy(dtype=float), list(rises.columns), n_clusters)
+    pos_sel = []
+    for i in range(n_pos):
+        pos_sel.append(select_sensitive_points(rises, tr.errors[:, i], n_clusters, rho,
+                                               clustering=clusters))
+        if progress is not None and ((i + 1) % max(1, n_pos // 10) == 0 or i + 1 == n_pos):
+            progress(f"sensitive points: {i + 1} of {n_pos} positions")
     k_sel = select_sensitive_points(tr.temperatures, k_tr, n_clusters, rho)
-    b_sel = select_sensitive_points(rises, b_tr, n_clusters, rho)
+    b_sel = select_sensitive_points(rises, b_tr, n_clusters, rho, clustering=clusters)
     selected = {"point": most_frequent([s.selected for s in pos_sel], n_clusters,
                                        order=data.sensors),
                 "k": k_sel.selected, "b": b_sel.selected}
     chosen = {**selected, **(sensors or {})}
+    if progress is not None:
+        progress("point_by_point_mlr")
     models = {"point_by_point_mlr": point_by_point(tr, chosen)}
     for kind in kinds:
-        models[f"decoupled_{kind}"] = decoupled(tr, chosen, kind)
+        if progress is not None and kind != "svr":
+            progress(f"decoupled_{kind}")
+        models[f"decoupled_{kind}"] = decoupled(
+            tr, chosen, kind, progress=_prefixed(progress, f"decoupled_{kind}, "))
+    unknown = sorted(set(baselines) - set(BASELINES))
+    if unknown:
+        raise ValueError(f"unknown baseline(s) {unknown}; use {list(BASELINES)}")
+    every = {"k": list(data.sensors), "b": list(data.sensors)}
+    if "ridge_all_sensors" in baselines:
+        if progress is not None:
+            progress("ridge_all_sensors")
+        models["ridge_all_sensors"] = ridge_all_sensors(offsets, len(data.sensors)).fit(
+            design(tr, every, "decoupled"), tr.errors, groups=tr.groups)
     measured = te.errors
     measured_kb = decouple(offsets, measured)
     preds, kb_preds, rows = {}, {}, []
+    if "uncompensated" in baselines:
+        preds["uncompensated"] = np.zeros_like(measured)
+        rows.append({"method": "uncompensated", "target": "thermal positioning error",
+                     "unit": "um", **metrics(measured)})
     for name, m in models.items():
-        x = design(te, chosen, "decoupled" if isinstance(m, DecoupledRegressor) else "point")
+        x = design(te, every if name == "ridge_all_sensors" else chosen,
+                   "decoupled" if isinstance(m, DecoupledRegressor) else "point")
         preds[name] = m.predict(x)
         rows.append({"method": name, "target": "thermal positioning error", "unit": "um",
                      **metrics(measured - preds[name])})
@@ -320,10 +392,10 @@ def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: flo
     table = pd.DataFrame(rows)[["method", "target", "rmse", "max_residual", "mae", "unit"]]
     return SplitResult(list(tr.experiments), list(te.experiments), pos_sel, selected, chosen,
                        k_sel, b_sel, models, preds, kb_preds, measured, measured_kb, table,
-                       _settings(data, train, test, n_clusters, rho, kinds, sensors))
+                       _settings(data, train, test, n_clusters, rho, kinds, sensors, baselines))
 
 
-def _settings(data, train, test, n_clusters, rho, kinds, sensors) -> dict:
+def _settings(data, train, test, n_clusters, rho, kinds, sensors, baselines=()) -> dict:
     """What determines a split's result: compared to reuse a result."""
     h = hashlib.sha256()
     for a in (data.index.to_numpy(dtype=float), data.temperatures.to_numpy(dtype=float),
@@ -333,12 +405,13 @@ def _settings(data, train, test, n_clusters, rho, kinds, sensors) -> dict:
     return {"data": h.hexdigest(), "train": sorted(int(e) for e in np.atleast_1d(train)),
             "test": sorted(int(e) for e in np.atleast_1d(test)), "n_clusters": int(n_clusters),
             "rho": float(rho), "kinds": tuple(kinds),
-            "sensors": {k: list(v) for k, v in sorted((sensors or {}).items())}}
+            "sensors": {k: list(v) for k, v in sorted((sensors or {}).items())},
+            "baselines": tuple(baselines)}
 
 
 def leave_one_experiment_out(data: ThermalData, n_clusters: int = 3, rho: float = 0.5,
                              kinds=("mlr", "svr"), sensors: dict | None = None,
-                             reuse=()) -> pd.DataFrame:
+                             reuse=(), *, progress=None, baselines=()) -> pd.DataFrame:
     """:func:`evaluate_split` with each experiment held out in turn (selection redone each time).
 
     Parameters
@@ -350,23 +423,40 @@ def leave_one_experiment_out(data: ThermalData, n_clusters: int = 3, rho: float 
     reuse : sequence of SplitResult
         Results computed on the same data (compared by content hash) with the same settings are
         taken as they are instead of being computed again.
+    progress : callable, optional
+        Called with a short text as the work goes, the messages of :func:`evaluate_split` led
+        by ``"held out <e> (<i> of <n>): "``, e.g. ``"held out 3 (3 of 10): decoupled_svr, k:
+        12 of 40 candidates"``, and ``"... reused"`` for a split taken from ``reuse``.  None
+        (the default): silent.
+    baselines : sequence of str
+        As :func:`evaluate_split`.
 
     Returns
     -------
     DataFrame
-        One row per held-out experiment, method and target: ``held_out``, the sensors used and
-        the columns of :attr:`SplitResult.table`.
+        One row per held-out experiment, method and target: ``held_out``, the sensors used,
+        the columns of :attr:`SplitResult.table` and ``n_residuals``, the number of residuals
+        behind the row's metrics (positions x measurements for the error, measurements for k
+        and b: :func:`mtaccuracy.thermal.pool_metrics` pools with them).
     """
     frames = []
-    for e in data.experiments:
+    for i, e in enumerate(data.experiments, 1):
         train = [x for x in data.experiments if x != e]
-        want = _settings(data, train, [e], n_clusters, rho, kinds, sensors)
-        r = next((r for r in reuse if r.settings == want), None) or \
-            evaluate_split(data, train, [e], n_clusters, rho, kinds, sensors)
+        want = _settings(data, train, [e], n_clusters, rho, kinds, sensors, baselines)
+        step = _prefixed(progress, f"held out {e} ({i} of {len(data.experiments)}): ")
+        r = next((r for r in reuse if r.settings == want), None)
+        if r is not None and step is not None:
+            step("reused")
+        r = r or evaluate_split(data, train, [e], n_clusters, rho, kinds, sensors,
+                                progress=step, baselines=baselines)
         t = r.table.copy()
         t.insert(0, "held_out", e)
-        for i, key in enumerate(("point", "k", "b"), 1):
-            t.insert(i, f"{key}_sensors", " ".join(r.inputs[key]))
+        for j, key in enumerate(("point", "k", "b"), 1):
+            t.insert(j, f"{key}_sensors", " ".join(r.inputs[key]))
+        # residuals behind each metric: positions x measurements for the error, measurements
+        # for k and b (pooling over experiments weighs each by them: baselines.pool_metrics)
+        t["n_residuals"] = np.where(t.target == "thermal positioning error", r.measured.size,
+                                    len(r.measured))
         frames.append(t)
     return pd.concat(frames, ignore_index=True)
 
