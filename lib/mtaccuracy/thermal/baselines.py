@@ -19,14 +19,13 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.linear_model import Ridge
-from sklearn.model_selection import GridSearchCV, GroupKFold, KFold
+from sklearn.model_selection import GridSearchCV
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
-from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils.validation import validate_data
 
-from .models import DecoupledRegressor
+from .models import DecoupledRegressor, SearchedRegressor, grouped_folds
 
 __all__ = ["BASELINES", "RIDGE_ALPHAS", "RIDGE_TIE_RTOL", "GroupedRidge", "ridge_all_sensors",
            "pool_metrics", "selection_vs_baselines", "selection_verdict"]
@@ -52,7 +51,7 @@ def _largest_tied_alpha(cv_results: dict, rtol: float = RIDGE_TIE_RTOL) -> int:
     return int(tied[np.argmax(alpha[tied])])
 
 
-class GroupedRidge(RegressorMixin, BaseEstimator):
+class GroupedRidge(SearchedRegressor):
     """Ridge regression on standardised inputs, its penalty chosen by grouped cross-validation.
 
     scikit-learn's ``Ridge`` in a ``StandardScaler`` pipeline, searched over ``alphas`` by
@@ -100,13 +99,7 @@ class GroupedRidge(RegressorMixin, BaseEstimator):
         self
         """
         X, y = validate_data(self, X, y, y_numeric=True)
-        if groups is None:
-            cv = KFold(n_splits=min(5, len(y)))
-        else:
-            n_groups = len(np.unique(groups))
-            if n_groups < 2:
-                raise ValueError("ridge cross-validation needs at least 2 training experiments")
-            cv = GroupKFold(n_splits=n_groups)
+        cv = grouped_folds(len(y), groups, "ridge")
         alphas = list(RIDGE_ALPHAS if self.alphas is None else self.alphas)
         self.search_ = GridSearchCV(make_pipeline(StandardScaler(), Ridge()),
                                     {"ridge__alpha": alphas}, cv=cv, n_jobs=1,
@@ -116,23 +109,6 @@ class GroupedRidge(RegressorMixin, BaseEstimator):
         self.best_estimator_ = self.search_.best_estimator_
         self.alpha_ = float(self.search_.best_params_["ridge__alpha"])
         return self
-
-    def predict(self, X):
-        """Predictions of the chosen penalty.
-
-        Parameters
-        ----------
-        X : array (n, p)
-            Inputs.
-
-        Returns
-        -------
-        array (n,)
-            Predicted target.
-        """
-        check_is_fitted(self)
-        X = validate_data(self, X, reset=False)
-        return self.best_estimator_.predict(X)
 
 
 def ridge_all_sensors(offsets_mm, n_sensors: int) -> DecoupledRegressor:

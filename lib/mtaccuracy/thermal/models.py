@@ -43,7 +43,7 @@ __all__ = [
     "decouple", "compose", "StandardisedSVR", "GroupedSVR", "PointByPointRegressor",
     "DecoupledRegressor", "svr_search", "svr_simplicity", "canonical_best", "tie_margin",
     "UnboundedFits", "bounded_grid", "SVR_GRID", "SVR_SOLVER_TOL", "SVR_TIE_RTOL",
-    "SVR_MAX_CN", "fit_linear", "predict_linear",
+    "SVR_MAX_CN", "fit_linear", "predict_linear", "grouped_folds", "SearchedRegressor",
 ]
 
 # --------------------------------------------------------------------------------------------
@@ -519,13 +519,7 @@ def svr_search(x: np.ndarray, y: np.ndarray, groups=None, grid=None,
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     if len(y) < 2:
         raise ValueError(f"n_samples = {len(y)}: cross-validation needs at least 2 samples")
-    if groups is None:
-        cv = KFold(n_splits=min(5, len(y)))
-    else:
-        n_groups = len(np.unique(groups))
-        if n_groups < 2:
-            raise ValueError("SVR cross-validation needs at least 2 training experiments")
-        cv = GroupKFold(n_splits=n_groups)
+    cv = grouped_folds(len(y), groups, "SVR")
     if not (np.isfinite(x).all() and np.isfinite(y).all()):
         raise ValueError("SVR inputs and target must be finite")
     refit = canonical_best if tie_rtol == SVR_TIE_RTOL else functools.partial(
@@ -558,7 +552,56 @@ def _prefixed(progress, prefix: str):
     return None if progress is None else (lambda text: progress(prefix + text))
 
 
-class GroupedSVR(RegressorMixin, BaseEstimator):
+def grouped_folds(n: int, groups, what: str):
+    """The cross-validation folds of a thermal model's hyperparameter search: one per group
+    (an experiment held out at a time, as the model is used on experiments it has not seen),
+    or ``KFold(min(5, n))`` (unshuffled) without groups.
+
+    Parameters
+    ----------
+    n : int
+        Number of rows.
+    groups : array (n,) or None
+        Experiment of each row.
+    what : str
+        The model, for the message refusing fewer than 2 groups.
+
+    Returns
+    -------
+    GroupKFold or KFold
+    """
+    if groups is None:
+        return KFold(n_splits=min(5, n))
+    n_groups = len(np.unique(groups))
+    if n_groups < 2:
+        raise ValueError(f"{what} cross-validation needs at least 2 training experiments")
+    return GroupKFold(n_splits=n_groups)
+
+
+class SearchedRegressor(RegressorMixin, BaseEstimator):
+    """Base of a regressor whose ``fit`` chooses its hyperparameters by a search and keeps the
+    chosen model, refitted on all data, as ``best_estimator_`` (:class:`GroupedSVR`,
+    :class:`mtaccuracy.thermal.GroupedRidge`)."""
+
+    def predict(self, X):
+        """Predictions of the chosen candidate.
+
+        Parameters
+        ----------
+        X : array (n, p)
+            Inputs.
+
+        Returns
+        -------
+        array (n,)
+            Predicted target.
+        """
+        check_is_fitted(self)
+        X = validate_data(self, X, reset=False)
+        return self.best_estimator_.predict(X)
+
+
+class GroupedSVR(SearchedRegressor):
     """SVR whose hyperparameters are chosen by grouped cross-validation at ``fit``.
 
     The estimator form of :func:`svr_search`: ``fit(X, y, groups)`` searches ``grid`` with one
@@ -613,23 +656,6 @@ class GroupedSVR(RegressorMixin, BaseEstimator):
                                   progress=progress)
         self.best_estimator_ = self.search_.best_estimator_
         return self
-
-    def predict(self, X):
-        """Predictions of the chosen candidate.
-
-        Parameters
-        ----------
-        X : array (n, p)
-            Inputs.
-
-        Returns
-        -------
-        array (n,)
-            Predicted target.
-        """
-        check_is_fitted(self)
-        X = validate_data(self, X, reset=False)
-        return self.best_estimator_.predict(X)
 
 
 class PointByPointRegressor(RegressorMixin, BaseEstimator):
