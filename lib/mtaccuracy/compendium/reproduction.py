@@ -590,7 +590,7 @@ def compare_tables(new_path, committed_path, tolerances: dict | None = None) -> 
 
 
 def papers_index() -> dict[str, dict]:
-    """``data/papers/index.csv``: notebook stem -> its row (paper, citation, seed)."""
+    """``data/papers/index.csv``: notebook stem -> its row (paper, citation, doi)."""
     with open(paths.PAPERS / "index.csv", newline="", encoding="utf-8") as fh:
         return {r["notebook"]: r for r in csv.DictReader(fh)}
 
