@@ -97,7 +97,12 @@ def _strip(line: str, quoted: bool, comment: str | None) -> tuple[str, bool]:
     return (line if m.end() == len(line) else line[:m.end()] + "\n"), False
 
 
-def records(text: str, *, comment: str | None = None) -> Iterator[Record]:
+#: A semicolon file is scanned with ';' and ',' swapped (a one-to-one swap of single characters,
+#: so lines and quoting stay where they were) and its fields swapped back.
+_SWAP = str.maketrans(";,", ",;")
+
+
+def records(text: str, *, comment: str | None = None, sep: str = ",") -> Iterator[Record]:
     """The records of a CSV text with their physical lines, the header first.
 
     Lines end with ``\\n``, ``\\r\\n`` or ``\\r``.  A line that is blank (or, with ``comment``,
@@ -110,6 +115,9 @@ def records(text: str, *, comment: str | None = None) -> Iterator[Record]:
         The file's text (decoded).
     comment : str, optional
         A character that starts a comment outside quoted fields (``"#"``); None: no comments.
+    sep : {",", ";"}
+        The field separator: ``";"`` reads a semicolon-separated file (as spreadsheet software
+        writes CSV in a locale with decimal commas), its fields as the file has them.
 
     Returns
     -------
@@ -123,6 +131,17 @@ def records(text: str, *, comment: str | None = None) -> Iterator[Record]:
     CSVLineError
         When the csv module cannot read a record.
     """
+    if sep == ";":
+        for rec in _records(text.translate(_SWAP), comment):
+            yield Record(rec.first, rec.last, [f.translate(_SWAP) for f in rec.fields])
+    elif sep == ",":
+        yield from _records(text, comment)
+    else:
+        raise ValueError(f"sep must be ',' or ';', got {sep!r}")
+
+
+def _records(text: str, comment: str | None) -> Iterator[Record]:
+    """:func:`records` of a comma-separated text."""
     text = text.replace("\r\n", "\n").replace("\r", "\n")
     fed: list[int] = []            # the physical line of every line handed to the csv reader
     opened = [0]                   # where the quoted field open at the end of a line opened

@@ -789,20 +789,13 @@ def _text(path: Path) -> str:
     return path.read_bytes().decode("utf-8-sig")
 
 
-#: The line scanner reads commas: it is shown a semicolon file with ';' and ',' swapped (a
-#: one-to-one swap of single characters, so lines and quoting stay where they were, and a field
-#: swapped back is the file's own text), as :mod:`mtaccuracy.thermal.io` does.
-_SWAP = str.maketrans(";,", ",;")
-
-
 def _records(text: str, sep: str):
     """The records of a file's text with their lines (:func:`mtaccuracy.csvlines.records`),
     the header first, the fields as the file has them (swapped back in a semicolon file), rows
     whose every field is empty left out (pandas' rows and these stay in step)."""
-    for rec in csvlines.records(text.translate(_SWAP) if sep == ";" else text):
-        fields = [f.translate(_SWAP) for f in rec.fields] if sep == ";" else rec.fields
-        if any(f.strip() for f in fields):
-            yield csvlines.Record(rec.first, rec.last, fields)
+    for rec in csvlines.records(text, sep=sep):
+        if any(f.strip() for f in rec.fields):
+            yield rec
 
 
 class _Lines:

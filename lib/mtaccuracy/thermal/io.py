@@ -202,12 +202,8 @@ def _problem(path, message) -> DataFormatError:
 #
 # Separator.  A file is comma-separated with decimal points, or semicolon-separated (as
 # European spreadsheet software writes CSV) with decimal commas or points; the first non-blank
-# line, the header, tells which (:func:`_separator`).  The line scanner reads commas: it is
-# shown a semicolon file with ';' and ',' swapped (:data:`_SWAP`, a one-to-one swap of single
-# characters, so lines and quoting stay where they were and a field swapped back is the
-# file's own text).
-
-_SWAP = str.maketrans(";,", ",;")
+# line, the header, tells which (:func:`_separator`); ``csvlines.records(text, sep=sep)``
+# scans either.
 
 
 def _decode(path: Path, raw: bytes) -> str:
@@ -256,9 +252,9 @@ def _separator(path: Path, text: str) -> str:
 
 
 def _records_of(text: str, sep: str):
-    """The records of a file's text (:func:`mtaccuracy.csvlines.records`), the header first;
-    the fields of a semicolon file come swapped (swap them back with :data:`_SWAP`)."""
-    return csvlines.records(text.translate(_SWAP) if sep == ";" else text)
+    """The records of a file's text (:func:`mtaccuracy.csvlines.records`), the header first,
+    the fields as the file has them."""
+    return csvlines.records(text, sep=sep)
 
 
 def _records(path: Path):
@@ -290,7 +286,7 @@ def _where(path: Path, rows, column: int | None = None) -> list[tuple[int, str]]
             row += 1
             if row in wanted:
                 f = rec.fields[column] if column is not None and column < len(rec.fields) else ""
-                found[row] = (rec.first, (f.translate(_SWAP) if sep == ";" else f).strip())
+                found[row] = (rec.first, f.strip())
                 if len(found) == len(wanted):
                     break
     return [found.get(int(r), (-1, "")) for r in rows]
@@ -373,7 +369,7 @@ def _header(path: Path, text: str, sep: str) -> list[str] | None:
             return None
     if rec is None:
         return None
-    names = [(f.translate(_SWAP) if sep == ";" else f).strip() for f in rec.fields]
+    names = [f.strip() for f in rec.fields]
     names = [n or _UNNAMED.format(i + 1) for i, n in enumerate(names)]
     seen: dict[str, list[int]] = {}
     for i, n in enumerate(names):
