@@ -3,11 +3,14 @@
 #   make reproduce NB=03        one notebook (a number, a stem or a path)
 #   make reproduce NB=03 PARAMS="n_samples=1000 seed=7"   with validated parameters
 #   make lab LAB_ARGS="--port 9999"                       JupyterLab on 127.0.0.1
-#   make test | bench | report | clean | lock
+#   make book                                             the book (build/book/html) from what is committed
+#   make explore EXPLORE_ARGS="--port 5007"               the interactive explorer on 127.0.0.1
+#   make test | bench | clean | lock
 #
-# NB, PARAMS, LAB_ARGS and LAB_UNSAFE reach the programs raw, through the environment: make
-# does not expand them ($(value ...) below: PARAMS='seed=$(shell ...)' is text, $HOME stays
-# $HOME) and Python's shlex splits them, never a shell: PARAMS="--check; touch x" is an error.
+# NB, PARAMS, LAB_ARGS, LAB_UNSAFE and EXPLORE_ARGS reach the programs raw, through the
+# environment: make does not expand them ($(value ...) below: PARAMS='seed=$(shell ...)' is
+# text, $HOME stays $HOME) and Python's shlex splits them, never a shell: PARAMS="--check;
+# touch x" is an error.
 #
 # Every target first checks that .venv is this checkout's own (ownenv.py: a .venv shared with
 # another checkout would run that checkout's code) and finishes a commit of results that a
@@ -32,7 +35,7 @@ OWN_VENV := $(PY) -I lib/mtaccuracy/compendium/ownenv.py
 RECOVER := PYTHONPATH=lib $(PYTHON) -m mtaccuracy.compendium.commit
 GUARD := @$(OWN_VENV) && $(RECOVER)
 
-.PHONY: reproduce report browser test test-notebooks lab bench clean distclean lint venv lock
+.PHONY: reproduce book explore browser test test-notebooks lab bench clean distclean lint venv lock
 
 venv: $(STAMP)
 
@@ -51,12 +54,20 @@ reproduce: $(STAMP)
 	$(GUARD)
 	@$(PY) -m mtaccuracy.compendium.runner --from-env
 	@$(PY) -m mtaccuracy.compendium.reproduction gather
-	@$(PY) -m mtaccuracy.compendium.report
 
-# The static report (figures/index.html) from what is in figures/ now, without running anything.
-report: $(STAMP)
+# The book (Sphinx + MyST-NB, book theme) from the committed notebooks and figures/, executing
+# nothing; checks every output shown against its provenance.json (exit 1 names what is wrong).
+book: $(STAMP)
 	$(GUARD)
-	$(PY) -m mtaccuracy.compendium.report
+	@$(PY) -m mtaccuracy.compendium.book
+
+# The interactive explorer (Panel) on 127.0.0.1; EXPLORE_ARGS for more (--port N).
+EXPLORE_ARGS ?=
+override EXPLORE_ARGS := $(value EXPLORE_ARGS)
+export EXPLORE_ARGS
+explore: $(STAMP)
+	$(GUARD)
+	@$(PY) -m mtaccuracy.compendium.explore --from-env
 
 # Debian's Chromium and ChromeDriver for the browser test (root; apt-get; never a browser download).
 browser:
@@ -67,17 +78,18 @@ test: $(STAMP)
 	$(PY) -m ruff check lib tests notebooks conftest.py
 	$(PY) -m pytest
 
-# The notebook checks alone (execution, printed tables, regenerated CSVs); CI runs them once
-# more with OPENBLAS_NUM_THREADS=1.
+# The notebook checks alone: nbval executes every notebook and compares its marked cells, then
+# the regenerated CSVs are compared; CI runs them once more with OPENBLAS_NUM_THREADS=1.
 test-notebooks: $(STAMP)
 	$(GUARD)
-	$(PY) -m pytest tests/test_notebooks.py
+	$(PY) -m pytest notebooks tests/test_notebooks.py
 
 lint: $(STAMP)
 	$(GUARD)
 	$(PY) -m ruff check lib tests notebooks conftest.py
 
-# Bound to 127.0.0.1 with a token; --allow-root when run as root (containers); LAB_ARGS for more.
+# At the repository root, opening on notebooks/; bound to 127.0.0.1 with a token; --allow-root
+# when run as root (containers); LAB_ARGS for more.
 lab: $(STAMP)
 	$(GUARD)
 	@$(PY) -m mtaccuracy.compendium.lab
@@ -94,8 +106,9 @@ lock:
 	rm -rf /tmp/mtaccuracy-lock && $(PYTHON) -m venv /tmp/mtaccuracy-lock
 	/tmp/mtaccuracy-lock/bin/pip install --quiet --upgrade pip setuptools
 	/tmp/mtaccuracy-lock/bin/pip install --quiet jupyterlab papermill numpy scipy SALib chaospy \
-	    pandas matplotlib nbval scikit-learn ipykernel pytest ruff sympy playwright
-	{ head -3 environment.txt; /tmp/mtaccuracy-lock/bin/pip freeze --all; } > environment.txt.new
+	    pandas matplotlib nbval scikit-learn ipykernel pytest ruff sympy playwright sphinx myst-nb \
+	    sphinx-book-theme numpydoc jupyter-server-mathjax itables panel
+	{ head -4 environment.txt; /tmp/mtaccuracy-lock/bin/pip freeze --all; } > environment.txt.new
 	mv environment.txt.new environment.txt
 
 # First finishes a commit a killed run left half done and removes what dead runs left (staging
@@ -103,7 +116,7 @@ lock:
 clean:
 	@$(RECOVER)
 	rm -rf notebooks/.running notebooks/.failed .pytest_cache .ruff_cache .test-output build
-	rm -rf figures/index.html figures/html figures/.runs.json
+	rm -rf figures/index.html figures/html figures/.runs.json build/book
 	find . -path ./.venv -prune -o -name __pycache__ -type d -exec rm -rf {} +
 	find . -path ./.venv -prune -o -name .ipynb_checkpoints -type d -exec rm -rf {} +
 

@@ -3,11 +3,16 @@
 * Executed notebooks write their figures and tables under ``<tmp>/mtaccuracy-tests/session-<pid>/``
   (through ``$MTACCURACY_OUTPUT_BASE`` and ``--copy-to``, which takes only folders outside the
   repository), never over the committed ``figures/``.
-* When the session includes tests that use the ``notebook_runs`` fixture
-  (tests/test_notebooks.py), every notebook starts executing in the background as soon as the
-  tests are collected, two at a time
-  (``python -m mtaccuracy.compendium.runner NN --copy-to DIR``), while
-  the unit tests run; those tests wait for the run they need.
+* The committed notebooks are executed by nbval itself (``--nbval-lax`` in pyproject.toml: every
+  cell runs, the cells whose first line is ``# NBVAL_CHECK_OUTPUT`` must print what the committed
+  notebook prints), after the unit tests, one at a time, each writing under the session folder
+  (``$MTACCURACY_OUTPUT_BASE``).  The tests that compare what such a run wrote with the committed
+  files (tests/test_notebooks.py, fixture ``nbval_output``) run after all of them.
+* When the session includes tests that use the ``notebook_runs`` fixture, the extra runs with
+  other parameters or data (notebook 03 with small parameters, notebook 04 on other data) start
+  in the background as soon as the tests are collected, two at a time (``python -m
+  mtaccuracy.compendium.runner NN --copy-to DIR``), while the unit tests run; those tests wait
+  for the run they need.
 * A session-wide guard fails the run if anything in the working tree's ``figures/`` or
   ``notebooks/`` changed while the tests ran.
 """
@@ -27,8 +32,8 @@ import pytest
 ROOT = Path(__file__).resolve().parent
 # One folder per test session, outside the repository (a run copies only to folders outside
 # it), so that two sessions running at once cannot clear each other's regenerated outputs; it
-# is removed when the session ends, except the browser test's screenshot, kept in
-# .test-output/report/.
+# is removed when the session ends, except the browser tests' screenshots, kept in
+# .test-output/book/ and .test-output/explore/.
 TEST_OUTPUT = Path(tempfile.gettempdir()) / "mtaccuracy-tests" / f"session-{os.getpid()}"
 KEPT = ROOT / ".test-output"
 GUARDED = [ROOT / "figures", ROOT / "notebooks"]
@@ -129,26 +134,63 @@ def pytest_configure(config):
     config._mtaccuracy_guard = _snapshot()
 
 
+def _is_nbval(item) -> bool:
+    return item.nodeid.startswith("notebooks/") and item.nodeid.split("::")[0].endswith(".ipynb")
+
+
+def _needs_runs(item) -> bool:
+    return bool({"notebook_runs", "nbval_output"} & set(getattr(item, "fixturenames", ())))
+
+
 def pytest_collection_modifyitems(config, items):
-    # the notebook checks last, so the unit tests run while the notebooks execute
-    late = [i for i in items if "notebook_runs" in getattr(i, "fixturenames", ())]
-    items[:] = [i for i in items if i not in late] + late
+    # the unit tests first (the extra runs execute in the background meanwhile), then nbval's
+    # cells notebook by notebook, then the tests of what the runs wrote
+    nbval = [i for i in items if _is_nbval(i)]
+    late = [i for i in items if _needs_runs(i)]
+    rest = [i for i in items if i not in nbval and i not in late]
+    items[:] = rest + nbval + late
+    config._mtaccuracy_nbval = {i.nodeid.split("::")[0] for i in nbval}
+
+
+#: Per notebook file executed by nbval in this session: the outcomes of its cells.
+_NBVAL_OUTCOMES: dict[str, list[str]] = {}
+
+
+def pytest_runtest_logreport(report):
+    nodeid = report.nodeid.split("::")[0]
+    if nodeid.startswith("notebooks/") and nodeid.endswith(".ipynb") and \
+            (report.when == "call" or report.outcome != "passed"):
+        _NBVAL_OUTCOMES.setdefault(Path(nodeid).stem, []).append(report.outcome)
+
+
+@pytest.fixture(scope="session")
+def nbval_output(request):
+    """``nbval_output(stem)``: the folder under which nbval's run of ``notebooks/<stem>.ipynb``
+    in this session wrote (``figures/<stem>/``, and ``data/thermal/`` for notebook 04); fails
+    when that run failed, skips when the session did not run it (run ``pytest notebooks
+    tests/test_notebooks.py``, as ``make test`` does)."""
+    collected = getattr(request.config, "_mtaccuracy_nbval", set())
+
+    def get(stem: str) -> Path:
+        if f"notebooks/{stem}.ipynb" not in collected:
+            pytest.skip(f"nbval did not run notebooks/{stem}.ipynb in this session: add "
+                        f"notebooks/ to the command (make test does)")
+        outcomes = _NBVAL_OUTCOMES.get(stem, [])
+        if not outcomes or set(outcomes) != {"passed"}:
+            pytest.fail(f"nbval's run of notebooks/{stem}.ipynb did not pass "
+                        f"({', '.join(sorted(set(outcomes))) or 'no cell ran'}); "
+                        f"see its cells' failures above")
+        return TEST_OUTPUT
+    return get
 
 
 def pytest_collection_finish(session):
     global _RUNS
     if not any("notebook_runs" in getattr(i, "fixturenames", ()) for i in session.items):
         return
-    from mtaccuracy.compendium import runner
-
     base = TEST_OUTPUT / "notebooks"
     base.mkdir(parents=True, exist_ok=True)
     _RUNS = NotebookRuns(base, jobs=max(1, min(2, os.cpu_count() or 1)))
-    known = runner.last_runs()
-    stems = sorted((p.stem for p in runner.all_notebooks()),  # the longest first
-                   key=lambda s: -float(known.get(s, {}).get("seconds", 0)))
-    for stem in stems:
-        _RUNS.add(stem, stem, [])
     for k in (1, 2):
         _RUNS.add(f"03_small_{k}", "03", SMALL_03)
     for name, params in own_data_runs(TEST_OUTPUT / "own_data").items():
@@ -189,16 +231,19 @@ def pytest_sessionfinish(session, exitstatus):
 
 
 def pytest_unconfigure(config):
-    # keep the browser test's screenshot (.test-output/report/index.png), drop the rest
-    kept = TEST_OUTPUT / "report"
-    if kept.is_dir():
-        target = KEPT / "report"
+    # keep the browser tests' screenshots (.test-output/book/, .test-output/explore/), drop the
+    # rest
+    for name in ("book", "explore"):
+        kept = TEST_OUTPUT / name
+        if not kept.is_dir():
+            continue
+        target = KEPT / name
         try:
             shutil.rmtree(target, ignore_errors=True)
             target.parent.mkdir(exist_ok=True)
             shutil.move(str(kept), target)
-        except OSError as exc:  # a read-only checkout: the screenshot is not kept
-            print(f"note: the browser test's screenshot was not kept in {target}: {exc}",
+        except OSError as exc:  # a read-only checkout: the screenshots are not kept
+            print(f"note: the browser tests' screenshots were not kept in {target}: {exc}",
                   file=sys.stderr)
     shutil.rmtree(TEST_OUTPUT, ignore_errors=True)
 
@@ -206,16 +251,3 @@ def pytest_unconfigure(config):
 @pytest.fixture(scope="session")
 def test_output() -> Path:
     return TEST_OUTPUT
-
-
-@pytest.fixture(scope="session")
-def committed_report() -> Path:
-    """The report built once from a copy of the committed ``figures/`` (the notebook exports
-    take most of the time); returns that copy's folder."""
-    from mtaccuracy.compendium import report
-
-    figures = TEST_OUTPUT / "committed-report" / "figures"
-    shutil.copytree(ROOT / "figures", figures,
-                    ignore=shutil.ignore_patterns("html", "index.html", ".*"))
-    report.build(figures)
-    return figures

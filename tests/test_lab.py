@@ -14,6 +14,9 @@ import pytest
 
 from mtaccuracy.compendium import lab
 
+#: The option with which the lab's file browser starts in notebooks/.
+START = "--FileContentsManager.preferred_dir=notebooks"
+
 
 @pytest.fixture(autouse=True)
 def own_jupyter(monkeypatch, tmp_path):
@@ -35,8 +38,20 @@ def own_jupyter(monkeypatch, tmp_path):
 def test_root_gets_allow_root_and_the_lab_stays_local():
     cmd = lab.command("", uid=0)
     assert cmd[1] == "lab" and "--ip=127.0.0.1" in cmd and "--allow-root" in cmd
-    assert f"--notebook-dir={lab.paths.NOTEBOOKS}" in cmd
+    assert f"--notebook-dir={lab.paths.ROOT}" in cmd
     assert "--allow-root" not in lab.command("", uid=1000)
+
+
+def test_the_lab_serves_the_repository_and_starts_in_notebooks():
+    # the root is the repository, so that the files notebook 06 asks its reader to edit
+    # (data/machines/*.csv) open in the lab; its file browser starts in notebooks/
+    cmd = lab.command("", uid=1000)
+    assert cmd[2:] == ["--ip=127.0.0.1", f"--notebook-dir={lab.paths.ROOT}", START]
+    from jupyter_server.services.contents.filemanager import FileContentsManager
+    manager = FileContentsManager(root_dir=str(lab.paths.ROOT),
+                                  preferred_dir=START.split("=", 1)[1])
+    assert lab.paths.ROOT / manager.preferred_dir == lab.paths.NOTEBOOKS
+    assert manager.dir_exists("data/machines")
 
 
 def test_lab_args_are_split_not_evaluated(tmp_path):
@@ -103,14 +118,21 @@ def test_harmless_lab_args_are_passed_on(args):
     assert not settings.allow_remote_access
 
 
-def test_the_defaults_give_way_to_the_same_option_in_lab_args():
+def test_the_defaults_give_way_to_the_same_option_in_lab_args(tmp_path):
     # jupyter refuses ServerApp.ip given twice, so --ip=::1 replaces --ip=127.0.0.1
     for args in ("--ip=::1", "--ServerApp.ip ::1"):
         cmd = lab.command(args, uid=1000)
-        assert "--ip=127.0.0.1" not in cmd and f"--notebook-dir={lab.paths.NOTEBOOKS}" in cmd
+        assert "--ip=127.0.0.1" not in cmd and f"--notebook-dir={lab.paths.ROOT}" in cmd
+        assert START in cmd
         assert lab.server_settings(shlex.split(args)).ip == "::1"
-    cmd = lab.command(f"--notebook-dir={lab.paths.ROOT}", uid=1000)
-    assert cmd[2:] == ["--ip=127.0.0.1", f"--notebook-dir={lab.paths.ROOT}"]
+    # another root: notebooks/ need not exist under it, so the starting folder gives way too
+    for args in (f"--notebook-dir={tmp_path}", f"--ServerApp.root_dir={tmp_path}"):
+        assert lab.command(args, uid=1000)[2:] == ["--ip=127.0.0.1", *shlex.split(args)]
+    # a starting folder of the reader's own
+    for args in (f"--preferred-dir={lab.paths.DATA}", "--FileContentsManager.preferred_dir=data",
+                 "--ContentsManager.preferred_dir=data"):
+        cmd = lab.command(args, uid=1000)
+        assert cmd[2:] == ["--ip=127.0.0.1", f"--notebook-dir={lab.paths.ROOT}", args]
 
 
 @pytest.mark.parametrize("args", [
@@ -127,7 +149,7 @@ def test_options_with_which_jupyter_does_not_serve_pass(capsys):
     for args in ("--help", "--version"):
         assert not lab.server_settings([args]).serves
         assert lab.command(args, uid=1000)[-1] == args
-    # with both defaults given way, a first word such as `paths` is a JupyterLab subcommand
+    # with all the defaults given way, a first word such as `paths` is a JupyterLab subcommand
     args = ["paths", "--ip=::1", f"--notebook-dir={lab.paths.ROOT}"]
     assert lab.server_settings(args).argv[0] == "paths"
     assert not lab.server_settings(args).serves

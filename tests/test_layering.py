@@ -1,6 +1,6 @@
 """The science packages never import the compendium's machinery (issue 15): a reader can take
 kinematics, machines, sensitivity, spindle, roundness and optimise into their own work without
-the runner, the report or the provenance of this repository."""
+the runner, the book or the provenance of this repository."""
 
 import ast
 from pathlib import Path
@@ -8,7 +8,7 @@ from pathlib import Path
 import mtaccuracy
 
 LIB = Path(mtaccuracy.__file__).parent
-MACHINERY = {"compendium"}   # runner, report, provenance, reproduction, paths, plotting, lab, bench
+MACHINERY = {"compendium"}   # runner, book, provenance, reproduction, paths, plotting, lab, bench
 SCIENCE = ["kinematics.py", "errors.py", "roundness.py", "csvlines.py", "machines",
            "sensitivity", "spindle", "optimise", "thermal"]
 
@@ -47,9 +47,9 @@ def test_science_modules_import_no_machinery():
 
 
 def test_the_check_sees_an_import_and_covers_every_science_package():
-    # the checker itself sees a relative import: report.py's ``from . import paths`` is
+    # the checker itself sees a relative import: book.py's ``from . import paths`` is
     # ``mtaccuracy.compendium``
-    assert "compendium" in _imports(LIB / "compendium" / "report.py")
+    assert "compendium" in _imports(LIB / "compendium" / "book.py")
     # every top-level package or module of the library is science or the compendium
     top = {p.name for p in LIB.iterdir() if p.name != "__pycache__" and not p.name.startswith(".")
            and (p.is_dir() or p.suffix == ".py")}

@@ -1,12 +1,11 @@
-"""Every notebook executed and checked against what is committed.
+"""What the notebooks' runs in this session wrote, checked against what is committed.
 
-The notebooks run in the background while the unit tests run (conftest.py starts them as soon as
-the tests are collected, two at a time, each with ``python -m mtaccuracy.compendium.runner NN
---copy-to DIR``, so nothing in the working tree is touched).  For each notebook:
+nbval itself executes every committed notebook (``make test`` collects ``notebooks/`` with
+``--nbval-lax``, see pyproject.toml and conftest.py): every cell must run, and the cells whose
+first line is ``# NBVAL_CHECK_OUTPUT`` must print what the committed notebook prints (they print
+the key tables, rounded).  Each run writes under the session's folder, never over ``figures/``.
+After those runs, for each notebook:
 
-* every cell executes without error;
-* the cells whose first line is ``# NBVAL_CHECK_OUTPUT`` print the same text as the committed
-  notebook (they print the key tables, rounded);
 * every regenerated CSV equals the committed one: text and integer columns exactly, float
   columns within the tolerance declared next to where the table is written
   (``reproduction.save_table(..., tolerance=...)``, recorded in the committed
@@ -14,8 +13,8 @@ the tests are collected, two at a time, each with ``python -m mtaccuracy.compend
   (wall-clock times) are not compared;
 * the files written are the files committed, each listed in ``provenance.json``.
 
-Notebook 03 also runs twice with small parameters: the two runs must give byte-identical CSVs,
-figures and ``provenance.json``.
+Notebook 03 also runs twice with small parameters (through the runner, in the background): the
+two runs must give byte-identical CSVs, figures and ``provenance.json``.
 """
 
 import json
@@ -46,25 +45,27 @@ def _printed(cell) -> list[str]:
     return out
 
 
-@pytest.mark.parametrize("stem", STEMS)
-def test_notebook_executes_and_prints_the_committed_tables(stem, notebook_runs):
-    folder = _ok(notebook_runs, stem)
-    fresh = json.loads((folder / f"{stem}.ipynb").read_text(encoding="utf-8"))
-    committed = json.loads((paths.NOTEBOOKS / f"{stem}.ipynb").read_text(encoding="utf-8"))
-    fresh_cells = [c for c in fresh["cells"] if "injected-parameters"
-                   not in c.get("metadata", {}).get("tags", [])]
-    assert len(fresh_cells) == len(committed["cells"])
-    checked = 0
-    for i, (a, b) in enumerate(zip(fresh_cells, committed["cells"], strict=True)):
-        if b["cell_type"] == "code" and "".join(b["source"]).startswith(CHECK):
-            assert _printed(a) == _printed(b), f"{stem}: cell {i} prints something else"
-            checked += 1
-    assert checked, f"{stem}: no cell marked {CHECK}"
+def _code(stem):
+    nb = json.loads((paths.NOTEBOOKS / f"{stem}.ipynb").read_text(encoding="utf-8"))
+    return [c for c in nb["cells"] if c["cell_type"] == "code"]
 
 
 @pytest.mark.parametrize("stem", STEMS)
-def test_regenerated_tables_equal_committed(stem, notebook_runs):
-    fresh = _ok(notebook_runs, stem) / "figures" / stem
+def test_notebook_marks_cells_for_nbval_visibly(stem):
+    """Every notebook has cells nbval compares, each marked by its visible first line (not by a
+    hidden tag), and each of them prints something to compare."""
+    marked = [c for c in _code(stem) if "".join(c["source"]).startswith(CHECK)]
+    assert marked, f"{stem}: no cell marked {CHECK}"
+    assert all(_printed(c) for c in marked), f"{stem}: a marked cell prints nothing"
+    for c in _code(stem):
+        tags = {t.lower() for t in c.get("metadata", {}).get("tags", [])}
+        assert not tags & {"nbval-check-output", "nbval-ignore-output", "nbval-skip"}, \
+            f"{stem}: a cell is marked for nbval by a hidden tag"
+
+
+@pytest.mark.parametrize("stem", STEMS)
+def test_regenerated_tables_equal_committed(stem, nbval_output):
+    fresh = nbval_output(stem) / "figures" / stem
     committed = paths.FIGURES / stem
     side = provenance.read(committed)
     assert side, f"figures/{stem}/provenance.json is missing"

@@ -146,32 +146,46 @@ def test_tolerance_policy_takes_the_largest_justified_source():
         R.tolerance_for("0.1", sampling_se=float("nan"))
 
 
+def added(method, *args, **kwargs) -> dict:
+    """The row that a card's ``method`` adds: the method itself returns nothing, so that a
+    notebook cell ending with it echoes no dict as ``Out[]``."""
+    rows = method.__self__.rows
+    before = len(rows)
+    assert method(*args, **kwargs) is None
+    assert len(rows) == before + 1
+    return rows[-1]
+
+
 def test_card_number_verdicts_and_conclusions():
     card = R.Card()
-    assert card.number("T1", "a", "0.100", 0.1004)["verdict"] == "reproduced"
-    assert card.number("T1", "b", "0.100", 0.1006)["verdict"] == "differs"
-    row = card.number("T1", "c", "0.10", 0.2, conclusion="largest of the group", holds=True)
+    assert added(card.number, "T1", "a", "0.100", 0.1004)["verdict"] == "reproduced"
+    assert added(card.number, "T1", "b", "0.100", 0.1006)["verdict"] == "differs"
+    row = added(card.number, "T1", "c", "0.10", 0.2, conclusion="largest of the group", holds=True)
     assert row["verdict"] == "close" and "same conclusion: largest of the group" in row["note"]
-    assert card.number("T1", "d", "0.10", 0.104, paper_rel=0.05)["verdict"] == "reproduced"
-    assert card.number("T1", "e", "0.10", 0.104, paper_rel=0.05)["tolerance"] == "0.005 (paper)"
+    assert added(card.number, "T1", "d", "0.10", 0.104, paper_rel=0.05)["verdict"] == "reproduced"
+    assert added(card.number, "T1", "e", "0.10", 0.104, paper_rel=0.05)["tolerance"] == \
+        "0.005 (paper)"
     with pytest.raises(ValueError, match="needs the conclusion in words"):
         card.number("T1", "f", "0.10", 0.2, holds=True)
     with pytest.raises(ValueError, match="added twice"):
         card.number("T1", "a", "0.100", 0.1)
     with pytest.raises(R.NonFiniteResult):
         card.number("T1", "g", "0.100", float("nan"))
-    assert card.count("T2", "n", "12", 12)["verdict"] == "reproduced"
-    assert card.count("T2", "m", "12", 11)["verdict"] == "differs"
+    assert added(card.count, "T2", "n", "12", 12)["verdict"] == "reproduced"
+    assert added(card.count, "T2", "m", "12", 11)["verdict"] == "differs"
+    assert added(card.statement, "T3", "x rises", "rises", "rises", holds=True)["verdict"] == \
+        "reproduced"
 
 
 def test_card_sets_count_extra_elements_as_well_as_missing_ones():
     card = R.Card()
-    assert card.set("K", "a", ["x", "y"], ["y", "x"])["verdict"] == "reproduced"
-    row = card.set("K", "b", list("abcde"), list("abcdef"))
+    assert added(card.set, "K", "a", ["x", "y"], ["y", "x"])["verdict"] == "reproduced"
+    row = added(card.set, "K", "b", list("abcde"), list("abcdef"))
     assert row["verdict"] == "close" and "extra: f" in row["note"]
-    assert card.set("K", "c", list("abc"), list("abcdef"))["verdict"] == "differs"
-    assert card.set("K", "d", list("abc"), list("abd"))["verdict"] == "differs"  # Jaccard 0.5
-    row = card.set("K", "e", list("abc"), list("acb"), ordered=True)
+    assert added(card.set, "K", "c", list("abc"), list("abcdef"))["verdict"] == "differs"
+    # Jaccard 0.5
+    assert added(card.set, "K", "d", list("abc"), list("abd"))["verdict"] == "differs"
+    row = added(card.set, "K", "e", list("abc"), list("acb"), ordered=True)
     assert row["verdict"] == "close" and "other order" in row["note"]
 
 
@@ -182,19 +196,20 @@ def test_the_basis_follows_the_declared_inputs():
                             how="built from Tables 1 and 5")
     sim = card.simulated("probe signals", how="set profile plus noise")
     table = card.printed("Table 2 values")
-    assert card.number("Table 3", "x", "1", 1.0)["basis"] == "independent"
-    assert card.number("Table 3", "y", "1", 1.0, uses=[pose])["basis"] == "fitted"
-    assert card.number("Table 7", "RMSE", "1", 1.0, uses=[data])["basis"] == "constructed"
-    assert card.number("Eq. 8", "slope at 185 mm", "1", 1.0, uses=[data])["basis"] == \
+    assert added(card.number, "Table 3", "x", "1", 1.0)["basis"] == "independent"
+    assert added(card.number, "Table 3", "y", "1", 1.0, uses=[pose])["basis"] == "fitted"
+    assert added(card.number, "Table 7", "RMSE", "1", 1.0, uses=[data])["basis"] == "constructed"
+    assert added(card.number, "Eq. 8", "slope at 185 mm", "1", 1.0, uses=[data])["basis"] == \
         "constructed"
-    assert card.number("Eq. 8", "slope at 300 mm", "1", 1.0, uses=[data])["basis"] == \
+    assert added(card.number, "Eq. 8", "slope at 300 mm", "1", 1.0, uses=[data])["basis"] == \
         "simulated"
-    assert card.number("Fig. 9", "roundness", "1", 1.0, uses=[sim])["basis"] == "simulated"
-    assert card.number("Table 2", "share", "1", 1.0, uses=[table])["basis"] == "internal"
-    assert card.number("Table 2", "mixed", "1", 1.0, uses=[table, pose])["basis"] == "fitted"
-    row = card.claim("Fig. 4", "z", "printed", why="the paper does not give the data")
+    assert added(card.number, "Fig. 9", "roundness", "1", 1.0, uses=[sim])["basis"] == "simulated"
+    assert added(card.number, "Table 2", "share", "1", 1.0, uses=[table])["basis"] == "internal"
+    assert added(card.number, "Table 2", "mixed", "1", 1.0, uses=[table, pose])["basis"] == "fitted"
+    row = added(card.claim, "Fig. 4", "z", "printed", why="the paper does not give the data")
     assert (row["verdict"], row["basis"]) == ("not reproducible", "unchecked")
-    assert card.claim("Fig. 5", "z", "printed", why="no data", ours=0.25)["reproduced"] == 0.25
+    row = added(card.claim, "Fig. 5", "z", "printed", why="no data", ours=0.25)
+    assert row["reproduced"] == 0.25
     assert "pose fitted to Table 2" in card.rows[1]["note"]
     other = R.Card().fitted("pose", to=["Table 9"], how="x")
     with pytest.raises(ValueError, match="not an input of this card"):

@@ -20,8 +20,8 @@ Science (usable without this repository; none of it imports :mod:`mtaccuracy.com
 ``csvlines``             CSV records with the lines an editor shows (the readers' messages)
 =======================  ================================================================
 
-The compendium's machinery (runner, report, provenance, published values, paths, plotting,
+The compendium's machinery (runner, book, provenance, published values, paths, plotting,
 bench) is in :mod:`mtaccuracy.compendium`.
 """
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

@@ -11,11 +11,14 @@ direction, so they can be taken into other work without this repository's runner
                    safety (``python -m mtaccuracy.compendium.runner``, ``make reproduce``)
 ``paths``          the repository's folders, output folders, input files checked
 ``provenance``     which code, notebook, parameters and inputs made each output
-``reproduction``   published values (``data/papers/``), tolerances, the scorecard ``Card``
-``report``         the HTML report and ``figures/REPRODUCTION.md``
+``reproduction``   published values (``data/papers/``), tolerances, the scorecard ``Card``,
+                   ``figures/REPRODUCTION.md``
+``book``           ``make book``: the published book (Sphinx, MyST-NB), its checks of
+                   every output shown against ``provenance.json``
 ``plotting``       the house style and byte-stable figure files
 ``bench``          ``make bench``: the speed targets of the issues, measured
-``lab``            ``make lab``: JupyterLab on the notebooks
+``lab``            ``make lab``: JupyterLab at the repository root
+``explore``        ``make explore``: the interactive explorer (Panel)
 ``zheng2024``      notebook 01's paper-specific checks, references and figures
 ``rong``           notebook 02's parameter checks and the tool-length figure
 ``xu2022``         notebook 04: published tables, the reconstruction's folders, tolerances,

@@ -308,8 +308,22 @@ def task_xu_split_limit():
     return dict(time=time.perf_counter() - t0, note="one run (not min of 3)")
 
 
+def task_explore_update():
+    """One slider move of the explorer's Machine tab (``mtaccuracy.compendium.explore``): the
+    closed-form indices at the pose and the dominant-error map over a 25 x 25 grid, for each of
+    the papers' three machines at its starting pose; min of 10 runs each after a warm-up.  The
+    time is the slowest machine's."""
+    from . import explore_model as M
+
+    times = {name: M.time_slider_update(M.machine_setup(name), repeat=10)
+             for name in M.MACHINES}
+    return dict(time=max(times.values()),
+                note="; ".join(f"{n} {t * 1e3:.1f} ms" for n, t in times.items()))
+
+
 TASKS = {
     "xu_split_limit": task_xu_split_limit,
+    "explore_update": task_explore_update,
     "guo_pose_error": task_guo_pose_error,
     "guo_spearman": task_guo_spearman,
     "zheng_pose_error": task_zheng_pose_error,
@@ -338,6 +352,8 @@ ROWS = [
      "<= 1 ms", None),
     ("Zheng 2024", "zheng_linear_atlas", "linear closed form, pose atlas", "1e4 poses in travels",
      "<= 10 s", None),
+    ("explorer", "explore_update", "slider move: indices + map", "3 machines, 25 x 25 grid",
+     "<= 0.1 s", None),
 ]
 for _name, (_b, _n, _deg, _otd, _) in PCE_CASES.items():
     for _m in ("omp", "lars", "openturns"):

@@ -1,11 +1,17 @@
-"""``make lab``: JupyterLab on the notebooks, bound to 127.0.0.1 and protected by a token.
+"""``make lab``: JupyterLab on the repository, bound to 127.0.0.1 and protected by a token.
 
-The command is ``jupyter lab --ip=127.0.0.1 --notebook-dir=notebooks``; as root (containers, CI
+The command is ``jupyter lab --ip=127.0.0.1 --notebook-dir=<repository root>
+--FileContentsManager.preferred_dir=notebooks``: the lab serves the whole repository, so that
+the files a notebook asks its reader to edit (``data/machines/*.csv`` for notebook 06) open in
+it too, and its file browser starts in ``notebooks/`` (JupyterLab's preferred folder, which
+the folder button of the file browser's path bar returns to).  As root (containers, CI
 machines) JupyterLab refuses to start without ``--allow-root``, which is added then.
 ``LAB_ARGS`` (from the environment, split like a shell would but never evaluated by one) is
 appended, e.g. ``make lab LAB_ARGS="--port 9999 --no-browser"``.  Jupyter refuses an option
 given twice, so ``--ip=127.0.0.1`` and ``--notebook-dir`` give way when ``LAB_ARGS`` sets the
-same option itself (``--ip=::1``, ``--ServerApp.ip=localhost``); the checks below still apply.
+same option itself (``--ip=::1``, ``--ServerApp.ip=localhost``), and the starting folder when
+``LAB_ARGS`` sets a root or a preferred folder of its own (``notebooks`` need not exist under
+another root); the checks below still apply.
 
 Before JupyterLab starts, the configuration it would run with is worked out by jupyter_server's
 and traitlets' own code (:func:`server_settings`): the same ``ServerApp``, with JupyterLab's
@@ -48,6 +54,7 @@ on a network you trust.
 from __future__ import annotations
 
 import contextlib
+import fnmatch
 import io
 import ipaddress
 import logging
@@ -66,8 +73,14 @@ from . import paths
 
 #: The environment variable that lets the lab start whatever it is configured to do.
 UNSAFE_ENV = "LAB_UNSAFE"
-#: The command's own options, each given way to the user's setting of the same trait.
-_DEFAULTS = (("ip", "--ip=127.0.0.1"), ("root_dir", f"--notebook-dir={paths.NOTEBOOKS}"))
+#: The command's own options, each with the command-line settings (``Class.trait`` patterns)
+#: it gives way to: the same trait, and for the starting folder any root or preferred folder.
+_DEFAULTS = (
+    ("--ip=127.0.0.1", {"ServerApp.ip"}),
+    (f"--notebook-dir={paths.ROOT}", {"ServerApp.root_dir"}),
+    (f"--FileContentsManager.preferred_dir={paths.NOTEBOOKS.relative_to(paths.ROOT).as_posix()}",
+     {"*.root_dir", "*.notebook_dir", "*.preferred_dir"}),
+)
 #: Options with which ``jupyter lab`` prints something and stops (jupyter_server's
 #: ``_preparse_for_stopping_flags``).
 _STOPPING = ("-h", "--help", "--help-all", "--version", "-V", "--generate-config")
@@ -258,16 +271,20 @@ def _quiet(j: SimpleNamespace, files: list):
 
 
 def _defaults(app: Any, extra: list[str]) -> list[str]:
-    """The command's own options that ``extra`` does not set itself (jupyter_server refuses a
-    trait given twice on the command line), found by the server's command-line parser."""
+    """The command's own options that ``extra`` does not displace (jupyter_server refuses a
+    trait given twice on the command line; :data:`_DEFAULTS`), found by the server's
+    command-line parser."""
     try:
         flags, aliases = app.flatten_flags()
         loader = app._create_loader(extra, aliases, flags,
                                     classes=list(app._classes_with_config_traits()))
-        given = loader.load_config().get("ServerApp", {})
+        config = loader.load_config()
     except (Exception, SystemExit):
         return []   # jupyter refuses ``extra`` whatever comes before it: let it say why alone
-    return [option for trait, option in _DEFAULTS if trait not in given]
+    given = [f"{cls}.{trait}" for cls, section in config.items() if isinstance(section, dict)
+             for trait in section]
+    return [option for option, displaced_by in _DEFAULTS
+            if not any(fnmatch.fnmatchcase(g, p) for g in given for p in displaced_by)]
 
 
 def _stops(argv: list[str], lab_app: type) -> bool:

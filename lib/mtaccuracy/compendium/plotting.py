@@ -50,7 +50,7 @@ def use_style() -> None:
     mpl.rcParams.update(STYLE)
 
 
-#: PNG text key naming the scorecard rows a figure is scored with (read by the report).
+#: PNG text key naming the scorecard rows a figure is scored with (for a reader of the file).
 SCORED_WITH = "mtaccuracy:scored-with"
 
 #: A clip path as matplotlib's SVG backend writes it (one per line of its ``<defs>``).
@@ -124,12 +124,11 @@ def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = Non
     formats : tuple of str
         Formats written, each as ``name.<fmt>``.
     title : str, optional
-        Stored as the file's ``Title`` (the report's caption).
+        Stored as the file's ``Title``.
     scored_with : list of str, optional
         Patterns (:mod:`fnmatch`, on a scorecard row's ``item`` or ``"item: quantity"``) of
         the rows that score what the figure shows, for a figure whose name is not the item of
-        its rows (``fig05_...`` drawing what Table 2 scores); the report captions the figure
-        with their verdicts.
+        its rows (``fig05_...`` drawing what Table 2 scores), stored in the PNG's metadata.
 
     Returns
     -------

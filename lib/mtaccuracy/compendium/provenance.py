@@ -19,6 +19,11 @@ Each file entry of the sidecar also says how the regenerated-table test compares
 machine: ``tolerance`` (per float column, see
 :class:`mtaccuracy.compendium.reproduction.Tolerance`) or
 ``measured`` (a measurement of the machine, such as wall-clock time: never compared, no hash).
+
+Before an output is shown (the book, ``make book``) it is checked against that list
+(:func:`output_problem`, :func:`folder_problems`): missing, unreadable, unlisted or changed
+files are named; a file the sidecar does not list is the user's, never judged or shown
+(:func:`not_outputs`).
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ import json
 import os
 import platform
 import subprocess
+import xml.etree.ElementTree as ET
 from importlib import metadata
 from pathlib import Path
 
@@ -181,3 +187,105 @@ def from_png(path) -> dict:
     with Image.open(path) as im:
         text = im.info.get("mtaccuracy:provenance")
     return json.loads(text) if text else {}
+
+
+# ---------------------------------------------------------- checks before an output is shown
+
+def output_kind(path: Path) -> str:
+    """What an output file is, for the messages: "figure", "table" or "file"."""
+    return {".png": "figure", ".svg": "figure", ".csv": "table"}.get(Path(path).suffix, "file")
+
+
+def output_problem(path: Path, side: dict) -> str | None:
+    """Why an output file cannot be shown or linked, or None when it is sound.
+
+    Parameters
+    ----------
+    path : Path
+        The file, in its output folder.
+    side : dict
+        That folder's ``provenance.json`` (:func:`read`).
+
+    Returns
+    -------
+    str or None
+        The problem in words, to follow the file's name ("is missing ...", "cannot be read
+        ...", "is not listed ...", "does not match the hash ..."): missing though listed, a
+        figure that cannot be decoded, not listed, no hash though not ``measured``, or bytes
+        that are not the ones the run recorded.  A ``measured`` entry is only required to
+        exist (and, for a figure, to be readable).
+    """
+    path = Path(path)
+    entry = side.get("files", {}).get(path.name)
+    if not path.is_file():
+        return (f"is missing (listed in {SIDECAR}, not on disk)" if entry is not None
+                else "is missing")
+    # Pillow here, not at the top: make's recovery step (commit.py) imports this module with
+    # the system's Python, before .venv exists
+    from PIL import Image
+
+    try:
+        if path.suffix == ".png":
+            with Image.open(path) as im:
+                im.load()  # decodes every byte: a truncated file fails here
+        elif path.suffix == ".svg":
+            ET.parse(path)
+    except Exception as exc:  # PIL and expat raise many kinds
+        return f"cannot be read ({type(exc).__name__}: {str(exc)[:80]})"
+    if entry is None:
+        return f"is not listed in {SIDECAR} (not written by this folder's run)"
+    if entry.get("measured"):
+        return None  # a measurement of the machine: no hash to check
+    if "sha256" not in entry:
+        return f"has no hash in {SIDECAR} and is not declared measured"
+    if entry["sha256"] != sha256(path):
+        return f"does not match the hash in {SIDECAR} (changed after its run)"
+    return None
+
+
+def folder_problems(folder: Path, side: dict | None = None) -> list[tuple[Path, str]]:
+    """Every problem (:func:`output_problem`) of the files an output folder's
+    ``provenance.json`` lists (its outputs); a file it does not list is not the compendium's
+    (:func:`not_outputs`) and is not judged.
+
+    Parameters
+    ----------
+    folder : Path
+        A notebook's output folder (``figures/<stem>``).
+    side : dict, optional
+        Its ``provenance.json`` (read when not given).
+
+    Returns
+    -------
+    list of (Path, str)
+        ``(path, why)`` for each file with a problem, sorted by name.
+    """
+    folder = Path(folder)
+    side = read(folder) if side is None else side
+    found = ((folder / n, output_problem(folder / n, side)) for n in sorted(side.get("files", {})))
+    return [(p, why) for p, why in found if why]
+
+
+def not_outputs(folder: Path, side: dict | None = None) -> list[str]:
+    """The files in an output folder that its ``provenance.json`` does not list: put there by
+    someone else (notes, an input file), left alone by every run, never shown or linked as
+    results.
+
+    Parameters
+    ----------
+    folder : Path
+        A notebook's output folder.
+    side : dict, optional
+        Its ``provenance.json`` (read when not given).
+
+    Returns
+    -------
+    list of str
+        Their names, sorted.
+    """
+    folder = Path(folder)
+    side = read(folder) if side is None else side
+    listed = set(side.get("files", {})) | {SIDECAR}
+    return sorted(p.name for p in folder.iterdir() if p.is_file()
+                  and not p.name.startswith(".") and p.name not in listed) \
+        if folder.is_dir() else []

@@ -179,10 +179,13 @@ class Card:
     is ``fitted``; else one using ``constructed`` or ``simulated`` data is ``simulated``; else
     one using only ``printed`` inputs is ``internal``; a row using nothing is ``independent``.
     The tolerance follows :func:`tolerance_for`; no verdict is computed anywhere else.
+    The methods that add a row return nothing (a notebook cell ending with one shows no
+    ``Out[]``); the row is the last of :attr:`rows`.
 
     >>> card = Card()
     >>> pose = card.fitted("pose", to=["Table 2"], how="least squares on the printed indices")
-    >>> card.number("Table 2", "S_T of d_ya", "0.0797", 0.0766, uses=[pose])["basis"]
+    >>> card.number("Table 2", "S_T of d_ya", "0.0797", 0.0766, uses=[pose])
+    >>> card.rows[-1]["basis"]
     'fitted'
     """
 
@@ -243,7 +246,7 @@ class Card:
         return "independent", said
 
     def _add(self, item, quantity, published, reproduced, unit, tolerance, verdict_, uses,
-             note, measured=False) -> dict:
+             note, measured=False) -> None:
         item, quantity = str(item), str(quantity)
         if measured:
             quantity = f"{quantity} {MEASURED_MARK}"
@@ -257,12 +260,11 @@ class Card:
                    unit=unit, tolerance=tolerance, verdict=verdict_, basis=basis, note=note)
         _check_row_numbers([row])
         self.rows.append(row)
-        return row
 
     def number(self, item, quantity, published, ours, unit: str = "", *, uses=(),
                paper_rel=None, paper_abs=None, sampling_se=None, conclusion: str = "",
                holds: bool | None = None, digits: int | None = None, note: str = "",
-               measured: bool = False) -> dict:
+               measured: bool = False) -> None:
         """A published number against ours.  ``reproduced`` within the tolerance of
         :func:`tolerance_for`; outside it ``close`` only when a stated ``conclusion`` (the
         paper's, in words) ``holds`` for our number, else ``differs``.  ``published`` is the
@@ -284,19 +286,19 @@ class Card:
             mine = int(ours)
         elif digits is not None:
             mine = round(mine, digits)
-        return self._add(item, quantity, str(published), mine, unit,
-                         _tolerance_text(tol, src), v, uses, note, measured)
+        self._add(item, quantity, str(published), mine, unit, _tolerance_text(tol, src), v,
+                  uses, note, measured)
 
     def count(self, item, quantity, published, ours: int, *, uses=(), conclusion: str = "",
-              holds: bool | None = None, note: str = "") -> dict:
+              holds: bool | None = None, note: str = "") -> None:
         """A published count against ours: ``reproduced`` only when equal."""
         if int(ours) != ours or int(float(published)) != float(published):
             raise ValueError(f"{item}: {quantity}: a count must be an integer")
-        return self.number(item, quantity, str(int(float(published))), int(ours), uses=uses,
-                           conclusion=conclusion, holds=holds, note=note)
+        self.number(item, quantity, str(int(float(published))), int(ours), uses=uses,
+                    conclusion=conclusion, holds=holds, note=note)
 
     def set(self, item, quantity, published, ours, *, uses=(), ordered: bool = False,
-            note: str = "") -> dict:
+            note: str = "") -> None:
         """A published set (or sequence) of names against ours (:func:`set_verdict`); the
         note lists the missing and the extra elements."""
         pub, mine = list(published), list(ours)
@@ -308,17 +310,17 @@ class Card:
         note = "; ".join(x for x in (note, *said) if x)
         join = (lambda xs: " ".join(map(str, xs))) if ordered else \
             (lambda xs: " ".join(sorted(map(str, xs))))
-        return self._add(item, quantity, join(pub), join(mine) or "(none)", "",
-                         "ordered, exact" if ordered else "exact set", v, uses, note)
+        self._add(item, quantity, join(pub), join(mine) or "(none)", "",
+                  "ordered, exact" if ordered else "exact set", v, uses, note)
 
     def statement(self, item, quantity, published: str, ours: str, holds: bool, *, uses=(),
-                  note: str = "", measured: bool = False) -> dict:
+                  note: str = "", measured: bool = False) -> None:
         """A claim of the paper in words, checked on our results: ``reproduced`` when it
         ``holds``, else ``differs``."""
-        return self._add(item, quantity, str(published), str(ours), "", "claim",
-                         "reproduced" if holds else "differs", uses, note, measured)
+        self._add(item, quantity, str(published), str(ours), "", "claim",
+                  "reproduced" if holds else "differs", uses, note, measured)
 
-    def claim(self, item, quantity, published: str, why: str, ours="", unit: str = "") -> dict:
+    def claim(self, item, quantity, published: str, why: str, ours="", unit: str = "") -> None:
         """A published number or claim that cannot be checked: ``not reproducible``, with
         what is missing (``why``).  ``ours``: a value we computed all the same (shown, not
         scored), e.g. for a figure whose data the paper does not give."""
@@ -326,8 +328,7 @@ class Card:
             raise ValueError(f"{item}: {quantity}: say what the paper lacks (why=...)")
         if isinstance(ours, float | np.floating):
             ours = _finite(ours, f"{item}: {quantity}: reproduced")
-        return self._add(item, quantity, str(published), ours, unit, "", "not reproducible",
-                         (), why)
+        self._add(item, quantity, str(published), ours, unit, "", "not reproducible", (), why)
 
     # -- output --------------------------------------------------------------------------------
     def frame(self, measured: bool = False) -> pd.DataFrame:
@@ -699,7 +700,7 @@ def _measured_sentence(figures: Path) -> str:
                       for s, n in m.groupby("notebook", sort=True).size().items())
     return (f"\nNot counted above: {len(m)} rows scoring wall-clock times, which are "
             f"measurements of the machine and change from run to run: {where}, shown with "
-            f"their verdicts in the HTML report (`make report`).\n")
+            f"their verdicts in the book (`make book`).\n")
 
 
 def _write_if_changed(path: Path, text: str) -> None:
@@ -710,7 +711,8 @@ def _write_if_changed(path: Path, text: str) -> None:
 
 
 def gather(figures=None, readme=None, report=None) -> tuple[Path, Path]:
-    """Write ``figures/REPRODUCTION.md`` and refresh the scorecard section of ``README.md``."""
+    """Write ``figures/REPRODUCTION.md`` (every row) and refresh the scorecard summary of
+    ``README.md`` (the counts; the rows are in the book and in ``REPRODUCTION.md``)."""
     figures = Path(figures or paths.FIGURES)
     readme = Path(readme or paths.ROOT / "README.md")
     report = Path(report or figures / "REPRODUCTION.md")
@@ -730,12 +732,10 @@ def gather(figures=None, readme=None, report=None) -> tuple[Path, Path]:
                          f"{README_END!r}; add them where the scorecard belongs")
     head, rest = text.split(README_START, 1)
     _, tail = rest.split(README_END, 1)
-    rows = rows_markdown(cards, notes=False)
     section = (README_START + "\n\n" + scorecard_markdown(cards, full=False) + "\n"
                + "Bases:\n\n" + bases_markdown() + measured
-               + "\n<details><summary>Every row (with its note in "
-               + "<a href=\"figures/REPRODUCTION.md\">figures/REPRODUCTION.md</a>)</summary>\n\n"
-               + rows + "\n</details>\n\n" + README_END)
+               + "\nEvery row, with its note: in the book (sortable and filterable) and in "
+               + "[`figures/REPRODUCTION.md`](figures/REPRODUCTION.md).\n\n" + README_END)
     _write_if_changed(readme, head + section + tail)
     return report, readme
 

@@ -50,7 +50,7 @@ def tool_length_figure(t_len, tool_study, key_tool, names, outputs, no_effect, n
         axes[1].plot(t_len, tool_study[f"ST_max_{s}"], "-o", ms=3, label=s)
     ax2 = axes[1].twinx()
     ax2.plot(t_len, tool_study.rms_error_mm * 1e3, "k:", lw=1)
-    ax2.set_ylabel("RMS tool-tip error (um), dotted")
+    ax2.set_ylabel("RMS tool-tip error (µm), dotted")
     ax2.grid(False)
     axes[1].set_ylabel("largest ST over Ex, Ey, Ez")
     axes[1].set_title("the errors without an arm at length 0\n(ey(x) and ey(y) coincide: both "

@@ -510,7 +510,7 @@ def _output_base(base: Path | None):
 
 
 def run(notebook: str | Path, overrides: dict | None = None, progress: bool = True,
-        share: int = 1, export: bool = True, copy_to: str | Path | None = None) -> float:
+        share: int = 1, copy_to: str | Path | None = None) -> float:
     """Validate, execute with papermill and, only if every cell succeeds, commit the executed
     notebook and its outputs (:func:`mtaccuracy.compendium.commit.commit`); returns seconds.
 
@@ -522,8 +522,7 @@ def run(notebook: str | Path, overrides: dict | None = None, progress: bool = Tr
     Raises :class:`RuntimeError` (failed), :class:`Interrupted` (SIGINT/SIGTERM) or
     :class:`ParameterError` (refused before it ran), each with a one-line message; the committed
     notebook and output folder are then unchanged and the partial run is kept in
-    ``notebooks/.failed/``.  With ``export``, a run into the default folder also writes the
-    report's HTML export of the notebook (``figures/html/``)."""
+    ``notebooks/.failed/``."""
     from . import commit
 
     path = notebook_path(notebook)
@@ -581,8 +580,6 @@ def run(notebook: str | Path, overrides: dict | None = None, progress: bool = Tr
                 signal.signal(sig, h)
     if _in_place(path, target):
         _record_run(path.stem, seconds)
-    if export:
-        _export(path, target)
     return seconds
 
 
@@ -609,18 +606,6 @@ def output_target(notebook: str | Path, params: dict) -> Path | None:
     if declared is None:
         return None
     return paths.resolve_output(params.get("output_dir", declared.default))
-
-
-def _export(path: Path, target: Path | None) -> None:
-    """The report's HTML export of a notebook just run into its default folder."""
-    if target == paths.FIGURES / path.stem:
-        from .report import export_notebook
-
-        try:
-            export_notebook(path, paths.FIGURES / "html" / f"{path.stem}.html")
-        except OSError as exc:
-            print(f"note: the HTML export of {path.stem} was not written: {exc}",
-                  file=sys.stderr)
 
 
 @contextlib.contextmanager
@@ -735,7 +720,7 @@ RUNS = ".runs.json"
 
 
 def _record_run(stem: str, seconds: float) -> None:
-    """Keep, for the report, each notebook's last run time and the commit it ran on, in
+    """Keep each notebook's last run time and the commit it ran on, in
     ``figures/.runs.json``: not committed (a measurement of this machine), and the only place
     the commit is kept: figures carry content hashes (:mod:`mtaccuracy.compendium.provenance`)."""
     rt = paths.FIGURES / RUNS
@@ -780,10 +765,6 @@ def _run_parallel(plan: list[tuple[Path, list[str], dict]], jobs: int,
     order = sorted(plan, key=lambda p: -float(known.get(p[0].stem, {}).get("seconds", 0)))
     pending, active, failures = list(order), {}, 0
     n, t0 = len(order), time.perf_counter()
-    try:
-        import nbconvert  # noqa: F401 - this process exports each notebook as its run ends
-    except ImportError:  # pragma: no cover - nbconvert is in the lock
-        pass
     old_handlers = _install(_on_signal)  # even where the shell started us with SIGINT ignored
     try:
         while pending or active:
@@ -797,14 +778,12 @@ def _run_parallel(plan: list[tuple[Path, list[str], dict]], jobs: int,
                 print(f"[{n - len(pending)}/{n}] started "
                       f"{t.stem}", flush=True)
             time.sleep(0.2)
-            for t, (proc, overrides) in list(active.items()):
+            for t, (proc, _overrides) in list(active.items()):
                 if proc.poll() is not None:
                     del active[t]
                     failures += proc.returncode != 0
                     if proc.returncode == 130:  # interrupted: stop the others too
                         raise Interrupted("")
-                    if proc.returncode == 0 and copy_to is None:  # while the other run goes on
-                        _export(t, output_target(t, overrides))
     except (KeyboardInterrupt, Interrupted):
         _install(signal.SIG_IGN)
         procs = [p for p, _ in active.values()]
@@ -907,8 +886,7 @@ def main(argv=None) -> int:
             shown = " ".join(f"{k}={v!r}" for k, v in overrides.items()) or "defaults"
             if not args.quiet:
                 print(f"{_rel(t)} ({shown})", flush=True)
-            s = run(t, overrides, progress=not args.quiet, share=args.share,
-                    export=not args.quiet and copy_to is None, copy_to=copy_to)
+            s = run(t, overrides, progress=not args.quiet, share=args.share, copy_to=copy_to)
             with _output_base(copy_to):
                 where = written_notebook(t, overrides, copy_to=copy_to)
             print(f"{t.stem} done in {s:.1f} s -> {_rel(where)}", flush=True)

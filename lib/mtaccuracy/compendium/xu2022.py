@@ -400,10 +400,10 @@ def prediction_figure(positions_mm, index, measured, predicted, title: str):
         axes[0].plot(positions_mm, yp, "--", color=c)
         axes[1].plot(positions_mm, y - yp, "o-", ms=3, color=c)
     axes[0].set_title("measured (solid) and predicted (dashed)")
-    axes[1].set_title(f"residual: {resid.min():.1f} .. {resid.max():.1f} um")
+    axes[1].set_title(f"residual: {resid.min():.1f} .. {resid.max():.1f} µm")
     for ax in axes:
         ax.set_xlabel("position (mm)")
-        ax.set_ylabel("error (um)")
+        ax.set_ylabel("error (µm)")
     if len(index) <= 24:
         axes[0].legend(fontsize=6, ncol=2)
     fig.suptitle(title)
@@ -418,8 +418,8 @@ def kb_figure(measurement, measured_kb, predicted_kb, title: str, colour):
     import numpy as np
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
-    for ax, meas, pred, lab in ((axes[0], measured_kb[0], predicted_kb[0], "slope k (um/m)"),
-                                (axes[1], measured_kb[1], predicted_kb[1], "intercept b (um)")):
+    for ax, meas, pred, lab in ((axes[0], measured_kb[0], predicted_kb[0], "slope k (µm/m)"),
+                                (axes[1], measured_kb[1], predicted_kb[1], "intercept b (µm)")):
         ax.plot(measurement, meas, "o-", color=colour, label="decoupled from the data")
         ax.plot(measurement, pred, "s--", color="k", label="predicted from temperatures")
         ax.set_xlabel("measurement")

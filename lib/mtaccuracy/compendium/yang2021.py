@@ -140,16 +140,15 @@ def fig21_figure(theta, layouts, rotation_errors, profiles, true_profile, d600, 
     for i, name in enumerate(layouts):
         v = rotation_errors[name]
         ax.plot(closed, np.r_[v, v[:1]], lw=1.2 if i == 0 else 0.7, color=cmap(i), label=name)
-    ax.set_title("separated rotation error, one run (um, offset 2)", fontsize=9, pad=18)
+    ax.set_title("separated rotation error, one run (µm, offset 2)", fontsize=9, pad=18)
     ax.tick_params(labelsize=6)
-    ax.legend(fontsize=6, loc="lower left", bbox_to_anchor=(-0.3, -0.25))
     ax2 = fig.add_subplot(1, 3, 2, projection="polar")
     for i, name in enumerate(layouts):
         v = profiles[name]
         ax2.plot(closed, np.r_[v, v[:1]], lw=1.2 if i == 0 else 0.7, color=cmap(i))
     ax2.plot(closed, np.r_[true_profile, true_profile[:1]], color="k", lw=2, alpha=0.3,
              label="true")
-    ax2.set_title("separated profile, one run (um, offset 5)", fontsize=9, pad=18)
+    ax2.set_title("separated profile, one run (µm, offset 5)", fontsize=9, pad=18)
     ax2.tick_params(labelsize=6)
     ax3 = fig.add_subplot(1, 3, 3)
     ax3.bar(range(len(d600)), d600.mz_mean_um, yerr=d600.mz_std_um,
@@ -158,9 +157,14 @@ def fig21_figure(theta, layouts, rotation_errors, profiles, true_profile, d600, 
     ax3.scatter([0] + list(range(1, 1 + len(pub_rand))), [pub_opt] + list(pub_rand), marker="D",
                 color=published_colour, zorder=3, label="published (Fig. 21)")
     ax3.set_xticks(range(len(d600)), list(d600.index), rotation=30, ha="right", fontsize=7)
-    ax3.set_ylabel("separated roundness, mean +- sd (um)")
+    ax3.set_ylabel("separated roundness, mean ± sd (µm)")
     ax3.legend(fontsize=7)
     fig.suptitle("Fig. 21 (SIMULATION): optimised against random probe angles at 600 r/min",
                  y=1.04)
     fig.tight_layout()
+    # one legend for both polar plots, below them (inside, it covered the 225° label)
+    handles, labels = ax.get_legend_handles_labels()
+    true_h, true_l = ax2.get_legend_handles_labels()
+    fig.legend(handles + true_h, labels + [f"{t} profile" for t in true_l], fontsize=7,
+               ncol=4, loc="upper center", bbox_to_anchor=(0.36, 0.02))
     return fig

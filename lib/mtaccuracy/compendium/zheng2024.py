@@ -11,7 +11,8 @@ import numpy as np
 import pandas as pd
 
 __all__ = ["tidy", "fmt", "normalise", "sobol_reference", "pce_indices", "group_label",
-           "fixed_ratio_checks", "group_head", "converged_at", "bars_figure"]
+           "fixed_ratio_checks", "group_head", "converged_at", "bars_figure",
+           "fig04_figure"]
 
 
 def tidy(df: pd.DataFrame) -> pd.DataFrame:
@@ -180,4 +181,42 @@ def bars_figure(st, comps, all_comps, names, t2, key_threshold: float, title: st
     axes[-1].set_xticks(xpos, names, rotation=90)
     fig.suptitle(title)
     fig.tight_layout()
+    return fig
+
+
+def fig04_figure(s_tp, comps, names, diagonal, vmax: float = 0.3):
+    """Fig. 4's test points: the linear total index of every error (rows, named) at every
+    test point (columns, numbered 1..N along the diagonals, which white lines separate), one
+    heat map per component, two rows of three; the first point of each diagonal and the last
+    point are numbered, and every point has a tick (up to 60 points).
+
+    ``s_tp`` (N, len(comps), 41): indices per point; ``names`` (41,): the error names;
+    ``diagonal`` (N,): the diagonal (0-3) of each point, points of one diagonal consecutive."""
+    import matplotlib.pyplot as plt
+
+    n_pts = s_tp.shape[0]
+    firsts = np.r_[0, np.flatnonzero(np.diff(diagonal)) + 1]   # first point of each diagonal
+    numbered = np.unique(np.r_[firsts + 1, n_pts])
+    fig, axes = plt.subplots(2, 3, figsize=(13, 14), sharex=True, sharey=True,
+                             layout="constrained")
+    fig.get_layout_engine().set(wspace=0.05)
+    for k, ax in enumerate(axes.flat):
+        im = ax.imshow(s_tp[:, k, :].T, aspect="auto", cmap="viridis", vmin=0, vmax=vmax,
+                       extent=(0.5, n_pts + 0.5, len(names) - 0.5, -0.5), interpolation="nearest")
+        for f in firsts[1:]:
+            ax.axvline(f + 0.5, color="w", lw=1.5)
+        ax.set_title(comps[k], fontsize=11)
+        ax.set_xticks(numbered, [str(t) for t in numbered])
+        if n_pts <= 60:   # a tick at every point while they stay apart
+            ax.set_xticks(np.arange(1, n_pts + 1), minor=True)
+        ax.set_yticks(range(len(names)), names, fontsize=8)
+        left, right = k % 3 == 0, k % 3 == 2   # error names beside the outer panels
+        ax.tick_params(axis="y", left=left, labelleft=left, right=right, labelright=right)
+        ax.tick_params(axis="x", labelbottom=True)
+        ax.grid(False)
+        ax.set_xlabel("test point (white lines: next diagonal)")
+    fig.colorbar(im, ax=axes, orientation="horizontal", shrink=0.5, aspect=40,
+                 label="normalised linear total index")
+    fig.suptitle("Linear total index of each error at each test point on the four workspace "
+                 "diagonals")
     return fig

@@ -143,7 +143,7 @@ ROTARY_TRAVEL = Limits(
                     "multiples of 5 deg"},
     units={"deg": 1.0, "rad": 180.0 / math.pi}, accepted=("deg",))
 
-#: A translational error range (mm), judged by its size max(|low|, |high|).  The geometric
+#: A translational error range (mm), judged by its size ``max(|low|, |high|)``.  The geometric
 #: errors of machine tools (positioning, straightness, radial and axial error motions, the
 #: offsets of rotary axes) are 0.1 um (ultra-precision machines) to 100 um (large machines);
 #: ISO 230-2 positioning deviations are 5-50 um per metre of travel.  Above 1 mm a warning:
@@ -163,7 +163,7 @@ TRANSLATION_ERROR = Limits(
                          "0.1-100 um; no machine tool is a centimetre off)"},
     units={"um": 1e-3, "mm": 1.0, "nm": 1e-6, "m": 1e3}, accepted=("um", "mm"))
 
-#: An angular error range (rad), judged by its size max(|low|, |high|).  Angular error
+#: An angular error range (rad), judged by its size ``max(|low|, |high|)``.  Angular error
 #: motions, squareness and the orientation of rotary axes are 0.5 urad (0.1 arcsec,
 #: ultra-precision) to 500 urad (100 arcsec, an uncompensated rotary table); ISO 10791
 #: acceptance tolerances of angular deviations and squareness are 20-60 um/m.  Above 1e-3 rad

@@ -114,13 +114,13 @@ def ishigami(a: float = 7.0, b: float = 0.1) -> Benchmark:
 
 
 def g_function(a) -> Benchmark:
-    """Sobol's G function prod_i (|4 x_i - 2| + a_i)/(1 + a_i), x_i ~ U(0, 1).
+    """Sobol's G function ``prod_i (|4 x_i - 2| + a_i)/(1 + a_i)``, ``x_i ~ U(0, 1)``.
 
     Exact: each factor has mean 1 and variance V_i = 1/(3 (1 + a_i)^2); the output variance is
     V = prod (1 + V_i) - 1, S_i = V_i / V and ST_i = V_i prod_{j != i} (1 + V_j) / V.  A small
     a_i makes input i important, a large one (99) nearly inert: a dummy input with a tiny but
-    exact index.  The kink of |4x - 2| at x = 1/2 makes it a hard case for polynomials, and every
-    factor is even about 1/2, so odd Legendre degrees carry nothing.
+    exact index.  The kink of ``|4x - 2|`` at x = 1/2 makes it a hard case for polynomials, and
+    every factor is even about 1/2, so odd Legendre degrees carry nothing.
 
     Parameters
     ----------

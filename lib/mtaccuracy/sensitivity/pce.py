@@ -483,7 +483,7 @@ def omp_path(psi: np.ndarray, y: np.ndarray, max_terms: int | None = None,
     column ``psi[:, 0]`` always in the model, and the corrected LOO error of the least-squares
     fit on every prefix of the path.
 
-    Each step takes the column of largest |correlation| with the residual (columns compared
+    Each step takes the column of largest ``|correlation|`` with the residual (columns compared
     at unit norm; ties go to the first), orthogonalises it against the columns taken (classical
     Gram-Schmidt, twice) and updates the residual, the hat-matrix diagonal and the trace of the
     inverse Gram matrix that the corrected LOO needs (O(n k) per step besides the one

@@ -454,7 +454,7 @@ def threshold_sweep(st, thresholds, x, model: Callable[[np.ndarray], np.ndarray]
 
     For each threshold: the key set of every output (``st`` (D, q)) and their union; the reduced
     model (non-union errors set to zero) on the samples ``x`` (n, D); per output the residual's
-    max |.| and RMS, also relative to the full model.  ``full`` (n, q) may pass the full-model
+    ``max |.|`` and RMS, also relative to the full model.  ``full`` (n, q) may pass the full-model
     predictions if already computed.  One row per (threshold, output).
 
     Parameters

@@ -295,7 +295,7 @@ def rank_positions(coefficients: np.ndarray) -> np.ndarray:
     Returns
     -------
     array of int (..., p, q)
-        1 = largest |rho|.
+        1 = largest ``|rho|``.
     """
     a = -np.abs(np.asarray(coefficients, dtype=float))
     order = np.argsort(a, axis=-2, kind="stable")  # stable: equal |rho| keep catalogue order

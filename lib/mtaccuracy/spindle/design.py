@@ -226,7 +226,7 @@ def weights_bound_H(w, half_units=None) -> np.ndarray:
     a unit of their last printed digit); the bound then holds for every weight in those intervals.
 
     Proof.  ``Lambda_k = sum_l a_l exp(i k phi_l)``, so by the triangle inequality
-    ``|Lambda_k| <= sum_l |a_l|`` whatever the angles, and therefore
+    ``|Lambda_k| <= sum_l |a_l|`` whatever the angles, and therefore::
 
         H = sum_l a_l^2 / |Lambda_k|^2 >= sum_l a_l^2 / (sum_l |a_l|)^2 =: B(a),
 

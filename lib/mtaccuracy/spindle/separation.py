@@ -295,7 +295,7 @@ class Separation:
     first_harmonic : array (..., 2)
         C, D: the profile's first harmonic C cos + D sin.
     cancelled : array of int
-        Harmonics 0..N/2 set aside (|Lambda_k| ~ 0); always has 1.
+        Harmonics 0..N/2 set aside (``|Lambda_k| ~ 0``); always has 1.
     rank : int
         Rank of the Eq. 6 matrix: N minus the cancelled DFT bins.
     residual_rms : array (...)
@@ -731,7 +731,7 @@ def cancelled_harmonics(phi, w, n_samples: int, rcond: float = 1e-9) -> list[int
     n_samples : int
         N.
     rcond : float
-        Relative threshold on |Lambda_k|.
+        Relative threshold on ``|Lambda_k|``.
 
     Returns
     -------
@@ -766,7 +766,7 @@ def rank_check(positions, phi, w, test_profile, rtol: float, roundoff: float):
         Relative singular-value threshold of the numerical rank (the ``rcond`` of the
         separation).
     roundoff : float
-        What separates round-off from a result, relative to max |test_profile|.
+        What separates round-off from a result, relative to ``max |test_profile|``.
 
     Returns
     -------

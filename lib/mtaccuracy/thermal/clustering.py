@@ -330,7 +330,7 @@ class Selection:
     margins : dict
         How far each decision is from flipping: ``"level"`` the relative distance of the cut to
         the nearest other level, ``"grade"`` the smallest lead of a cluster's winner over its
-        runner-up, ``"correlation"`` the smallest |correlation| that decided a mirroring (NaN
+        runner-up, ``"correlation"`` the smallest ``|correlation|`` that decided a mirroring (NaN
         where there is nothing to decide).
     """
 

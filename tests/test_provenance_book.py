@@ -1,4 +1,5 @@
-"""Provenance stamps and the static report (the browser test is test_report_browser.py)."""
+"""Provenance stamps, and the checks the book makes before it shows an output (the book
+itself: test_book.py)."""
 
 import io
 import json
@@ -14,7 +15,7 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from mtaccuracy.compendium import paths, plotting, provenance, report, reproduction, runner  # noqa: E402
+from mtaccuracy.compendium import book, paths, plotting, provenance, reproduction, runner  # noqa: E402
 
 
 @pytest.fixture
@@ -80,7 +81,17 @@ def _fig(folder, name):
     plt.close(fig)
 
 
-def test_report_marks_a_broken_figure_and_fails(run_record, tmp_path, capsys):
+def _problems(figs, stems, caps=None):
+    return {stem: [(p.name, why.split(" (")[0]) for p, why in found]
+            for stem, found in book.check(figs, stems, caps or {}).items()}
+
+
+def _captions(folder):
+    return {folder.name: [{"figure": p.stem, "label": "Fig. 2", "caption": "c"}
+                          for p in sorted(folder.glob("*.png"))]}
+
+
+def test_a_broken_figure_is_named_and_not_shown(run_record, tmp_path):
     figs = tmp_path / "figures"
     folder = figs / "02_rong_sobol_21_errors"
     folder.mkdir(parents=True)
@@ -91,48 +102,42 @@ def test_report_marks_a_broken_figure_and_fails(run_record, tmp_path, capsys):
     _fig(folder, "fig02_good")
     _fig(folder, "fig03_truncated")
     _fig(folder, "fig04_replaced")
+    caps = _captions(folder)
     png = folder / "fig03_truncated.png"
     png.write_bytes(png.read_bytes()[: len(png.read_bytes()) // 4])  # an interrupted write
     (folder / "fig04_replaced.svg").write_text((folder / "fig04_replaced.svg").read_text()
                                                 .replace("demo", "other"))
-    assert report.main(["--figures", str(figs)]) == 1
-    err = capsys.readouterr().err
-    assert "fig03_truncated.png cannot be read" in err
-    assert "fig04_replaced.svg does not match the hash" in err
-    assert "fig02_good" not in err
-    text = (figs / "index.html").read_text()
-    assert 'src="02_rong_sobol_21_errors/fig02_good.png"' in text
-    assert 'src="02_rong_sobol_21_errors/fig03_truncated.png"' not in text
+    found = book.check(figs, [folder.name], caps)
+    assert [(p.name, why.split(" (")[0]) for p, why in found[folder.name]] == [
+        ("fig03_truncated.png", "cannot be read"),
+        ("fig04_replaced.svg", "does not match the hash in provenance.json")]
+    text = book.chapter(folder.name, figs, caps, reproduction.papers_index(), found)
+    assert "../figures/02_rong_sobol_21_errors/fig02_good.png" in text
+    assert "fig03_truncated.png\n" not in text and "{figure} ../figures/" \
+        "02_rong_sobol_21_errors/fig03_truncated.png" not in text
+    assert "fig04_replaced.svg\">SVG" not in text
     assert text.count('class="broken"') == 2
 
 
-def test_report_lists_every_row_and_figure(committed_report):
-    figs = committed_report
-    text = (figs / "index.html").read_text()
-    for card in figs.glob("*/reproduction.csv"):
-        stem = card.parent.name
-        n = len(pd.read_csv(card))
-        assert text.count(f'class="score-row" data-notebook="{stem}"') == n, stem
-        for png in card.parent.glob("*.png"):
-            assert f'src="{stem}/{png.name}"' in text
-        assert (figs / "html" / f"{stem}.html").exists()
-    assert "http://" not in text and "https://" not in text and "<script" not in text
-    assert not re.search(r'src="https?://', (figs / "html" / f"{stem}.html").read_text())
-    broken = []
-    assert report.build(figs, export=False, broken=broken).read_text() == text  # deterministic
-    assert broken == [] and 'class="broken"' not in text  # every committed output as recorded
+def test_every_committed_output_is_sound_and_captioned():
+    stems = [p.stem for p in runner.all_notebooks()]
+    assert book.check(paths.FIGURES, stems, book.captions()) == {}
 
 
 ZHENG, RONG, GUO = ("01_zheng2024_pce_sobol_41_errors", "02_rong_sobol_21_errors",
                     "03_guo2016_spearman_21_errors")
 
 
-def test_report_marks_deleted_and_changed_outputs_and_fails(committed_report, tmp_path, capsys):
-    """A figure or table that provenance.json lists but that is gone, or whose bytes changed,
-    is marked (not shown, not linked) and fails the command; a measured table may change but
-    must exist."""
+def _committed_copy(tmp_path):
     figs = tmp_path / "figures"
-    shutil.copytree(committed_report, figs)  # with its notebook exports: none is redone
+    shutil.copytree(paths.FIGURES, figs, ignore=shutil.ignore_patterns("html", "index.html", ".*"))
+    return figs
+
+
+def test_deleted_and_changed_outputs_are_named(tmp_path):
+    """A figure or table that provenance.json lists but that is gone, or whose bytes changed,
+    is named (and neither shown nor linked); a measured table may change but must exist."""
+    figs = _committed_copy(tmp_path)
     side = provenance.read(figs / ZHENG)["files"]
     assert side["table3_timing.csv"] == {"measured": True}
     assert side["reproduction_measured.csv"] == {"measured": True}
@@ -143,40 +148,31 @@ def test_report_marks_deleted_and_changed_outputs_and_fails(committed_report, tm
         fh.write("edited,by,hand\n")
     with open(figs / ZHENG / "reproduction_measured.csv", "a") as fh:  # measured: may change
         fh.write("\n")
-    assert report.main(["--figures", str(figs)]) == 1
-    err = capsys.readouterr().err
-    assert f"figure {figs / ZHENG / 'fig07_convergence.png'} is missing" in err
-    assert f"table {figs / RONG / 'table3_key_errors.csv'} is missing" in err
-    assert f"table {figs / ZHENG / 'table3_timing.csv'} is missing" in err
-    assert f"table {figs / GUO / 'pose_search.csv'} does not match the hash" in err
-    assert "reproduction_measured.csv" not in err and err.count("error:") == 4
-    text = (figs / "index.html").read_text()
-    assert text.count('class="broken"') == 4
-    assert (f"<strong>Missing figure</strong> <code>{ZHENG}/fig07_convergence.png</code>"
-            in text)
-    assert f'src="{ZHENG}/fig07_convergence.png"' not in text
-    assert f'href="{ZHENG}/fig07_convergence.svg"' not in text  # its SVG only with its PNG
-    assert f"<strong>Missing table</strong> <code>{RONG}/table3_key_errors.csv</code>" in text
-    assert f"<strong>Broken table</strong> <code>{GUO}/pose_search.csv</code>" in text
-    assert f'href="{GUO}/pose_search.csv"' not in text  # not linked
-    assert f'href="{ZHENG}/reproduction_measured.csv"' in text
-    assert f'src="{ZHENG}/fig05_position_total_sobol.png"' in text  # the rest as before
+    caps = book.captions()
+    assert _problems(figs, [ZHENG, RONG, GUO], caps) == {
+        ZHENG: [("fig07_convergence.png", "is missing"), ("table3_timing.csv", "is missing")],
+        RONG: [("table3_key_errors.csv", "is missing")],
+        GUO: [("pose_search.csv", "does not match the hash in provenance.json")]}
+    found = book.check(figs, [ZHENG, GUO], caps)
+    text = book.chapter(ZHENG, figs, caps, reproduction.papers_index(), found)
+    assert "Not shown:</strong> <code>01_zheng2024_pce_sobol_41_errors/fig07_convergence.png" \
+        in text
+    assert f"../figures/{ZHENG}/fig07_convergence.png" not in text
+    assert f"../figures/{ZHENG}/fig05_position_total_sobol.png" in text  # the rest as before
+    assert f"(../figures/{ZHENG}/reproduction_measured.csv)" in text
+    guo = book.chapter(GUO, figs, caps, reproduction.papers_index(), found)
+    assert f"(../figures/{GUO}/pose_search.csv)" not in guo  # not linked
 
 
-def test_a_paper_folder_that_lost_its_scorecard_is_still_reported(run_record, tmp_path,
-                                                                   capsys):
-    figs = tmp_path / "figures"
-    folder = figs / RONG
-    card = reproduction.Card()
-    card.number("Fig. 2", "q", "1.0", 1.0)
-    card.write(folder / "reproduction.csv")
-    _fig(folder, "fig02_good")
-    (folder / "reproduction.csv").unlink()
-    assert report.main(["--figures", str(figs)]) == 1
-    assert f"table {folder / 'reproduction.csv'} is missing" in capsys.readouterr().err
-    text = (figs / "index.html").read_text()
-    assert f'<section class="paper" id="{RONG}">' in text
-    assert f'src="{RONG}/fig02_good.png"' in text
+def test_a_figure_without_a_caption_or_a_caption_without_a_figure_is_named(tmp_path):
+    figs = _committed_copy(tmp_path)
+    caps = book.captions()
+    caps[RONG] = caps[RONG][1:] + [{"figure": "fig99_gone", "label": "Fig. 99", "caption": "c"}]
+    missing = book.captions()[RONG][0]["figure"]
+    assert _problems(figs, [RONG], caps) == {RONG: [
+        (f"{missing}.png", "has no caption in book/figures.yml"),
+        ("fig99_gone.png", "is captioned in book/figures.yml but is not one of the folder's "
+                           "outputs")]}
 
 
 def test_outputs_are_checked_against_the_sidecar(run_record):
@@ -186,34 +182,31 @@ def test_outputs_are_checked_against_the_sidecar(run_record):
     folder = run_record / "out"
     reproduction.save_table(pd.DataFrame({"a": [1.5]}), folder / "t.csv")
     reproduction.save_table(pd.DataFrame({"s": [0.25]}), folder / "timing.csv", measured=True)
-    assert report.folder_problems(folder) == [] and report.not_outputs(folder) == []
+    assert provenance.folder_problems(folder) == [] and provenance.not_outputs(folder) == []
     (folder / "timing.csv").write_text("s\n0.5\n")
     (folder / "my_ranges.csv").write_text("a\n1\n")
-    assert report.folder_problems(folder) == []
-    assert report.not_outputs(folder) == ["my_ranges.csv"]
+    assert provenance.folder_problems(folder) == []
+    assert provenance.not_outputs(folder) == ["my_ranges.csv"]
     (folder / "timing.csv").unlink()
     (folder / "t.csv").write_text("a\n1.6\n")
-    assert [(p.name, why.split(" (")[0]) for p, why in report.folder_problems(folder)] == [
+    assert [(p.name, why.split(" (")[0]) for p, why in provenance.folder_problems(folder)] == [
         ("t.csv", "does not match the hash in provenance.json"),
         ("timing.csv", "is missing")]
 
 
-def test_a_users_file_in_an_output_folder_neither_fails_nor_shows_in_the_report(
-        committed_report, tmp_path, capsys):
+def test_a_users_file_in_an_output_folder_is_neither_judged_nor_shown(tmp_path):
     """``make reproduce NB=06 PARAMS="ranges_file=figures/06_your_machine/my_ranges.csv"``
-    left the range file alone, then failed in the report, which called it broken."""
-    figs = tmp_path / "figures"
-    shutil.copytree(committed_report, figs)
+    leaves the range file alone; the book neither fails on it nor shows it."""
+    figs = _committed_copy(tmp_path)
     folder = figs / "06_your_machine"
     shutil.copy(paths.DATA / "machines" / "swivel_head_ranges.csv", folder / "my_ranges.csv")
     fig, ax = plt.subplots()
     ax.plot([0, 1])
     fig.savefig(folder / "my_sketch.png")  # the user's own figure, not through plotting.save
     plt.close(fig)
-    assert report.main(["--figures", str(figs)]) == 0, capsys.readouterr().err
-    text = (figs / "index.html").read_text()
-    assert "my_ranges.csv" in text and 'href="06_your_machine/my_ranges.csv"' not in text
-    assert 'src="06_your_machine/my_sketch.png"' not in text
+    assert _problems(figs, ["06_your_machine"], book.captions()) == {}
+    text = book.chapter("06_your_machine", figs, book.captions(), {}, {})
+    assert "my_sketch.png" not in text
 
 
 def _convergence_like(noise: float):
@@ -270,87 +263,3 @@ def test_clip_paths_are_named_after_what_they_print():
     assert plotting.stable_svg_ids("<svg/>") == "<svg/>"
     with pytest.raises(ValueError, match="clip1"):
         plotting.stable_svg_ids(svg.replace("<svg>", '<svg><g id="clip1"/>'))
-
-
-@pytest.mark.parametrize("name, label", [("fig05_position_total_sobol", "Fig. 5"),
-                                         ("fig08_09_algorithms_compared", "Figs. 8-9"),
-                                         ("fig3_spearman_all", "Fig. 3"),
-                                         ("table2_key_errors", "Table 2"),
-                                         ("eq06_matrix_eigenvalues", "eq06_matrix_eigenvalues")])
-def test_figure_labels(name, label):
-    assert report._figure_label(name) == label
-
-
-@pytest.mark.parametrize("label, title, shown", [
-    ("Fig. 5", "Fig. 5: total Sobol indices", "total Sobol indices"),
-    ("Figs. 8-9", "Figs. 8-9 - GA against DE", "GA against DE"),
-    ("Fig. 3", "Guo 2016 Fig. 3 regenerated", "Guo 2016 Fig. 3 regenerated"),
-])
-def test_a_caption_does_not_repeat_its_label(label, title, shown):
-    assert report._caption_title(label, title) == shown
-
-
-@pytest.mark.parametrize("item, refs", [
-    ("Section 1.3, Figs. 6-7", {("fig", 6), ("fig", 7)}),
-    ("Table 2 PCE", {("table", 2)}),
-    ("Abstract / Fig. 7", {("fig", 7)}),
-    ("Figs. 8 and 9", {("fig", 8), ("fig", 9)}),
-    ("Eq. 13", set()),
-])
-def test_scorecard_items_name_their_figures_and_tables(item, refs):
-    assert report._refs(item) == refs
-
-
-def _luminance(hex_colour):
-    c = [int(hex_colour[i:i + 2], 16) / 255 for i in (1, 3, 5)]
-    c = [x / 12.92 if x <= 0.03928 else ((x + 0.055) / 1.055) ** 2.4 for x in c]
-    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
-
-
-def test_verdict_badges_are_readable():
-    """White badge text on each colour: WCAG AA contrast (4.5:1) at least."""
-    for verdict, colour in report.COLOURS.items():
-        assert (1.05 / (_luminance(colour) + 0.05)) >= 4.5, verdict
-
-
-def test_report_shows_verdict_by_basis_and_collapses_long_scorecards(tmp_path):
-    figs = tmp_path / "figures"
-    card = reproduction.Card()
-    pose = card.fitted("pose", to=["Table 2"], how="least squares")
-    for i in range(report.COLLAPSE_ROWS + 1):
-        card.number("Table 2", f"q{i}", "1.0", 1.0, uses=[pose] if i % 2 else ())
-    card.write(figs / "03_guo2016_spearman_21_errors" / "reproduction.csv")
-    text = report.build(figs, notebooks=tmp_path, export=False).read_text()
-    assert text.count('data-basis="fitted"') == report.COLLAPSE_ROWS // 2 + 1
-    assert '<details class="scorecard">' in text  # collapsed: more rows than COLLAPSE_ROWS
-    assert "8 reproduced independently" in text and 'class="crosstab"' in text
-    assert "8 of the 16 published numbers and claims scored were reproduced independently; " \
-        "16 agree in all (the others: 8 fitted)" in text
-
-
-def test_a_figure_is_captioned_with_the_rows_it_declares(run_record, tmp_path):
-    figs = tmp_path / "figures"
-    folder = figs / "03_guo2016_spearman_21_errors"
-    card = reproduction.Card()
-    card.number("Table 2", "index in Px", "0.10", 0.1)
-    card.number("Table 2", "index in Vx", "0.10", 0.3)
-    card.number("Table 5", "k", "1.0", 1.0)
-    card.write(folder / "reproduction.csv")
-    for name, rows in (("fig05_position", ["Table 2: * in P?"]), ("fig06_other", None)):
-        fig, ax = plt.subplots()
-        ax.plot([0, 1])
-        plotting.save(fig, folder, name, title="demo", scored_with=rows)
-        plt.close(fig)
-    text = report.build(figs, notebooks=tmp_path, export=False).read_text()
-    assert "Scorecard rows for Fig. 5: 1 reproduced (independent)." in text
-    assert "No scorecard row is tied to this figure" in text
-
-
-def test_a_report_it_cannot_write_is_one_clear_line(run_record, tmp_path, capsys):
-    """A read-only checkout crashed with a PermissionError traceback on figures/html; any
-    error writing the report now ends in one line (here index.html is a folder)."""
-    figs = tmp_path / "figures"
-    (figs / "index.html").mkdir(parents=True)
-    assert report.main(["--figures", str(figs)]) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "index.html" in err and "Traceback" not in err

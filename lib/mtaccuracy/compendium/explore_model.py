@@ -1,0 +1,914 @@
+"""What the interactive explorer computes, as plain functions (no Panel, no Bokeh).
+
+:mod:`mtaccuracy.compendium.explore` draws these; the tests and ``make bench`` call them
+directly.  Nothing here is new science: every number comes from the library's own functions,
+with the inputs the notebooks use.
+
+Machines (tab "Machine")
+    :func:`machine_setup` builds one of the papers' three machines or any topology typed in
+    (:func:`mtaccuracy.machines.chain.iso_machine`) with the pose ranges and the default error
+    ranges the explorer offers (:class:`MachineSetup` says where each came from).
+    :func:`indices_at_pose` gives the closed-form Sobol indices of the first-order model at one
+    pose (:func:`mtaccuracy.sensitivity.linear_indices` of ``machine.linear_jacobian``);
+    :func:`dominant_map` the error with the largest index over a grid of two axes, batched
+    (one Jacobian call on every grid pose, :func:`mtaccuracy.sensitivity.dominant_errors`);
+    :func:`slider_update` is what one slider move computes (timed by ``make bench``).
+
+Error ranges
+    Every error is uniform on ``+- h_i``.  The default ``h_i`` are the notebooks' ranges:
+    Zheng et al. 2024 (notebook 01) +-15 um and +-10 arcsec; Rong et al. (notebook 02)
+    +-2 x the acceptance value of ``data/rong/error_ranges.csv`` (7.5 um positioning, 10 um
+    straightness, 80 urad angular, 4.75 urad squareness); Guo et al. 2016 (notebook 03) the
+    ranges [0, 3] um, [0, 4] um, [0, 3.2e-5] rad and [0, 1.9] um/m, whose half widths (the same
+    variance) are used; a typed topology +-5 um and +-3 arcsec for every error (a choice of
+    the explorer, about the illustrative ranges of notebook 06).  Two numbers scale them: the
+    *position half range* (um) is the largest half range among the translational errors, the
+    *angular half range* (arcsec) the largest among the angular ones; the others keep their
+    ratio to it.  Indices of the linear model depend only on the ratios of the variances, so
+    the distribution (uniform here, normal in notebook 01) does not matter.
+
+Spindle (tab "Spindle")
+    :func:`probe_transfer`: per harmonic, the noise amplification ``q_k`` of the two estimators
+    of :mod:`mtaccuracy.spindle.probes` (least squares, and the weighted multi-point method of
+    Yang et al. 2021 with the weights :func:`~mtaccuracy.spindle.probes.layout_weights` finds
+    or those of Eq. 5 for a given ``a3``), the harmonics the layout cancels and those it
+    amplifies.
+
+Thermal (tab "Thermal")
+    :func:`thermal_prediction`: notebook 04's split (:func:`mtaccuracy.thermal.evaluate_split`)
+    on chosen experiments, the decoupled model of Xu et al. 2022 (Eq. 9), MLR or SVR, with the
+    paper's sensitive points (read from ``data/papers/xu2022_models.csv``) or the ones its
+    procedure selects on the training experiments.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import errors as _errors
+from .. import sensitivity as S
+from ..machines import build
+from ..machines import chain as _chain
+
+__all__ = [
+    "MACHINES", "TOPOLOGY", "GRID_STEPS", "ARCSEC", "AxisRange", "MachineSetup", "PoseIndices",
+    "DominantMap", "machine_setup", "topology_setup", "error_half_ranges", "pose_of",
+    "indices_at_pose", "top_errors", "dominant_map", "default_map_axes", "slider_update",
+    "time_slider_update",
+    "YANG_POSITIONS", "YANG_SAMPLES", "YANG_A3", "yang_layout_deg", "ProbeTransfer",
+    "probe_transfer", "ThermalPrediction", "thermal_data", "published_thermal_inputs",
+    "thermal_prediction",
+]
+
+#: The papers' machines offered by the explorer: registry name -> label.
+MACHINES = {
+    "ac_double_turntable": "AC double turntable (Zheng et al. 2024, 41 errors)",
+    "horizontal_3axis": "Horizontal 3-axis machining centre (Rong et al., 21 errors)",
+    "vertical_xyfz": "Vertical XYFZ (Guo et al. 2016, 21 errors)",
+}
+#: The key of a machine typed in as a topology.
+TOPOLOGY = "topology"
+#: Grid points per axis of the dominant-error map (25 x 25 = 625 poses per update).
+GRID_STEPS = 25
+#: One arc second in rad.
+ARCSEC = _errors.UNIT_SCALE["arcsec"]
+
+
+# ------------------------------------------------------------------------------------------
+# Machines
+# ------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class AxisRange:
+    """The slider of one pose axis.
+
+    Attributes
+    ----------
+    name : str
+        Pose name (``x``, ``y``, ``z`` lower case; ``A``, ``B``, ``C``).
+    low, high, default : float
+        Range and starting value, in ``unit``.
+    unit : str
+        ``"mm"`` (linear axes) or ``"deg"`` (rotary axes; the library takes rad).
+    """
+
+    name: str
+    low: float
+    high: float
+    default: float
+    unit: str
+
+    @property
+    def rotary(self) -> bool:
+        """bool: a rotary axis (degrees on the slider, rad in the library)."""
+        return self.unit == "deg"
+
+
+@dataclass(frozen=True)
+class MachineSetup:
+    """A machine with the explorer's pose ranges and default error ranges.
+
+    Attributes
+    ----------
+    key : str
+        A name of :data:`MACHINES`, or :data:`TOPOLOGY`.
+    label : str
+        What the explorer calls it.
+    machine : ChainMachine
+        The machine.
+    axes : tuple of AxisRange
+        One per pose axis, in ``machine.axes`` order.
+    tool : dict
+        Tool offsets (mm), fixed.
+    half_range : array (d,)
+        Default half range of every error (mm, rad): uniform on ``+- half_range``.
+    position_um, angular_arcsec : float
+        The default values of the two range sliders: the largest half range of the
+        translational errors (um) and of the angular ones (arcsec).
+    notes : tuple of str
+        Where the ranges come from, in words.
+    """
+
+    key: str
+    label: str
+    machine: object
+    axes: tuple
+    tool: dict
+    half_range: np.ndarray
+    position_um: float
+    angular_arcsec: float
+    notes: tuple = field(default_factory=tuple)
+
+    @property
+    def names(self) -> list[str]:
+        """list of str: the error symbols (catalogue order)."""
+        return list(self.machine.error_names)
+
+    @property
+    def outputs(self) -> list[str]:
+        """list of str: the output names (``machine.components``)."""
+        return list(self.machine.components)
+
+    @property
+    def translational(self) -> np.ndarray:
+        """array of bool (d,): the translational errors."""
+        return np.array([e.translational for e in self.machine.catalogue])
+
+    def axis(self, name: str) -> AxisRange:
+        """The :class:`AxisRange` of pose axis ``name``.
+
+        Parameters
+        ----------
+        name : str
+            A pose name of the machine.
+
+        Returns
+        -------
+        AxisRange
+        """
+        for a in self.axes:
+            if a.name == name:
+                return a
+        raise ValueError(f"{self.label} has no axis {name!r}; axes: "
+                         f"{', '.join(a.name for a in self.axes)}")
+
+
+def _rong_half_ranges(machine, range_factor: float = 2.0) -> np.ndarray:
+    """Notebook 02's ranges: +- ``range_factor`` x the acceptance value of each error in
+    ``data/rong/error_ranges.csv`` (mm, rad)."""
+    import pandas as pd
+
+    from . import paths
+
+    path = paths.DATA / "rong" / "error_ranges.csv"
+    acc = pd.read_csv(path, dtype={"symbol": str}).set_index("symbol")
+    missing = [s for s in machine.error_names if s not in acc.index]
+    if missing:
+        raise ValueError(f"{path}: no range for {missing}")
+    acc = acc.loc[machine.error_names]
+    scale = acc.unit.map(_errors.UNIT_SCALE)
+    if scale.isna().any() or (acc.acceptance_value <= 0).any():
+        raise ValueError(f"{path}: units must be in {sorted(_errors.UNIT_SCALE)} and values > 0")
+    return range_factor * acc.acceptance_value.to_numpy(float) * scale.to_numpy(float)
+
+
+def _guo_half_ranges(machine) -> np.ndarray:
+    """Notebook 03's ranges ([0, 3] um, [0, 4] um, [0, 3.2e-5] rad, [0, 1.9] um/m), as half
+    widths (mm, rad): a uniform on [0, r] has the variance of one on +- r / 2."""
+    b = _errors.uniform_bounds(machine.catalogue, {
+        "positioning": (0.0, 3.0), "straightness": (0.0, 4.0), "angular": (0.0, 3.2e-5),
+        "squareness": (0.0, 1.9)})
+    return (b[1] - b[0]) / 2
+
+
+def _largest(half: np.ndarray, mask: np.ndarray, unit: float) -> float:
+    return float(half[mask].max() / unit) if mask.any() else 0.0
+
+
+def machine_setup(key: str) -> MachineSetup:
+    """The machine called ``key`` with the explorer's pose and error ranges.
+
+    Parameters
+    ----------
+    key : str
+        A name of :data:`MACHINES`, or a topology string (``"w C b X Y Z B t"``, read by
+        :func:`mtaccuracy.machines.chain.iso_machine`).
+
+    Returns
+    -------
+    MachineSetup
+        Pose ranges: the machine's travels when the library knows them (Zheng et al.'s
+        ``TRAVELS``), the workspace of the notebook otherwise (Rong: 0..700, 0..600, 0..500 mm,
+        notebook 02; Guo: 0..500 mm, notebook 03's pose grid), and for a typed topology
+        (:func:`topology_setup`, used for any ``key`` not in :data:`MACHINES`) -300..300 mm
+        and -180..180 deg (the box of
+        :func:`~mtaccuracy.machines.chain.redundant_location_errors`).  Starting pose: notebook
+        01's check pose (x 120, y -80, z 150 mm, A 40, C 75 deg), the centre of Rong's
+        workspace, Guo's pose (100, 100, 100) mm, the centre for a typed topology.  Tool
+        offsets 0.
+
+    Raises
+    ------
+    ValueError
+        For a topology the library refuses, with the library's own message.
+    """
+    deg = np.rad2deg
+    if key == "ac_double_turntable":
+        m = build(key)
+        start = dict(x=120.0, y=-80.0, z=150.0, A=40.0, C=75.0)
+        axes = tuple(AxisRange(a, *(deg(m.travels[a]) if a in "AC" else m.travels[a]),
+                               start[a], "deg" if a in "AC" else "mm") for a in m.axes)
+        half = np.array([15e-3 if e.translational else 10.0 * ARCSEC for e in m.catalogue])
+        notes = ("travels: the library's (ac_double_turntable.TRAVELS); starting pose: "
+                 "notebook 01's check pose",
+                 "errors: +-15 um and +-10 arcsec (Zheng et al. 2024, notebook 01)")
+    elif key == "horizontal_3axis":
+        m = build(key)
+        work = dict(x=700.0, y=600.0, z=500.0)
+        axes = tuple(AxisRange(a, 0.0, work[a], work[a] / 2, "mm") for a in m.axes)
+        half = _rong_half_ranges(m)
+        notes = ("axes: notebook 02's workspace 700 x 600 x 500 mm (the library has no "
+                 "travels for this machine); starting pose: its centre",
+                 "errors: +-2 x the acceptance values of data/rong/error_ranges.csv "
+                 "(notebook 02): 7.5 um positioning, 10 um straightness, 80 urad angular, "
+                 "4.75 urad squareness")
+    elif key == "vertical_xyfz":
+        m = build(key)
+        axes = tuple(AxisRange(a, 0.0, 500.0, 100.0, "mm") for a in m.axes)
+        half = _guo_half_ranges(m)
+        notes = ("axes: 0..500 mm, notebook 03's pose grid (the library has no travels for "
+                 "this machine); starting pose: notebook 03's (100, 100, 100) mm",
+                 "errors: half widths of notebook 03's ranges [0, 3] um positioning, [0, 4] um "
+                 "straightness, [0, 32] urad angular, [0, 1.9] um/m squareness")
+    else:
+        return topology_setup(key)
+    return _setup(key, MACHINES[key], m, axes, half, notes)
+
+
+def topology_setup(topology: str) -> MachineSetup:
+    """A machine typed in as a topology, with the explorer's ranges (see :func:`machine_setup`).
+
+    Parameters
+    ----------
+    topology : str
+        Read by :func:`mtaccuracy.machines.chain.iso_machine` (ISO 230-1/230-7 catalogue,
+        redundant location errors removed), even when it is also the name of a machine.
+
+    Returns
+    -------
+    MachineSetup
+
+    Raises
+    ------
+    ValueError
+        For a topology the library refuses, with the library's own message.
+    """
+    deg = np.rad2deg
+    m = _chain.iso_machine(topology, name="typed topology")
+    axes = []
+    for a in m.axes:
+        if a in _chain.ROTARY:
+            lo, hi = m.travels.get(a, (-np.pi, np.pi))
+            axes.append(AxisRange(a, float(deg(lo)), float(deg(hi)),
+                                  float(deg(lo + hi) / 2), "deg"))
+        else:
+            lo, hi = m.travels.get(a, (-300.0, 300.0))
+            axes.append(AxisRange(a, float(lo), float(hi), float(lo + hi) / 2, "mm"))
+    axes = tuple(axes)
+    half = np.array([5e-3 if e.translational else 3.0 * ARCSEC for e in m.catalogue])
+    removed = f"; {len(m.removed)} redundant location errors removed" if m.removed else ""
+    notes = (f"{m.topology.describe()}: ISO 230-1/230-7 catalogue of {m.n_errors} errors"
+             f"{removed}",
+             "axes: -300..300 mm and -180..180 deg (no travels known); starting pose: the "
+             "centre",
+             "errors: +-5 um and +-3 arcsec for every error (the explorer's choice, about "
+             "notebook 06's illustrative ranges)")
+    return _setup(TOPOLOGY, f"topology {topology.strip()!r} ({m.n_errors} errors)", m, axes,
+                  half, notes)
+
+
+def _setup(key, label, m, axes, half, notes) -> MachineSetup:
+    axes = tuple(AxisRange(a.name, float(a.low), float(a.high), float(a.default), a.unit)
+                 for a in axes)
+    trans = np.array([e.translational for e in m.catalogue])
+    return MachineSetup(key, label, m, axes, {t: 0.0 for t in m.tool_offsets},
+                        np.asarray(half, dtype=float), _largest(half, trans, 1e-3),
+                        _largest(half, ~trans, ARCSEC), tuple(notes))
+
+
+def error_half_ranges(setup: MachineSetup, *, position_um: float | None = None,
+                      angular_arcsec: float | None = None) -> np.ndarray:
+    """The half range of every error for the two range sliders (mm, rad).
+
+    Parameters
+    ----------
+    setup : MachineSetup
+        The machine.
+    position_um : float, optional
+        The largest half range of the translational errors (um); the others keep their ratio
+        to it (default: ``setup.position_um``, the notebook's).
+    angular_arcsec : float, optional
+        The same for the angular errors (arcsec).
+
+    Returns
+    -------
+    array (d,)
+        Half ranges, mm and rad.
+    """
+    pos = setup.position_um if position_um is None else float(position_um)
+    ang = setup.angular_arcsec if angular_arcsec is None else float(angular_arcsec)
+    if not (np.isfinite(pos) and np.isfinite(ang)) or pos < 0 or ang < 0:
+        raise ValueError(f"half ranges must be finite and >= 0, got {pos} um, {ang} arcsec")
+    trans = setup.translational
+    scale = np.where(trans, pos / setup.position_um if setup.position_um else 0.0,
+                     ang / setup.angular_arcsec if setup.angular_arcsec else 0.0)
+    return setup.half_range * scale
+
+
+def pose_of(setup: MachineSetup, values: Mapping[str, float] | None = None) -> dict:
+    """The library's pose (mm, rad, tool offsets included) from slider values.
+
+    Parameters
+    ----------
+    setup : MachineSetup
+        The machine.
+    values : mapping of str to float or array, optional
+        Axis -> value in the slider's unit (mm, deg); missing axes take their default.
+
+    Returns
+    -------
+    dict of str to float or array
+        For ``machine.linear_jacobian``.
+    """
+    values = dict(values or {})
+    unknown = sorted(set(values) - {a.name for a in setup.axes})
+    if unknown:
+        raise ValueError(f"unknown axis(es) {unknown}; axes: "
+                         f"{', '.join(a.name for a in setup.axes)}")
+    pose = {}
+    for a in setup.axes:
+        v = np.asarray(values.get(a.name, a.default), dtype=float)
+        pose[a.name] = np.deg2rad(v) if a.rotary else v
+    return {**pose, **setup.tool}
+
+
+@dataclass(frozen=True)
+class PoseIndices:
+    """Closed-form Sobol indices of the first-order model at one pose.
+
+    Attributes
+    ----------
+    indices : array (d, q)
+        First-order = total index of each error (rows) for each output (columns); 0 for an
+        output with no first-order term.
+    first_order : array of bool (q,)
+        The output has a first-order term at this pose
+        (:func:`mtaccuracy.sensitivity.first_order_outputs`).
+    sd : array (q,)
+        Standard deviation of each output of the linear model (mm, rad).
+    names, outputs : list of str
+        Errors and outputs.
+    """
+
+    indices: np.ndarray
+    first_order: np.ndarray
+    sd: np.ndarray
+    names: list
+    outputs: list
+
+
+def indices_at_pose(setup: MachineSetup, values: Mapping[str, float] | None = None, *,
+                    position_um: float | None = None,
+                    angular_arcsec: float | None = None) -> PoseIndices:
+    """Closed-form Sobol indices of the first-order model at one pose.
+
+    ``S_ki = J_ki^2 sd_i^2 / sum_j J_kj^2 sd_j^2`` (:func:`mtaccuracy.sensitivity.
+    linear_indices`) with ``J`` the machine's closed-form Jacobian
+    (``machine.linear_jacobian``) and ``sd_i = h_i / sqrt(3)`` (uniform on ``+- h_i``).
+
+    Parameters
+    ----------
+    setup : MachineSetup
+        The machine.
+    values : mapping of str to float, optional
+        Pose in slider units (mm, deg); missing axes at their default.
+    position_um, angular_arcsec : float, optional
+        The range sliders (:func:`error_half_ranges`).
+
+    Returns
+    -------
+    PoseIndices
+    """
+    sd = error_half_ranges(setup, position_um=position_um,
+                           angular_arcsec=angular_arcsec) / np.sqrt(3.0)
+    jac = setup.machine.linear_jacobian(pose_of(setup, values))          # (1, q, d)
+    idx = S.linear_indices(jac, sd)[0]                                   # (q, d)
+    first = S.first_order_outputs(jac, sd**2)[0]
+    idx[~first] = 0.0
+    out_sd = np.sqrt((jac[0] ** 2 * sd**2).sum(-1))
+    return PoseIndices(idx.T.copy(), first, out_sd, setup.names, setup.outputs)
+
+
+def top_errors(result: PoseIndices) -> list[tuple[str, str, float]]:
+    """The error with the largest index for each output with a first-order term.
+
+    Ties within :func:`mtaccuracy.sensitivity.merge_ties`'s tolerance go to the first in the
+    catalogue (as :func:`mtaccuracy.sensitivity.dominant_errors`).
+
+    Parameters
+    ----------
+    result : PoseIndices
+        Indices at a pose.
+
+    Returns
+    -------
+    list of (str, str, float)
+        ``(output, error, index)`` per output with a first-order term.
+    """
+    merged = S.merge_ties(result.indices)
+    top = np.argmax(merged, axis=0)
+    return [(o, result.names[top[k]], float(result.indices[top[k], k]))
+            for k, o in enumerate(result.outputs) if result.first_order[k]]
+
+
+@dataclass(frozen=True)
+class DominantMap:
+    """The error with the largest closed-form index over a grid of two axes.
+
+    Attributes
+    ----------
+    axes : tuple of str
+        The two axes: ``axes[0]`` across (columns), ``axes[1]`` up (rows).
+    u, v : arrays (n,), (m,)
+        Their grid values, in slider units (mm, deg).
+    error : array of int (m, n, q)
+        Column of the dominant error at each grid pose and output; -1 where the output has no
+        first-order term.
+    index : array (m, n, q)
+        Its index (0 where ``error`` is -1).
+    names, outputs : list of str
+        Errors and outputs.
+    """
+
+    axes: tuple
+    u: np.ndarray
+    v: np.ndarray
+    error: np.ndarray
+    index: np.ndarray
+    names: list
+    outputs: list
+
+
+def default_map_axes(setup: MachineSetup) -> tuple[str, str]:
+    """The two axes the dominant-error map starts on: the last and first rotary axes when the
+    machine has two (as notebook 06), else its first two axes (one axis: it twice).
+
+    Parameters
+    ----------
+    setup : MachineSetup
+        The machine.
+
+    Returns
+    -------
+    tuple of str
+    """
+    rotary = [a.name for a in setup.axes if a.rotary]
+    if len(rotary) >= 2:
+        return rotary[-1], rotary[0]
+    names = [a.name for a in setup.axes]
+    return (names[0], names[1]) if len(names) > 1 else (names[0], names[0])
+
+
+def dominant_map(setup: MachineSetup, values: Mapping[str, float] | None = None, *,
+                 axes: Sequence[str] | None = None, steps: int = GRID_STEPS,
+                 position_um: float | None = None,
+                 angular_arcsec: float | None = None) -> DominantMap:
+    """The dominant error over a ``steps x steps`` grid of two axes, the others fixed.
+
+    One batched ``machine.linear_jacobian`` call on all grid poses (a leading pose axis, no
+    loop over them), then :func:`mtaccuracy.sensitivity.dominant_errors` (ties to the first in
+    the catalogue; -1 for an output without a first-order term) and
+    :func:`mtaccuracy.sensitivity.indices_at_poses` for the index shown.
+
+    Parameters
+    ----------
+    setup : MachineSetup
+        The machine.
+    values : mapping of str to float, optional
+        Pose in slider units; the two grid axes are overridden.
+    axes : sequence of two str, optional
+        The grid axes, each over its slider range (default :func:`default_map_axes`).
+    steps : int
+        Grid points per axis (>= 2).
+    position_um, angular_arcsec : float, optional
+        The range sliders (:func:`error_half_ranges`).
+
+    Returns
+    -------
+    DominantMap
+    """
+    a1, a2 = axes if axes is not None else default_map_axes(setup)
+    if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 2:
+        raise ValueError(f"steps must be an integer >= 2, got {steps!r}")
+    r1, r2 = setup.axis(a1), setup.axis(a2)
+    u = np.linspace(r1.low, r1.high, steps)
+    v = np.linspace(r2.low, r2.high, steps)
+    uu, vv = np.meshgrid(u, v, indexing="xy")                  # (m, n): rows follow v
+    grid = {a.name: np.full(uu.size, values.get(a.name, a.default) if values else a.default,
+                            dtype=float) for a in setup.axes}
+    grid[a1] = uu.ravel()
+    if a2 != a1:
+        grid[a2] = vv.ravel()
+    var = error_half_ranges(setup, position_um=position_um,
+                            angular_arcsec=angular_arcsec) ** 2 / 3.0
+    jac = setup.machine.linear_jacobian(pose_of(setup, grid))            # (G, q, d)
+    dom = S.dominant_errors(jac, var)                                    # (G, q)
+    idx = S.indices_at_poses(jac, var)                                   # (G, d, q)
+    top = np.take_along_axis(idx, np.maximum(dom, 0)[:, None, :], axis=1)[:, 0, :]
+    top = np.where(dom >= 0, top, 0.0)
+    shape = (steps, steps, len(setup.outputs))
+    return DominantMap((a1, a2), u, v, dom.reshape(shape), top.reshape(shape), setup.names,
+                       setup.outputs)
+
+
+def slider_update(setup: MachineSetup, values: Mapping[str, float] | None = None, *,
+                  axes: Sequence[str] | None = None, steps: int = GRID_STEPS,
+                  position_um: float | None = None, angular_arcsec: float | None = None
+                  ) -> tuple[PoseIndices, DominantMap]:
+    """Everything one slider move of the Machine tab computes: the indices at the pose and the
+    dominant-error map.
+
+    Parameters
+    ----------
+    setup : MachineSetup
+        The machine.
+    values : mapping of str to float, optional
+        Pose in slider units.
+    axes : sequence of two str, optional
+        The map's axes.
+    steps : int
+        Grid points per map axis.
+    position_um, angular_arcsec : float, optional
+        The range sliders.
+
+    Returns
+    -------
+    PoseIndices, DominantMap
+    """
+    kw = dict(position_um=position_um, angular_arcsec=angular_arcsec)
+    return (indices_at_pose(setup, values, **kw),
+            dominant_map(setup, values, axes=axes, steps=steps, **kw))
+
+
+def time_slider_update(setup: MachineSetup, *, repeat: int = 10, steps: int = GRID_STEPS
+                       ) -> float:
+    """The minimum wall time (s) of :func:`slider_update` at the default pose over ``repeat``
+    runs after one warm-up run (``make bench``).
+
+    Parameters
+    ----------
+    setup : MachineSetup
+        The machine.
+    repeat : int
+        Timed runs.
+    steps : int
+        Grid points per map axis.
+
+    Returns
+    -------
+    float
+        Seconds.
+    """
+    slider_update(setup, steps=steps)
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        slider_update(setup, steps=steps)
+        best = min(best, time.perf_counter() - t0)
+    return float(best)
+
+
+# ------------------------------------------------------------------------------------------
+# Spindle: what a probe layout does to each harmonic
+# ------------------------------------------------------------------------------------------
+
+#: Yang et al. 2021's four-point layout: probes at samples 0, 14, 65, 116 of 128 per
+#: revolution (Section 1.3; notebook 05's ``probe_positions``), and their ``a3``.
+YANG_POSITIONS = (0, 14, 65, 116)
+YANG_SAMPLES = 128
+YANG_A3 = 1.953
+
+
+def yang_layout_deg() -> np.ndarray:
+    """Yang et al. 2021's probe angles in degrees (0, 39.375, 182.8125, 326.25).
+
+    Returns
+    -------
+    array (4,)
+        deg.
+    """
+    from ..spindle import probe_angles
+
+    return np.rad2deg(probe_angles(list(YANG_POSITIONS), YANG_SAMPLES))
+
+
+@dataclass(frozen=True)
+class ProbeTransfer:
+    """How a probe layout transfers each harmonic of the profile, for both estimators.
+
+    Attributes
+    ----------
+    angles_deg : array (L,)
+        Probe angles (deg).
+    harmonics : array of int (K,)
+        ``2..max_harmonic`` (the first is the motion's, never separable).
+    weights : array (L,) or None
+        The weighted method's weights (first probe's 1); None when no weights exist.
+    weights_rule : str
+        ``"optimal"`` (:func:`~mtaccuracy.spindle.probes.layout_weights`) or ``"eq5"``.
+    q_least_squares, q_weighted : arrays (K,)
+        Noise amplification ``q_k`` (:func:`~mtaccuracy.spindle.probes.noise_amplification`);
+        inf where the harmonic is cancelled.
+    gain_weighted : array (K,)
+        ``|Lambda_k| / ||a||``: how much of harmonic k the weighted sum keeps (``1 / q_k``; 0:
+        cancelled).
+    cancelled : array of bool (K,)
+        The layout cancels the harmonic: no estimator recovers it
+        (:func:`~mtaccuracy.spindle.probes.layout_cancelled`).
+    cancelled_by_weights : array of bool (K,)
+        The weights cancel it though least squares recovers it.
+    amplified_least_squares, amplified_weighted : arrays of bool (K,)
+        ``q_k`` above ``amplified_above`` (finite).
+    amplified_above : float
+        The threshold (notebook 07's default: 3).
+    """
+
+    angles_deg: np.ndarray
+    harmonics: np.ndarray
+    weights: np.ndarray | None
+    weights_rule: str
+    q_least_squares: np.ndarray
+    q_weighted: np.ndarray
+    gain_weighted: np.ndarray
+    cancelled: np.ndarray
+    cancelled_by_weights: np.ndarray
+    amplified_least_squares: np.ndarray
+    amplified_weighted: np.ndarray
+    amplified_above: float
+
+
+def probe_transfer(angles_deg, *, max_harmonic: int = 20, weights: str = "optimal",
+                   a3: float = YANG_A3, amplified_above: float = 3.0) -> ProbeTransfer:
+    """What probes at ``angles_deg`` do to harmonics 2..``max_harmonic`` of the profile.
+
+    Least squares: ``q_k^2 = [(A_k^H A_k)^-1]_00`` with ``A_k`` the design of harmonic k and
+    the two motion components; the weighted multi-point method (Yang et al. 2021, Eqs. 14, 19):
+    ``q_k^2 = sum a_l^2 / |Lambda_k|^2``, ``Lambda_k = sum a_l exp(i k phi_l)``.  Both from
+    :func:`mtaccuracy.spindle.probes.noise_amplification`.
+
+    Parameters
+    ----------
+    angles_deg : array (L,)
+        Probe angles (deg), L >= 3, the first defining the x axis.
+    max_harmonic : int
+        The highest harmonic shown (>= 2).
+    weights : {"optimal", "eq5"}
+        The weighted method's weights: those minimising the worst ``q_k`` over the harmonics
+        the layout does not cancel (:func:`~mtaccuracy.spindle.probes.layout_weights`), or
+        Eq. 5 (= Eq. 15) with the free weight ``a3`` (four probes, the first at 0).
+    a3 : float
+        The free weight of Eq. 5.
+    amplified_above : float
+        ``q_k`` above this counts as amplified (> 1).
+
+    Returns
+    -------
+    ProbeTransfer
+
+    Raises
+    ------
+    ValueError
+        With the library's message: fewer than three probes, two at one angle, a layout Eq. 5
+        cannot serve.
+    """
+    from .. import spindle as SP
+
+    phi = np.deg2rad(np.asarray(angles_deg, dtype=float))
+    if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
+            or max_harmonic < 2:
+        raise ValueError(f"max_harmonic must be an integer >= 2, got {max_harmonic!r}")
+    if not amplified_above > 1:
+        raise ValueError(f"amplified_above must be > 1, got {amplified_above!r}")
+    ks = np.arange(2, int(max_harmonic) + 1)
+    cancelled_list = SP.layout_cancelled(phi, int(max_harmonic))
+    cancelled = np.isin(ks, cancelled_list)
+    q_ls = SP.noise_amplification(phi, ks)
+    if weights == "optimal":
+        keep = ks[~cancelled]
+        w = SP.layout_weights(phi, keep) if keep.size else None
+    elif weights == "eq5":
+        if phi.shape != (4,):
+            raise ValueError(f"Eq. 5 weights are for four probes, got {phi.shape[0]}")
+        w = SP.full_weights(phi, a3)
+    else:
+        raise ValueError(f"weights must be 'optimal' or 'eq5', got {weights!r}")
+    if w is None:
+        q_w = np.full(ks.shape, np.inf)
+    else:
+        q_w = SP.noise_amplification(phi, ks, weights=w)
+    q_w = np.where(cancelled, np.inf, q_w)
+    with np.errstate(divide="ignore"):
+        gain = np.where(np.isfinite(q_w), 1.0 / q_w, 0.0)
+    return ProbeTransfer(
+        np.rad2deg(phi), ks, None if w is None else np.asarray(w, dtype=float), weights,
+        q_ls, q_w, gain, cancelled, ~cancelled & ~np.isfinite(q_w),
+        np.isfinite(q_ls) & (q_ls > amplified_above),
+        np.isfinite(q_w) & (q_w > amplified_above), float(amplified_above))
+
+
+# ------------------------------------------------------------------------------------------
+# Thermal: a train/test split of notebook 04
+# ------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ThermalPrediction:
+    """The thermal error of a test experiment predicted from its temperatures.
+
+    Attributes
+    ----------
+    train : list of int
+        Training experiments.
+    test : int
+        The test experiment.
+    kind : str
+        ``"mlr"`` or ``"svr"`` (the decoupled model, Xu et al. 2022, Eq. 9).
+    inputs : dict
+        ``{"k": [...], "b": [...]}``: the sensors of k (absolute temperatures) and b (rises).
+    positions_mm : array (P,)
+        Target positions (mm).
+    time_min : array (n,)
+        Time of each test measurement (min).
+    measurement : array of int (n,)
+        Measurement numbers.
+    measured, predicted : arrays (n, P)
+        Thermal positioning error (um).
+    rmse : float
+        Pooled over all positions and measurements (um, :func:`mtaccuracy.thermal.metrics`).
+    max_residual : float
+        Largest absolute residual (um).
+    rmse_uncompensated : float
+        RMSE of the measured error itself (no model, the plain baseline), um.
+    """
+
+    train: list
+    test: int
+    kind: str
+    inputs: dict
+    positions_mm: np.ndarray
+    time_min: np.ndarray
+    measurement: np.ndarray
+    measured: np.ndarray
+    predicted: np.ndarray
+    rmse: float
+    max_residual: float
+    rmse_uncompensated: float
+
+
+def thermal_data(folder=None):
+    """The thermal measurements (default the committed reconstruction, ``data/thermal``) and
+    whether they are the paper's reconstruction (decided by content,
+    :func:`mtaccuracy.compendium.xu2022.reconstruction_seed`).
+
+    Parameters
+    ----------
+    folder : path, optional
+        A folder in the schema of ``data/thermal/README.md``.
+
+    Returns
+    -------
+    data : ThermalData
+    reconstructed : bool
+    """
+    from .. import thermal
+    from . import paths, xu2022
+
+    folder = paths.DATA / "thermal" if folder is None else folder
+    data = thermal.read_measurements(folder)
+    return data, xu2022.reconstruction_seed(folder, data) is not None
+
+
+def published_thermal_inputs() -> dict:
+    """The paper's sensitive points, from the terms of its printed models
+    (``data/papers/xu2022_models.csv``: Eq. 8 for ``point``, Eq. 9 for ``k`` and ``b``).
+
+    Returns
+    -------
+    dict
+        ``{"point": [...], "k": [...], "b": [...]}`` sensor names.
+    """
+    from . import xu2022
+
+    models = xu2022.published_models()
+    terms = models[models.term != "intercept"]
+
+    def of(model, prefix=""):
+        rows = terms[(terms.model == model) & terms.target.str.startswith(prefix)]
+        return list(dict.fromkeys(t.removeprefix("d") for t in rows.term))
+    return {"point": of("point_by_point_mlr"), "k": of("decoupled_mlr", "k"),
+            "b": of("decoupled_mlr", "b")}
+
+
+def thermal_prediction(data, *, train: Sequence[int], test: int, inputs: str = "published",
+                       kind: str = "mlr", progress: Callable[[str], None] | None = None
+                       ) -> ThermalPrediction:
+    """Predict the test experiment's thermal error with the decoupled model (Eq. 9) fitted on
+    the training experiments: :func:`mtaccuracy.thermal.evaluate_split`, as notebook 04.
+
+    Parameters
+    ----------
+    data : ThermalData
+        All measurements.
+    train : sequence of int
+        Training experiments (>= 1; >= 2 for the SVR, whose cross-validation leaves one out).
+    test : int
+        The experiment predicted from its temperatures only.
+    inputs : {"published", "selected"}
+        The paper's sensitive points (:func:`published_thermal_inputs`), or those its procedure
+        (fuzzy clustering, grey relational grade) selects on the training experiments.
+    kind : {"mlr", "svr"}
+        Linear regression, or the grouped SVR (hyperparameters by leave-one-experiment-out).
+    progress : callable, optional
+        Called with a short text as the fit goes (:func:`~mtaccuracy.thermal.evaluate_split`).
+
+    Returns
+    -------
+    ThermalPrediction
+
+    Raises
+    ------
+    ValueError
+        For an experiment the data lack, a test experiment also trained on, too few training
+        experiments, or a paper's sensor the data lack.
+    """
+    from .. import thermal
+
+    train = sorted({int(e) for e in train})
+    test = int(test)
+    absent = sorted(set(train + [test]) - set(data.experiments))
+    if absent:
+        raise ValueError(f"experiment(s) {absent} are not in the data; they have "
+                         f"{data.experiments}")
+    if test in train:
+        raise ValueError(f"the test experiment {test} is also a training experiment")
+    if kind not in ("mlr", "svr"):
+        raise ValueError(f"kind must be 'mlr' or 'svr', got {kind!r}")
+    need = 2 if kind == "svr" else 1
+    if len(train) < need:
+        raise ValueError(f"the {kind.upper()} needs at least {need} training experiment"
+                         f"{'s (its cross-validation leaves one out)' if need > 1 else ''}, "
+                         f"got {train}")
+    if inputs == "published":
+        sensors = published_thermal_inputs()
+        lacking = sorted({s for v in sensors.values() for s in v} - set(data.sensors))
+        if lacking:
+            raise ValueError(f"the data lack the paper's sensors {lacking}; use the selected "
+                             f"inputs")
+    elif inputs == "selected":
+        sensors = None
+    else:
+        raise ValueError(f"inputs must be 'published' or 'selected', got {inputs!r}")
+    res = thermal.evaluate_split(data, train, [test], kinds=(kind,), sensors=sensors,
+                                 progress=progress, baselines=("uncompensated",))
+    name = f"decoupled_{kind}"
+    measured, predicted = res.measured, res.predictions[name]
+    m = thermal.metrics(measured - predicted)
+    te = data.subset(test)
+    return ThermalPrediction(
+        train, test, kind, {"k": list(res.inputs["k"]), "b": list(res.inputs["b"])},
+        np.asarray(data.positions_mm, dtype=float), te.index.time_min.to_numpy(float),
+        te.index.measurement.to_numpy(int), measured, predicted, float(m["rmse"]),
+        float(m["max_residual"]), float(thermal.metrics(measured)["rmse"]))

@@ -1,0 +1,382 @@
+"""The interactive explorer (``mtaccuracy.compendium.explore``): what it computes, held to
+independent formulations, and its server held to 127.0.0.1.
+
+The computations (``explore_model``) are plain functions: the indices at a pose against a
+Monte Carlo regression on the exact chain, a finite-difference Jacobian and an analytic pose;
+the dominant-error map against single-pose computations and to one batched Jacobian call; the
+spindle transfer against the harmonics theory cancels; the thermal prediction against a
+least-squares fit written out here.  The app is built in Python (no browser: see
+``test_explore_browser.py``) to check that a bad topology shows the library's message.
+"""
+
+import html
+import signal
+import socket
+
+import numpy as np
+import pytest
+
+from mtaccuracy import sensitivity as S
+from mtaccuracy.compendium import explore_model as M
+from mtaccuracy.machines import chain
+
+TOPOLOGY = "w C b X Y Z B t"      # notebook 06's swivel-head machine
+
+
+@pytest.fixture(scope="module")
+def setups():
+    return {k: M.machine_setup(k) for k in [*M.MACHINES, TOPOLOGY]}
+
+
+# ------------------------------------------------------------------------------------------
+# Machines: setups and ranges
+# ------------------------------------------------------------------------------------------
+
+def test_the_default_ranges_are_the_notebooks(setups):
+    z, r, g = (setups[k] for k in ("ac_double_turntable", "horizontal_3axis", "vertical_xyfz"))
+    assert z.machine.n_errors == 41 and r.machine.n_errors == 21 and g.machine.n_errors == 21
+    h = dict(zip(z.names, M.error_half_ranges(z), strict=True))
+    assert h["d_xx"] == pytest.approx(15e-3) and h["e_xx"] == pytest.approx(10 * M.ARCSEC)
+    # Rong: +- 2 x acceptance (data/rong/error_ranges.csv)
+    h = dict(zip(r.names, M.error_half_ranges(r), strict=True))
+    assert [h[s] for s in ("dx(x)", "dy(x)", "ex(x)", "S_xy")] == pytest.approx(
+        [7.5e-3, 10e-3, 8e-5, 4.75e-6])
+    assert r.position_um == pytest.approx(10.0) and r.angular_arcsec == pytest.approx(16.5012, 1e-5)
+    # Guo: the half widths of [0, 3] um, [0, 4] um, [0, 3.2e-5] rad, [0, 1.9] um/m
+    h = dict(zip(g.names, M.error_half_ranges(g), strict=True))
+    assert [h[s] for s in ("dx(x)", "dy(x)", "ex(x)", "S_xy")] == pytest.approx(
+        [1.5e-3, 2e-3, 1.6e-5, 0.95e-6])
+
+
+def test_the_range_sliders_scale_their_group_only(setups):
+    s = setups["horizontal_3axis"]
+    base = M.error_half_ranges(s)
+    trans = s.translational
+    moved = M.error_half_ranges(s, position_um=2 * s.position_um)
+    assert np.allclose(moved[trans], 2 * base[trans]) and np.array_equal(moved[~trans],
+                                                                         base[~trans])
+    moved = M.error_half_ranges(s, angular_arcsec=s.angular_arcsec / 4)
+    assert np.allclose(moved[~trans], base[~trans] / 4) and np.array_equal(moved[trans],
+                                                                          base[trans])
+    with pytest.raises(ValueError, match="finite and >= 0"):
+        M.error_half_ranges(s, position_um=-1.0)
+
+
+def test_pose_ranges_come_from_the_travels_when_known(setups):
+    z = setups["ac_double_turntable"]
+    a = z.axis("A")
+    assert (a.low, a.high) == pytest.approx((-130.0, 130.0)) and a.unit == "deg" and a.rotary
+    assert z.axis("x").low == -400.0 and z.axis("C").high == pytest.approx(360.0)
+    assert [a.default for a in setups["vertical_xyfz"].axes] == [100.0, 100.0, 100.0]
+    with pytest.raises(ValueError, match="no axis 'q'"):
+        z.axis("q")
+    with pytest.raises(ValueError, match="unknown axis"):
+        M.pose_of(z, {"w": 1.0})
+
+
+# ------------------------------------------------------------------------------------------
+# Indices at a pose
+# ------------------------------------------------------------------------------------------
+
+def test_indices_equal_an_analytic_case():
+    """Guo's machine at x = y = z = 0 with no tool offset: no Abbe arm, so Px is
+    dx(x) + dx(y) + dx(z) (positioning [0, 3] um, straightness [0, 4] um): indices 9/41,
+    16/41, 16/41 and nothing else."""
+    g = M.machine_setup("vertical_xyfz")
+    r = M.indices_at_pose(g, dict(x=0.0, y=0.0, z=0.0))
+    px = dict(zip(r.names, r.indices[:, 0], strict=True))
+    want = {"dx(x)": 9 / 41, "dx(y)": 16 / 41, "dx(z)": 16 / 41}
+    assert {k: v for k, v in px.items() if v > 1e-15} == pytest.approx(want, abs=1e-12)
+    # one error obviously dominates when its group's range is 1000 times the other's
+    r = M.indices_at_pose(g, dict(x=0.0, y=0.0, z=400.0), position_um=0.1, angular_arcsec=100)
+    out, err, index = M.top_errors(r)[0]
+    assert out == "Px" and err.startswith("e") and index > 0.3, (err, index)
+
+
+def test_indices_equal_a_monte_carlo_regression_on_the_exact_chain(setups):
+    """For independent inputs the index of e_i in a linear model is the squared correlation
+    of y with e_i: estimated here from samples of the *exact* chain (uniform errors on the
+    ranges), a route that shares nothing with the closed form but the machine."""
+    s = setups["horizontal_3axis"]
+    values = dict(x=600.0, y=150.0, z=420.0)
+    r = M.indices_at_pose(s, values)
+    half = M.error_half_ranges(s)
+    rng = np.random.default_rng(7)
+    e = rng.uniform(-half, half, (40_000, s.machine.n_errors))
+    y = s.machine.pose_error(e, M.pose_of(s, values))[:, :3]
+    ec, yc = e - e.mean(0), y - y.mean(0)
+    rho2 = (ec.T @ yc) ** 2 / np.outer((ec**2).sum(0), (yc**2).sum(0))      # (d, 3)
+    assert np.abs(rho2 - r.indices[:, :3]).max() < 0.02
+    assert r.indices[:, :3].max() > 0.2              # not a flat case
+
+
+def test_indices_equal_the_finite_difference_jacobian(setups):
+    """The closed-form Jacobian against central differences of the exact chain
+    (``machine.jacobian``), through the same share formula written out here."""
+    for key in ("ac_double_turntable", TOPOLOGY):
+        s = setups[key]
+        values = {a.name: a.low + 0.37 * (a.high - a.low) for a in s.axes}
+        r = M.indices_at_pose(s, values, position_um=7.0, angular_arcsec=4.0)
+        sd = M.error_half_ranges(s, position_um=7.0, angular_arcsec=4.0) / np.sqrt(3)
+        jac = s.machine.jacobian(M.pose_of(s, values))[0]                  # (6, d)
+        v = jac**2 * sd**2
+        ours = (v / v.sum(1, keepdims=True)).T
+        assert np.abs(ours - r.indices)[:, r.first_order].max() < 1e-6
+
+
+def test_indices_sum_to_one_only_where_there_is_a_first_order_term(setups):
+    for key, s in setups.items():
+        r = M.indices_at_pose(s)
+        sums = r.indices.sum(0)
+        assert np.allclose(sums[r.first_order], 1.0, atol=1e-12), key
+        assert np.all(sums[~r.first_order] == 0.0), key
+    # the swivel head at the centre of its travels: Vz has no first-order term (a unit
+    # vector's change along itself is second order)
+    r = M.indices_at_pose(setups[TOPOLOGY])
+    assert list(np.array(r.outputs)[~r.first_order]) == ["Vz"]
+    assert "Vz" not in [o for o, _, _ in M.top_errors(r)]
+
+
+# ------------------------------------------------------------------------------------------
+# Dominant-error map
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("key", [*M.MACHINES, TOPOLOGY])
+def test_the_map_equals_the_argmax_at_each_single_pose(setups, key):
+    s = setups[key]
+    values = {a.name: a.default for a in s.axes}
+    d = M.dominant_map(s, values, steps=9)
+    rng = np.random.default_rng(3)
+    for i, j in [(0, 0), (8, 8), (4, 2), *rng.integers(0, 9, (5, 2)).tolist()]:
+        at = dict(values, **{d.axes[0]: float(d.u[i]), d.axes[1]: float(d.v[j])})
+        r = M.indices_at_pose(s, at)
+        top = np.argmax(S.merge_ties(r.indices), axis=0)
+        for k in range(len(r.outputs)):
+            if r.first_order[k]:
+                assert d.error[j, i, k] == top[k], (key, i, j, r.outputs[k])
+                assert d.index[j, i, k] == pytest.approx(r.indices[top[k], k], rel=1e-9)
+                assert d.index[j, i, k] == pytest.approx(r.indices[:, k].max(), rel=1e-9)
+            else:
+                assert d.error[j, i, k] == -1 and d.index[j, i, k] == 0.0
+
+
+def test_the_map_is_one_batched_jacobian_call_and_not_trivial(setups, monkeypatch):
+    s = M.machine_setup("ac_double_turntable")
+    calls = []
+    real = s.machine.linear_jacobian
+
+    def counted(pose):
+        calls.append({k: np.shape(v) for k, v in pose.items()})
+        return real(pose)
+    monkeypatch.setattr(s.machine, "linear_jacobian", counted)
+    d = M.dominant_map(s, axes=("C", "A"), steps=25)
+    assert len(calls) == 1 and calls[0]["C"] == (625,) and calls[0]["A"] == (625,)
+    assert d.error.shape == (25, 25, 6) and np.allclose(d.u, np.linspace(0, 360, 25))
+    assert len(np.unique(d.error[:, :, 0])) >= 3       # the map shows more than one error
+    with pytest.raises(ValueError, match="steps"):
+        M.dominant_map(s, steps=1)
+
+
+def test_the_slider_update_returns_both_and_is_timed_positive(setups):
+    s = setups["vertical_xyfz"]
+    r, d = M.slider_update(s, dict(x=250.0), axes=("y", "z"), steps=5)
+    assert r.indices.shape == (21, 6) and d.error.shape == (5, 5, 6) and d.axes == ("y", "z")
+    assert M.time_slider_update(s, repeat=1, steps=5) > 0
+
+
+# ------------------------------------------------------------------------------------------
+# Typed topologies
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("bad", ["w Q b t", "w X b X t", "b X Y t", ""])
+def test_a_bad_topology_gives_the_library_message(bad):
+    with pytest.raises(ValueError) as lib:
+        chain.iso_machine(bad)
+    for build in (M.machine_setup, M.topology_setup):
+        with pytest.raises(ValueError) as ours:
+            build(bad)
+        assert str(ours.value) == str(lib.value)
+    # a machine's name typed as a topology is read as a topology (and refused)
+    with pytest.raises(ValueError, match="unknown axis letter"):
+        M.topology_setup("vertical_xyfz")
+
+
+def test_the_app_shows_the_library_message_not_a_traceback():
+    pytest.importorskip("panel")
+    from mtaccuracy.compendium import explore
+
+    app = explore.create_app()
+    tab = app.tabs["machine"]
+    before = tab.setup.label
+    tab.topology.value = "w C A b Y X Q t"
+    with pytest.raises(ValueError) as lib:
+        chain.parse_topology("w C A b Y X Q t")
+    assert tab.error.visible and html.escape(str(lib.value)) in tab.error.object
+    assert "Traceback" not in tab.error.object and tab.setup.label == before
+    tab.topology.value = TOPOLOGY                     # a good one replaces the machine
+    assert not tab.error.visible and tab.setup.machine.n_errors == 37
+    assert [s.name for s in tab.sliders] == ["C (deg)", "x (mm)", "y (mm)", "z (mm)", "B (deg)"]
+    # moving a pose slider changes the indices shown
+    shown = tab.top.object
+    tab.machine.value = "horizontal_3axis"
+    tab.sliders[0].value = 690.0
+    assert tab.top.object != shown and 'data-output="Px"' in tab.top.object
+
+
+# ------------------------------------------------------------------------------------------
+# Spindle
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("n", [3, 4, 5, 6])
+def test_equally_spaced_probes_cancel_exactly_k_equal_to_plus_minus_one_mod_n(n):
+    """n probes equally spaced read exp(i k phi_l) as a motion (cos, sin) exactly when
+    k = +-1 mod n (the DFT of the layout): no estimator recovers those harmonics."""
+    t = M.probe_transfer(np.arange(n) * 360.0 / n, max_harmonic=30)
+    theory = (t.harmonics % n == 1) | (t.harmonics % n == n - 1)
+    assert np.array_equal(t.cancelled, theory)
+    assert np.all(np.isinf(t.q_least_squares[theory]))
+    assert np.all(np.isfinite(t.q_least_squares[~theory]))
+    assert np.all(t.gain_weighted[theory] == 0)
+
+
+def test_eq5_weights_on_the_symmetric_layout_cancel_k_2_mod_4_when_a3_is_1():
+    """Eq. 15 gives a1 = a3 and a2 = 1 on 0, 90, 180, 270 deg, so Lambda_k = (1 + (-1)^k)
+    (1 + a3 i^k): with a3 = 1 the weights also cancel k = 2 mod 4, which least squares
+    recovers (notebook 05's rank check)."""
+    t = M.probe_transfer([0, 90, 180, 270], max_harmonic=20, weights="eq5", a3=1.0)
+    assert np.allclose(t.weights, [1, 1, 1, 1])
+    assert list(t.harmonics[t.cancelled_by_weights]) == [2, 6, 10, 14, 18]
+    assert np.all(np.isfinite(t.q_least_squares[t.cancelled_by_weights]))
+
+
+def test_the_yang_layout_and_the_gauss_markov_bound():
+    ang = M.yang_layout_deg()
+    assert ang == pytest.approx([0.0, 39.375, 182.8125, 326.25])
+    for rule in ("optimal", "eq5"):
+        t = M.probe_transfer(ang, max_harmonic=40, weights=rule)
+        assert not t.cancelled.any()
+        ok = np.isfinite(t.q_weighted)
+        # least squares is the best linear unbiased estimator: never above any weights
+        assert np.all(t.q_least_squares[ok] <= t.q_weighted[ok] * (1 + 1e-9))
+        assert np.array_equal(t.amplified_weighted, np.isfinite(t.q_weighted)
+                              & (t.q_weighted > 3.0))
+    # the paper's Eq. 5 weights amplify more than the weights searched for the band
+    assert M.probe_transfer(ang, weights="eq5").q_weighted.max() > \
+        M.probe_transfer(ang, weights="optimal").q_weighted.max()
+
+
+def test_bad_layouts_are_refused_with_the_library_message():
+    with pytest.raises(ValueError, match="same angle"):
+        M.probe_transfer([0, 90, 90, 200])
+    with pytest.raises(ValueError, match="at least 3"):
+        M.probe_transfer([0, 90])
+    with pytest.raises(ValueError, match="coincident or opposite"):
+        M.probe_transfer([0, 30, 210, 300], weights="eq5")
+    with pytest.raises(ValueError, match="four probes"):
+        M.probe_transfer([0, 100, 200], weights="eq5")
+
+
+# ------------------------------------------------------------------------------------------
+# Thermal
+# ------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def thermal_data():
+    data, reconstructed = M.thermal_data()
+    assert reconstructed           # the committed data/thermal is the paper's reconstruction
+    return data
+
+
+def test_the_paper_inputs_are_read_from_its_printed_models():
+    assert M.published_thermal_inputs() == {"point": ["T1", "T11", "T12"],
+                                            "k": ["T1", "T6", "T12"], "b": ["T2", "T7", "T11"]}
+
+
+@pytest.mark.parametrize("train, test", [([1, 2, 3], 4), ([2, 4], 1)])
+def test_the_mlr_prediction_equals_a_direct_least_squares_fit(thermal_data, train, test):
+    """Eq. 9 written out: per training measurement a straight line through the errors
+    (slope k in um/m, intercept b), k regressed on the absolute temperatures of T1, T6, T12,
+    b on the rises (from each experiment's first measurement) of T2, T7, T11, by plain
+    least squares; the test experiment's errors composed from the predicted k, b."""
+    d = thermal_data
+    got = M.thermal_prediction(d, train=train, test=test)
+    x = d.positions_mm - d.positions_mm[0]
+    temps = d.temperatures
+    first = temps.groupby(d.index.experiment).transform("first")
+    rises = temps - first
+    exp = d.index.experiment.to_numpy()
+    tr, te = np.isin(exp, train), exp == test
+    kb = np.array([np.polyfit(x, row, 1) for row in d.errors[tr]])       # (n, 2): um/mm, um
+    design_k = np.c_[np.ones(tr.sum()), temps[["T1", "T6", "T12"]].to_numpy()[tr]]
+    design_b = np.c_[np.ones(tr.sum()), rises[["T2", "T7", "T11"]].to_numpy()[tr]]
+    ck = np.linalg.lstsq(design_k, kb[:, 0] * 1000, rcond=None)[0]
+    cb = np.linalg.lstsq(design_b, kb[:, 1], rcond=None)[0]
+    k = np.c_[np.ones(te.sum()), temps[["T1", "T6", "T12"]].to_numpy()[te]] @ ck
+    b = np.c_[np.ones(te.sum()), rises[["T2", "T7", "T11"]].to_numpy()[te]] @ cb
+    want = k[:, None] * x[None, :] / 1000 + b[:, None]
+    assert np.allclose(got.predicted, want, atol=1e-8)
+    assert np.array_equal(got.measured, d.errors[te])
+    assert got.rmse == pytest.approx(np.sqrt(np.mean((d.errors[te] - want) ** 2)), rel=1e-9)
+    assert got.rmse_uncompensated == pytest.approx(np.sqrt(np.mean(d.errors[te] ** 2)))
+    assert got.rmse < got.rmse_uncompensated
+
+
+def test_thermal_splits_are_checked(thermal_data):
+    with pytest.raises(ValueError, match="also a training experiment"):
+        M.thermal_prediction(thermal_data, train=[1, 2], test=2)
+    with pytest.raises(ValueError, match="not in the data"):
+        M.thermal_prediction(thermal_data, train=[1, 2], test=9)
+    with pytest.raises(ValueError, match="SVR needs at least 2"):
+        M.thermal_prediction(thermal_data, train=[1], test=4, kind="svr")
+    with pytest.raises(ValueError, match="inputs must be"):
+        M.thermal_prediction(thermal_data, train=[1, 2], test=4, inputs="mine")
+
+
+def test_selected_inputs_come_from_the_training_data_only(thermal_data):
+    """The sensitive points are selected on the training experiments alone: the same training
+    set gives the same inputs whatever experiment is predicted."""
+    a = M.thermal_prediction(thermal_data, train=[1, 2], test=3, inputs="selected")
+    b = M.thermal_prediction(thermal_data, train=[1, 2], test=4, inputs="selected")
+    assert a.inputs == b.inputs and all(len(v) == 3 for v in a.inputs.values())
+    assert a.measured.shape != b.measured.shape or not np.array_equal(a.measured, b.measured)
+
+
+# ------------------------------------------------------------------------------------------
+# The server: 127.0.0.1 only
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("address", ["0.0.0.0", "", "::", "localhost", "192.168.1.10",
+                                     "127.0.0.2"])
+def test_the_server_refuses_any_address_but_loopback(address):
+    from mtaccuracy.compendium import explore
+
+    with pytest.raises(ValueError, match="127.0.0.1 only"):
+        explore.check_address(address)
+    with pytest.raises(ValueError, match="127.0.0.1 only"):
+        explore.serve(address=address)
+
+
+def test_the_command_refuses_a_bad_port_in_one_line(capsys):
+    from mtaccuracy.compendium import explore
+
+    assert explore.main(["--port", "70000"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "0..65535" in err
+
+
+def test_the_server_listens_on_loopback_with_restricted_websocket_origins():
+    from mtaccuracy.compendium import explore
+
+    previous = signal.getsignal(signal.SIGINT)
+    server, url = explore.serve(port=0)
+    try:
+        signal.signal(signal.SIGINT, previous)         # pn.serve installs its own handler
+        port = server.port
+        assert url == f"http://127.0.0.1:{port}/" and server.address == "127.0.0.1"
+        assert server._tornado.websocket_origins == {f"127.0.0.1:{port}", f"localhost:{port}"}
+        with socket.create_connection(("127.0.0.1", port), timeout=5):
+            pass                                       # listening on the loopback address
+    finally:
+        server.unlisten()
+        server.stop()
+        signal.signal(signal.SIGINT, previous)

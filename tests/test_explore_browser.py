@@ -1,0 +1,181 @@
+"""The explorer served by ``python -m mtaccuracy.compendium.explore`` and driven in a browser.
+
+The server runs in a subprocess on 127.0.0.1 at a free port (``--port 0``; the URL is read from
+its first line of output) and is always terminated.  Headless Chromium from the Debian package
+(``/usr/bin/chromium``, launched through Playwright's ``executable_path`` with the arguments of
+``test_book.py``; nothing is ever downloaded) opens it.  A pose slider is moved with
+the keyboard on its handle and the top error's index shown must change; the hover tooltip of
+the dominant-error map must show an error and its index; a topology typed in must show the
+library's message when it is bad and its machine when it is good; the Spindle tab must list
+the harmonics four equally spaced probes cancel; the Thermal tab must show an RMSE.  Every
+request must stay on the server (Panel serves its own JavaScript: no CDN, no web font), and
+the console must show no error.  A screenshot goes to
+``$MTACCURACY_OUTPUT_BASE/explore/explore.png``.  Waits are bounded.
+"""
+
+import os
+import queue
+import re
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+playwright = pytest.importorskip("playwright.sync_api")
+
+#: Debian's Chromium and the launch arguments of test_book.py (copied).
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                 "--disable-component-update", "--disable-sync", "--no-first-run",
+                 "--disable-quic"]
+START_TIMEOUT_S = 60
+TIMEOUT_MS = 30_000
+
+
+@pytest.fixture
+def server(tmp_path):
+    """The explorer in a subprocess; yields its URL; terminated whatever happens."""
+    if not CHROMIUM.exists():
+        message = (f"{CHROMIUM} is missing: install Debian's chromium and chromium-driver "
+                   "packages, run `make browser` (.ci/install-browser) as root")
+        if os.environ.get("CI"):
+            pytest.fail(message)
+        pytest.skip(message)
+    log = tmp_path / "server.log"
+    with open(log, "w") as err:
+        proc = subprocess.Popen([sys.executable, "-m", "mtaccuracy.compendium.explore",
+                                 "--port", "0", "--no-show"], stdout=subprocess.PIPE,
+                                stderr=err, text=True, cwd=tmp_path)
+    lines: queue.Queue = queue.Queue()
+    reader = threading.Thread(target=lambda: [lines.put(li) for li in proc.stdout], daemon=True)
+    reader.start()
+    try:
+        deadline = time.monotonic() + START_TIMEOUT_S
+        url = None
+        while url is None and time.monotonic() < deadline and proc.poll() is None:
+            try:
+                found = re.search(r"http://127\.0\.0\.1:\d+/", lines.get(timeout=0.5))
+            except queue.Empty:
+                continue
+            url = found.group(0) if found else None
+        if url is None:
+            pytest.fail(f"the explorer did not print its URL within {START_TIMEOUT_S} s "
+                        f"(exit code {proc.poll()}): {log.read_text()[-2000:]}")
+        yield url
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=10)
+
+
+@pytest.fixture
+def browser():
+    with playwright.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS,
+                              timeout=TIMEOUT_MS)
+        try:
+            yield b
+        finally:
+            b.close()
+
+
+def _tooltip_values(page) -> list[str]:
+    rows = page.locator(".bk-tooltip-row-value")
+    return [rows.nth(i).text_content().strip() for i in range(rows.count())
+            if rows.nth(i).is_visible()]
+
+
+def test_the_explorer_in_a_browser(server, browser):
+    expect = playwright.expect
+    problems, external = [], []
+    context = browser.new_context(viewport={"width": 1500, "height": 1000},
+                                  service_workers="block")
+    try:
+        def route(r):
+            if r.request.url.startswith(server):
+                r.continue_()
+            else:
+                external.append(r.request.url)
+                r.abort()
+
+        context.route("**/*", route)
+        page = context.new_page()
+        page.set_default_timeout(TIMEOUT_MS)
+        page.on("console", lambda m: m.type == "error" and problems.append(
+            f"console error: {m.text}"))
+        page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
+        page.on("response", lambda r: r.status >= 400 and problems.append(
+            f"HTTP {r.status} for {r.url}"))
+        response = page.goto(server, wait_until="load")
+        assert response is not None and response.status == 200
+
+        # the Machine tab: indices at the starting pose (Zheng et al.'s machine)
+        px = page.locator('tr[data-role="top-error"][data-output="Px"]')
+        px.wait_for()
+        before = px.get_attribute("data-index")
+        assert 0 < float(before) <= 1 and px.get_attribute("data-error")
+        assert page.locator('tr[data-role="top-error"]').count() == 6
+
+        # move the x slider with the keyboard on its handle: the indices shown change
+        handle = page.locator(".pose-x .noUi-handle")
+        assert handle.count() == 1
+        handle.focus()
+        for _ in range(3):
+            page.keyboard.press("PageUp")
+        expect(px).not_to_have_attribute("data-index", before, timeout=10_000)
+        assert float(px.get_attribute("data-index")) != float(before)
+        expect(page.locator(".pose-x")).to_contain_text("135")   # 120 mm + 3 x 5 steps of 1
+
+        # hover over the dominant-error map: an error of the machine and its index
+        figures = page.locator(".bk-Figure")
+        box = figures.nth(1).bounding_box()
+        for f in (0.30, 0.35):
+            page.mouse.move(box["x"] + box["width"] * f, box["y"] + box["height"] * 0.5,
+                            steps=4)
+        expect(page.locator(".bk-tooltip-row-value").first).to_be_visible(timeout=5_000)
+        values = _tooltip_values(page)
+        assert re.fullmatch(r"[a-zA-Z_()]+", values[0]) and 0 <= float(values[1]) <= 1, values
+
+        shot = Path(os.environ["MTACCURACY_OUTPUT_BASE"]) / "explore" / "explore.png"
+        shot.parent.mkdir(parents=True, exist_ok=True)
+        page.mouse.move(5, 5)
+        page.screenshot(path=str(shot), full_page=True)
+
+        # a topology typed in: a bad one shows the library's message, a good one its machine
+        topology = page.locator("input[placeholder='w C b X Y Z B t']")
+        topology.fill("w C A b Y X Q t")
+        topology.press("Enter")
+        error = page.locator('[data-role="error"]')
+        expect(error).to_contain_text("unknown axis letter(s) ['Q'] in topology", timeout=10_000)
+        assert "Traceback" not in error.text_content()
+        topology.fill("w C b X Y Z B t")
+        topology.press("Enter")
+        expect(page.locator('tr[data-role="top-error"][data-output="Px"]')).to_have_attribute(
+            "data-error", "EXC", timeout=10_000)
+        expect(page.locator('tr[data-role="top-error"][data-output="Vz"]')).to_contain_text(
+            "no first-order term")
+        expect(error).to_be_hidden()
+
+        # the Spindle tab: four equally spaced probes cancel the odd harmonics
+        page.get_by_text("Spindle", exact=True).click()
+        page.locator("select", has=page.locator("option", has_text="four probes")) \
+            .select_option(label="four probes equally spaced")
+        summary = page.locator('[data-role="spindle-summary"]')
+        expect(summary).to_contain_text("Cancelled by the layout: 3, 5, 7, 9, 11, 13, 15, 17, "
+                                        "19.", timeout=10_000)
+
+        # the Thermal tab: the MLR's RMSE on experiment 4
+        page.get_by_text("Thermal", exact=True).click()
+        rmse = page.locator('[data-role="thermal-summary"]')
+        expect(rmse).to_contain_text("RMSE")
+        assert 0 < float(rmse.get_attribute("data-rmse")) < 5
+    finally:
+        context.close()
+    assert not external, f"requests left 127.0.0.1: {external}"
+    assert not problems, problems
