@@ -251,3 +251,34 @@ def pytest_unconfigure(config):
 @pytest.fixture(scope="session")
 def test_output() -> Path:
     return TEST_OUTPUT
+
+
+#: Debian's Chromium (``.ci/install-browser``; never a browser download) and its launch
+#: arguments, for the browser tests (tests/test_book.py, tests/test_explore_browser.py).
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                 "--disable-component-update", "--disable-sync", "--no-first-run",
+                 "--disable-quic"]
+BROWSER_TIMEOUT_MS = 30_000
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """Headless Chromium driven by Playwright; a missing Chromium skips the test, or fails it
+    under CI (``$CI`` set), which must install it."""
+    if not CHROMIUM.exists():
+        message = (f"{CHROMIUM} is missing: install Debian's chromium and chromium-driver "
+                   "packages (make browser, that is .ci/install-browser, as root)")
+        if os.environ.get("CI"):
+            pytest.fail(message)
+        pytest.skip(message)
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS,
+                              timeout=BROWSER_TIMEOUT_MS)
+        try:
+            yield b
+        finally:
+            b.close()
+

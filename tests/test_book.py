@@ -2,7 +2,8 @@
 into the session's folder, then read as files and opened in a real browser.
 
 The browser is headless Chromium from the Debian package (``/usr/bin/chromium``;
-``.ci/install-browser`` installs it, nothing is ever downloaded), driven by Playwright, at a
+``.ci/install-browser`` installs it, nothing is ever downloaded; conftest.py's ``browser``
+fixture), driven by Playwright, at a
 desktop width and at 400 px.  The book is served on 127.0.0.1 (an ephemeral port); any request
 elsewhere is refused and fails the test.  A full-page screenshot of the home page and of one
 chapter at each width goes to ``$MTACCURACY_OUTPUT_BASE/book/`` (kept in
@@ -23,10 +24,6 @@ import pytest
 
 from mtaccuracy.compendium import book, paths, reproduction, runner
 
-CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--no-first-run",
-                 "--disable-quic"]
 TIMEOUT_MS = 30_000
 STEMS = [p.stem for p in runner.all_notebooks()]
 PAPERS = [s for s in STEMS if s in reproduction.papers_index()]
@@ -155,22 +152,6 @@ def _serve(directory: Path):
     finally:
         server.shutdown()
         server.server_close()
-
-
-@pytest.fixture(scope="module")
-def browser():
-    if not CHROMIUM.exists():
-        pytest.skip(f"{CHROMIUM} is missing: install Debian's chromium and chromium-driver "
-                    f"(bash .ci/install-browser, as root)")
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS,
-                              timeout=TIMEOUT_MS)
-        try:
-            yield b
-        finally:
-            b.close()
 
 
 @contextlib.contextmanager

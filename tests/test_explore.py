@@ -215,7 +215,7 @@ def test_the_app_shows_the_library_message_not_a_traceback():
     assert "Traceback" not in tab.error.object and tab.setup.label == before
     tab.topology.value = TOPOLOGY                     # a good one replaces the machine
     assert not tab.error.visible and tab.setup.machine.n_errors == 37
-    assert [s.name for s in tab.sliders] == ["C (deg)", "x (mm)", "y (mm)", "z (mm)", "B (deg)"]
+    assert [s.name for s in tab.sliders] == ["C (°)", "x (mm)", "y (mm)", "z (mm)", "B (°)"]
     # moving a pose slider changes the indices shown
     shown = tab.top.object
     tab.machine.value = "horizontal_3axis"

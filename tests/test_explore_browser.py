@@ -2,8 +2,8 @@
 
 The server runs in a subprocess on 127.0.0.1 at a free port (``--port 0``; the URL is read from
 its first line of output) and is always terminated.  Headless Chromium from the Debian package
-(``/usr/bin/chromium``, launched through Playwright's ``executable_path`` with the arguments of
-``test_book.py``; nothing is ever downloaded) opens it.  A pose slider is moved with
+(``/usr/bin/chromium``, conftest.py's ``browser`` fixture; nothing is ever downloaded) opens
+it.  A pose slider is moved with
 the keyboard on its handle and the top error's index shown must change; the hover tooltip of
 the dominant-error map must show an error and its index; a topology typed in must show the
 library's message when it is bad and its machine when it is good; the Spindle tab must list
@@ -26,11 +26,6 @@ import pytest
 
 playwright = pytest.importorskip("playwright.sync_api")
 
-#: Debian's Chromium and the launch arguments of test_book.py (copied).
-CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--no-first-run",
-                 "--disable-quic"]
 START_TIMEOUT_S = 60
 TIMEOUT_MS = 30_000
 
@@ -38,12 +33,6 @@ TIMEOUT_MS = 30_000
 @pytest.fixture
 def server(tmp_path):
     """The explorer in a subprocess; yields its URL; terminated whatever happens."""
-    if not CHROMIUM.exists():
-        message = (f"{CHROMIUM} is missing: install Debian's chromium and chromium-driver "
-                   "packages, run `make browser` (.ci/install-browser) as root")
-        if os.environ.get("CI"):
-            pytest.fail(message)
-        pytest.skip(message)
     log = tmp_path / "server.log"
     with open(log, "w") as err:
         proc = subprocess.Popen([sys.executable, "-m", "mtaccuracy.compendium.explore",
@@ -72,17 +61,6 @@ def server(tmp_path):
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait(timeout=10)
-
-
-@pytest.fixture
-def browser():
-    with playwright.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS,
-                              timeout=TIMEOUT_MS)
-        try:
-            yield b
-        finally:
-            b.close()
 
 
 def _tooltip_values(page) -> list[str]:

@@ -60,6 +60,8 @@ from . import xu2022
 
 __all__ = ["LOOPBACK", "create_app", "check_address", "free_port", "serve", "main"]
 
+#: Units as a reader writes them (the library's unit names are ASCII).
+_SYMBOL = {"deg": "°", "um": "µm"}
 #: The only address the explorer listens on.
 LOOPBACK = "127.0.0.1"
 #: Colours: the house colours of the figures (plotting.REPRODUCED / PUBLISHED) and a red for
@@ -164,7 +166,7 @@ class MachineTab:
         self.error = pn.pane.HTML("", width=290, visible=False)
         self.notes = pn.pane.HTML("", width=290)
         self.pose_box = pn.Column(width=300)
-        self.position = pn.widgets.FloatSlider(label="position-error half range (um)",
+        self.position = pn.widgets.FloatSlider(label="position-error half range (µm)",
                                                start=0.1, end=100.0, step=0.1, width=280,
                                                css_classes=["range-position"])
         self.angular = pn.widgets.FloatSlider(label="angular-error half range (arcsec)",
@@ -256,9 +258,9 @@ class MachineTab:
             sliders = []
             for a in setup.axes:
                 step = 1.0 if a.rotary or a.high - a.low > 50 else 0.1
-                s = pn.widgets.FloatSlider(label=f"{a.name} ({a.unit})", start=a.low, end=a.high,
-                                           value=a.default, step=step, width=280,
-                                           css_classes=[f"pose-{a.name}"])
+                s = pn.widgets.FloatSlider(label=f"{a.name} ({_SYMBOL.get(a.unit, a.unit)})",
+                                           start=a.low, end=a.high, value=a.default,
+                                           step=step, width=280, css_classes=[f"pose-{a.name}"])
                 _prompt(s)
                 s.param.watch(self._on_change, "value")
                 sliders.append(s)
@@ -379,8 +381,8 @@ class MachineTab:
         self.here.data = dict(u=[pose[a1.name]], v=[pose[a2.name]])     # the pose itself
         self.dmap.x_range.update(start=dmap.u[0] - du / 2, end=dmap.u[-1] + du / 2)
         self.dmap.y_range.update(start=dmap.v[0] - dv / 2, end=dmap.v[-1] + dv / 2)
-        self.dmap.xaxis.axis_label = f"{a1.name} ({a1.unit})"
-        self.dmap.yaxis.axis_label = f"{a2.name} ({a2.unit})"
+        self.dmap.xaxis.axis_label = f"{a1.name} ({_SYMBOL.get(a1.unit, a1.unit)})"
+        self.dmap.yaxis.axis_label = f"{a2.name} ({_SYMBOL.get(a2.unit, a2.unit)})"
         self.dmap.title.text = f"Dominant error for {dmap.outputs[k]}"
 
     def _draw_top(self, res: M.PoseIndices) -> None:
@@ -420,7 +422,7 @@ class SpindleTab:
         self.preset = pn.widgets.Select(label="Layout", options=list(self.PRESETS) + ["custom"],
                                         value=first, width=290)
         self.angles = [pn.widgets.EditableFloatSlider(
-            label=f"probe {i + 1} angle (deg)", start=0.0, end=359.9, step=0.1,
+            label=f"probe {i + 1} angle (°)", start=0.0, end=359.9, step=0.1,
             value=float(self.PRESETS[first][i]), width=280, css_classes=[f"probe-{i + 1}"])
             for i in range(1, 4)]
         self.max_k = pn.widgets.IntSlider(label="highest harmonic", start=3, end=100, value=20,
@@ -643,7 +645,7 @@ class ThermalTab:
         self.meas_src = ColumnDataSource(dict(x=[], y=[], pred=[], res=[], t=[], m=[]))
         self.pred_src = ColumnDataSource(dict(xs=[], ys=[], t=[], m=[]))
         self.curves = figure(width=560, height=380, tools="hover,save", toolbar_location="above",
-                             x_axis_label="position (mm)", y_axis_label="thermal error (um)",
+                             x_axis_label="position (mm)", y_axis_label="thermal error (µm)",
                              title="Test experiment: measured (dots), predicted (lines)")
         self.curves.multi_line(xs="xs", ys="ys", source=self.pred_src, line_width=1.6,
                                line_color={"field": "t", "transform": self.mapper})
@@ -651,11 +653,11 @@ class ThermalTab:
                                  color={"field": "t", "transform": self.mapper})
         self.curves.select_one(HoverTool).update(
             renderers=[rm], tooltips=[("measurement", "@m"), ("time", "@t{0} min"),
-                                      ("position", "@x mm"), ("measured", "@y{0.000} um"),
-                                      ("predicted", "@pred{0.000} um"),
-                                      ("residual", "@res{0.000} um")])
+                                      ("position", "@x mm"), ("measured", "@y{0.000} µm"),
+                                      ("predicted", "@pred{0.000} µm"),
+                                      ("residual", "@res{0.000} µm")])
         self.scatter = figure(width=380, height=380, tools="hover,save", toolbar_location="above",
-                              x_axis_label="measured (um)", y_axis_label="predicted (um)",
+                              x_axis_label="measured (µm)", y_axis_label="predicted (µm)",
                               title="Predicted against measured")
         self.diag = ColumnDataSource(dict(x=[0, 1], y=[0, 1]))
         self.scatter.line(x="x", y="y", source=self.diag, color="#777", line_dash="dashed")
@@ -663,8 +665,8 @@ class ThermalTab:
                                   color={"field": "t", "transform": self.mapper})
         self.scatter.select_one(HoverTool).update(
             renderers=[rs], tooltips=[("measurement", "@m"), ("position", "@x mm"),
-                                      ("measured", "@y{0.000} um"),
-                                      ("predicted", "@pred{0.000} um")])
+                                      ("measured", "@y{0.000} µm"),
+                                      ("predicted", "@pred{0.000} µm")])
 
         for w in (self.train, self.test, self.inputs, self.kind):
             w.param.watch(self._on_change, "value")
@@ -756,9 +758,9 @@ class ThermalTab:
             f'<div class="mt-note" data-role="thermal-summary" data-rmse="{r.rmse:.6f}">'
             f"Decoupled {r.kind.upper()} trained on experiment(s) "
             f"{', '.join(map(str, r.train))}, predicting experiment {r.test}: "
-            f"<b>RMSE {r.rmse:.3f} um</b> (pooled over {n} measurements x {p} positions), "
-            f"largest residual {r.max_residual:.3f} um; without compensation the RMSE is "
-            f"{r.rmse_uncompensated:.3f} um.<br>Inputs: k from "
+            f"<b>RMSE {r.rmse:.3f} µm</b> (pooled over {n} measurements x {p} positions), "
+            f"largest residual {r.max_residual:.3f} µm; without compensation the RMSE is "
+            f"{r.rmse_uncompensated:.3f} µm.<br>Inputs: k from "
             f"{', '.join(r.inputs['k'])} (temperatures), b from {', '.join(r.inputs['b'])} "
             f"(rises from the first measurement)."
             + (f'<br><span style="color:{RED};font-weight:bold">{self.label}</span>'

@@ -245,7 +245,7 @@ def machine_setup(key: str) -> MachineSetup:
         half = np.array([15e-3 if e.translational else 10.0 * ARCSEC for e in m.catalogue])
         notes = ("travels: the library's (ac_double_turntable.TRAVELS); starting pose: "
                  "notebook 01's check pose",
-                 "errors: +-15 um and +-10 arcsec (Zheng et al. 2024, notebook 01)")
+                 "errors: ±15 µm and ±10 arcsec (Zheng et al. 2024, notebook 01)")
     elif key == "horizontal_3axis":
         m = build(key)
         work = dict(x=700.0, y=600.0, z=500.0)
@@ -253,8 +253,8 @@ def machine_setup(key: str) -> MachineSetup:
         half = _rong_half_ranges(m)
         notes = ("axes: notebook 02's workspace 700 x 600 x 500 mm (the library has no "
                  "travels for this machine); starting pose: its centre",
-                 "errors: +-2 x the acceptance values of data/rong/error_ranges.csv "
-                 "(notebook 02): 7.5 um positioning, 10 um straightness, 80 urad angular, "
+                 "errors: ±2 x the acceptance values of data/rong/error_ranges.csv "
+                 "(notebook 02): 7.5 µm positioning, 10 µm straightness, 80 µrad angular, "
                  "4.75 urad squareness")
     elif key == "vertical_xyfz":
         m = build(key)
@@ -262,8 +262,8 @@ def machine_setup(key: str) -> MachineSetup:
         half = _guo_half_ranges(m)
         notes = ("axes: 0..500 mm, notebook 03's pose grid (the library has no travels for "
                  "this machine); starting pose: notebook 03's (100, 100, 100) mm",
-                 "errors: half widths of notebook 03's ranges [0, 3] um positioning, [0, 4] um "
-                 "straightness, [0, 32] urad angular, [0, 1.9] um/m squareness")
+                 "errors: half widths of notebook 03's ranges [0, 3] µm positioning, [0, 4] µm "
+                 "straightness, [0, 32] µrad angular, [0, 1.9] µm/m squareness")
     else:
         return topology_setup(key)
     return _setup(key, MACHINES[key], m, axes, half, notes)
@@ -305,7 +305,7 @@ def topology_setup(topology: str) -> MachineSetup:
              f"{removed}",
              "axes: -300..300 mm and -180..180 deg (no travels known); starting pose: the "
              "centre",
-             "errors: +-5 um and +-3 arcsec for every error (the explorer's choice, about "
+             "errors: ±5 µm and ±3 arcsec for every error (the explorer's choice, about "
              "notebook 06's illustrative ranges)")
     return _setup(TOPOLOGY, f"topology {topology.strip()!r} ({m.n_errors} errors)", m, axes,
                   half, notes)
@@ -342,7 +342,7 @@ def error_half_ranges(setup: MachineSetup, *, position_um: float | None = None,
     pos = setup.position_um if position_um is None else float(position_um)
     ang = setup.angular_arcsec if angular_arcsec is None else float(angular_arcsec)
     if not (np.isfinite(pos) and np.isfinite(ang)) or pos < 0 or ang < 0:
-        raise ValueError(f"half ranges must be finite and >= 0, got {pos} um, {ang} arcsec")
+        raise ValueError(f"half ranges must be finite and >= 0, got {pos} µm, {ang} arcsec")
     trans = setup.translational
     scale = np.where(trans, pos / setup.position_um if setup.position_um else 0.0,
                      ang / setup.angular_arcsec if setup.angular_arcsec else 0.0)
