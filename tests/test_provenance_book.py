@@ -263,3 +263,15 @@ def test_clip_paths_are_named_after_what_they_print():
     assert plotting.stable_svg_ids("<svg/>") == "<svg/>"
     with pytest.raises(ValueError, match="clip1"):
         plotting.stable_svg_ids(svg.replace("<svg>", '<svg><g id="clip1"/>'))
+
+
+def test_committed_outputs_were_made_by_this_library_and_these_notebooks():
+    """Every figure carries the library's hash and the notebook's: a change to either that was
+    committed without re-running the notebooks (make reproduce) leaves figures that say they were
+    made by other code."""
+    for stem in [p.stem for p in runner.all_notebooks()]:
+        run = provenance.read(paths.FIGURES / stem)["run"]
+        assert run["library_sha256"] == provenance.library_hash(), \
+            f"figures/{stem} was made by another version of lib/: run make reproduce"
+        assert run["notebook_sha256"] == provenance.notebook_source_hash(
+            paths.NOTEBOOKS / f"{stem}.ipynb"), f"notebooks/{stem}.ipynb changed since its run"
