@@ -352,6 +352,13 @@ def _add_columns(t, name, columns):
     return t
 
 
+def _drop_column(t, name, k):
+    """Column ``k`` (0-based) removed from file ``name``."""
+    header, rows = t[name]
+    t[name] = (header[:k] + header[k + 1:], [r[:k] + r[k + 1:] for r in rows])
+    return t
+
+
 def test_extra_columns_are_ignored_with_a_note(tmp_path):
     d = model(seed=16)
     t = tables(d)
@@ -437,8 +444,7 @@ def test_a_unit_column_beside_the_schemas_own_is_ignored_and_alone_is_refused(tm
     write(tmp_path, d, files=t)
     with pytest.warns(thermal.IgnoredColumnWarning, match=r"column\(s\) \['error_mm'\] ignored"):
         assert_matches(thermal.read_measurements(tmp_path), d)
-    header, rows = t["errors.csv"]
-    t["errors.csv"] = (header[:3] + header[4:], [r[:3] + r[4:] for r in rows])
+    _drop_column(t, "errors.csv", 3)
     write(tmp_path, d, files=t)
     with pytest.raises(thermal.DataFormatError,
                        match=r"errors.csv: column 'error_mm' gives error in 'mm'; the schema "
@@ -468,8 +474,7 @@ def test_unnamed_columns(tmp_path):
                        match=r"temperatures.csv: column 9 has no name in the header but holds "
                              r"numbers"):
         thermal.read_measurements(tmp_path)
-    header, rows = t["temperatures.csv"]
-    t["temperatures.csv"] = (header[:7] + header[8:], [r[:7] + r[8:] for r in rows])
+    _drop_column(t, "temperatures.csv", 7)
     write(tmp_path, d, files=t)
     with pytest.raises(thermal.DataFormatError,
                        match=r"temperatures.csv: column 8 has no name in the header but holds "

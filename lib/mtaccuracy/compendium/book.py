@@ -50,6 +50,7 @@ import pandas as pd
 import yaml
 
 from . import paths, provenance, reproduction, runner
+from .plotting import unit_symbol
 
 BOOK = paths.ROOT / "book"
 CAPTIONS = BOOK / "figures.yml"
@@ -98,29 +99,21 @@ def captions(path: Path | None = None) -> dict[str, list[dict]]:
 def figure_problems(figures: Path, stems: list[str], caps: dict) -> list[tuple[Path, str]]:
     """Figures (PNGs listed in a folder's ``provenance.json``) without a caption, and captions
     naming a figure that is not there: ``(path, why)``."""
-    out = []
+    out, where = [], paths.relative(CAPTIONS)
     for stem in stems:
         folder = figures / stem
         listed = {Path(n).stem for n in provenance.read(folder).get("files", {})
                   if n.endswith(".png")}
         captioned = [f["figure"] for f in caps.get(stem, [])]
         for name in sorted(listed - set(captioned)):
-            out.append((folder / f"{name}.png", f"has no caption in {_rel(CAPTIONS)}"))
+            out.append((folder / f"{name}.png", f"has no caption in {where}"))
         for name in captioned:
             if name not in listed:
                 out.append((folder / f"{name}.png",
-                            f"is captioned in {_rel(CAPTIONS)} but is not one of the folder's "
-                            f"outputs"))
+                            f"is captioned in {where} but is not one of the folder's outputs"))
         if len(set(captioned)) != len(captioned):
-            out.append((folder, f"a figure is captioned twice in {_rel(CAPTIONS)}"))
+            out.append((folder, f"a figure is captioned twice in {where}"))
     return out
-
-
-def _rel(p: Path) -> str:
-    try:
-        return str(Path(p).relative_to(paths.ROOT))
-    except ValueError:
-        return str(p)
 
 
 def notebook_parts(nb_path: Path) -> dict:
@@ -170,15 +163,6 @@ def scorecard_html(cards: pd.DataFrame, table_id: str, dt_url: str,
 #: Relative widths of the scorecard's columns on a wide screen.
 _WIDTHS = {"paper": 8, "item": 7, "quantity": 15, "published": 9, "reproduced": 10,
            "tolerance": 9, "verdict": 12, "basis": 10, "note": 28}
-#: The units of the scorecards' ``unit`` column (ASCII in the CSV files), as a reader writes them.
-_SYMBOLS = {"um": "µm", "degC": "°C", "deg": "°", "percent": "%"}
-
-
-def unit_symbol(unit: str) -> str:
-    """``"um/m/degC"`` -> ``"µm/m/°C"``: each part of a unit written with its symbol."""
-    return "/".join(_SYMBOLS.get(part, part) for part in str(unit).split("/"))
-
-
 def _label_css() -> str:
     """On a phone each scorecard cell is shown with its column's name (one rule per column of
     the two column sets the book shows)."""
@@ -494,9 +478,9 @@ def main(argv=None) -> int:
         for path, why in found:
             print(f"error: {provenance.output_kind(path)} {path} {why}", file=sys.stderr)
     size = sum(f.stat().st_size for f in site.rglob("*") if f.is_file())
-    print(f"book: {_rel(site / 'index.html')} ({time.perf_counter() - t0:.0f} s, "
+    print(f"book: {paths.relative(site / 'index.html')} ({time.perf_counter() - t0:.0f} s, "
           f"{size / 1e6:.1f} MB, {len(warnings)} Sphinx warning(s)); open it in a browser, "
-          f"or serve it: python -m http.server -d {_rel(site)} -b 127.0.0.1")
+          f"or serve it: python -m http.server -d {paths.relative(site)} -b 127.0.0.1")
     return 1 if broken else 0
 
 

@@ -57,11 +57,10 @@ import numpy as np
 
 from . import explore_model as M
 from . import xu2022
+from .plotting import unit_symbol
 
 __all__ = ["LOOPBACK", "create_app", "check_address", "free_port", "serve", "main"]
 
-#: Units as a reader writes them (the library's unit names are ASCII).
-_SYMBOL = {"deg": "°", "um": "µm"}
 #: The only address the explorer listens on.
 LOOPBACK = "127.0.0.1"
 #: Colours: the house colours of the figures (plotting.REPRODUCED / PUBLISHED) and a red for
@@ -258,7 +257,7 @@ class MachineTab:
             sliders = []
             for a in setup.axes:
                 step = 1.0 if a.rotary or a.high - a.low > 50 else 0.1
-                s = pn.widgets.FloatSlider(label=f"{a.name} ({_SYMBOL.get(a.unit, a.unit)})",
+                s = pn.widgets.FloatSlider(label=f"{a.name} ({unit_symbol(a.unit)})",
                                            start=a.low, end=a.high, value=a.default,
                                            step=step, width=280, css_classes=[f"pose-{a.name}"])
                 _prompt(s)
@@ -381,8 +380,8 @@ class MachineTab:
         self.here.data = dict(u=[pose[a1.name]], v=[pose[a2.name]])     # the pose itself
         self.dmap.x_range.update(start=dmap.u[0] - du / 2, end=dmap.u[-1] + du / 2)
         self.dmap.y_range.update(start=dmap.v[0] - dv / 2, end=dmap.v[-1] + dv / 2)
-        self.dmap.xaxis.axis_label = f"{a1.name} ({_SYMBOL.get(a1.unit, a1.unit)})"
-        self.dmap.yaxis.axis_label = f"{a2.name} ({_SYMBOL.get(a2.unit, a2.unit)})"
+        self.dmap.xaxis.axis_label = f"{a1.name} ({unit_symbol(a1.unit)})"
+        self.dmap.yaxis.axis_label = f"{a2.name} ({unit_symbol(a2.unit)})"
         self.dmap.title.text = f"Dominant error for {dmap.outputs[k]}"
 
     def _draw_top(self, res: M.PoseIndices) -> None:
@@ -409,7 +408,8 @@ class MachineTab:
 class SpindleTab:
     """What a probe layout does to each harmonic, for both estimators."""
 
-    PRESETS = {"Yang et al. 2021 (samples 0, 14, 65, 116 of 128)": tuple(M.yang_layout_deg()),
+    PRESETS = {(f"Yang et al. 2021 (samples {', '.join(map(str, M.YANG_POSITIONS))} of "
+                f"{M.YANG_SAMPLES})"): tuple(M.yang_layout_deg()),
                "four probes equally spaced": (0.0, 90.0, 180.0, 270.0)}
 
     def __init__(self):

@@ -51,8 +51,11 @@ import numpy as np
 
 from .. import errors as _errors
 from .. import sensitivity as S
+from .. import spindle as SP
+from .. import thermal
 from ..machines import build
 from ..machines import chain as _chain
+from . import paths, runner, xu2022
 
 __all__ = [
     "MACHINES", "TOPOLOGY", "GRID_STEPS", "ARCSEC", "AxisRange", "MachineSetup", "PoseIndices",
@@ -182,7 +185,6 @@ def _rong_half_ranges(machine, range_factor: float = 2.0) -> np.ndarray:
     ``data/rong/error_ranges.csv`` (mm, rad)."""
     import pandas as pd
 
-    from . import paths
 
     path = paths.DATA / "rong" / "error_ranges.csv"
     acc = pd.read_csv(path, dtype={"symbol": str}).set_index("symbol")
@@ -616,11 +618,17 @@ def time_slider_update(setup: MachineSetup, *, repeat: int = 10, steps: int = GR
 # Spindle: what a probe layout does to each harmonic
 # ------------------------------------------------------------------------------------------
 
+def _yang_layout() -> tuple[tuple[int, ...], int, float]:
+    """Notebook 05's defaults, the paper's Section 1.3 layout: ``probe_positions``,
+    ``n_samples`` and ``a3`` (one source: the notebook's parameters cell)."""
+    p = runner.read_parameters("05_yang2021_spindle_four_point_ga")
+    return (tuple(int(v) for v in p["probe_positions"].default), int(p["n_samples"].default),
+            float(p["a3"].default))
+
+
 #: Yang et al. 2021's four-point layout: probes at samples 0, 14, 65, 116 of 128 per
-#: revolution (Section 1.3; notebook 05's ``probe_positions``), and their ``a3``.
-YANG_POSITIONS = (0, 14, 65, 116)
-YANG_SAMPLES = 128
-YANG_A3 = 1.953
+#: revolution, and their ``a3`` (Section 1.3), as notebook 05's parameters give them.
+YANG_POSITIONS, YANG_SAMPLES, YANG_A3 = _yang_layout()
 
 
 def yang_layout_deg() -> np.ndarray:
@@ -631,9 +639,8 @@ def yang_layout_deg() -> np.ndarray:
     array (4,)
         deg.
     """
-    from ..spindle import probe_angles
 
-    return np.rad2deg(probe_angles(list(YANG_POSITIONS), YANG_SAMPLES))
+    return np.rad2deg(SP.probe_angles(list(YANG_POSITIONS), YANG_SAMPLES))
 
 
 @dataclass(frozen=True)
@@ -715,7 +722,6 @@ def probe_transfer(angles_deg, *, max_harmonic: int = 20, weights: str = "optima
         With the library's message: fewer than three probes, two at one angle, a layout Eq. 5
         cannot serve.
     """
-    from .. import spindle as SP
 
     phi = np.deg2rad(np.asarray(angles_deg, dtype=float))
     if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
@@ -813,33 +819,14 @@ def thermal_data(folder=None):
     data : ThermalData
     reconstructed : bool
     """
-    from .. import thermal
-    from . import paths, xu2022
 
     folder = paths.DATA / "thermal" if folder is None else folder
     data = thermal.read_measurements(folder)
     return data, xu2022.reconstruction_seed(folder, data) is not None
 
 
-def published_thermal_inputs() -> dict:
-    """The paper's sensitive points, from the terms of its printed models
-    (``data/papers/xu2022_models.csv``: Eq. 8 for ``point``, Eq. 9 for ``k`` and ``b``).
-
-    Returns
-    -------
-    dict
-        ``{"point": [...], "k": [...], "b": [...]}`` sensor names.
-    """
-    from . import xu2022
-
-    models = xu2022.published_models()
-    terms = models[models.term != "intercept"]
-
-    def of(model, prefix=""):
-        rows = terms[(terms.model == model) & terms.target.str.startswith(prefix)]
-        return list(dict.fromkeys(t.removeprefix("d") for t in rows.term))
-    return {"point": of("point_by_point_mlr"), "k": of("decoupled_mlr", "k"),
-            "b": of("decoupled_mlr", "b")}
+#: The paper's sensitive points (:func:`mtaccuracy.compendium.xu2022.published_inputs`).
+published_thermal_inputs = xu2022.published_inputs
 
 
 def thermal_prediction(data, *, train: Sequence[int], test: int, inputs: str = "published",
@@ -874,7 +861,6 @@ def thermal_prediction(data, *, train: Sequence[int], test: int, inputs: str = "
         For an experiment the data lack, a test experiment also trained on, too few training
         experiments, or a paper's sensor the data lack.
     """
-    from .. import thermal
 
     train = sorted({int(e) for e in train})
     test = int(test)

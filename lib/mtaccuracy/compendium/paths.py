@@ -136,6 +136,16 @@ def output_dir(path: str | os.PathLike) -> Path:
     return p
 
 
+def relative(path) -> str:
+    """``path`` as a reader of this repository's messages wants it: relative to the repository
+    root when it lies inside (symbolic links resolved), else absolute; ``/``-separated."""
+    p = Path(path).resolve()
+    try:
+        return p.relative_to(ROOT).as_posix()
+    except ValueError:
+        return p.as_posix()
+
+
 def input_file(name, what: str) -> Path:
     """An input file a notebook parameter names: relative paths are taken from the
     repository root; a missing file is a ``FileNotFoundError`` naming the parameter."""

@@ -45,6 +45,17 @@ PUBLISHED = "#d95f02"
 REPRODUCED = "#1b9e77"
 
 
+#: Units as a reader writes them; the files and the library name them in ASCII (``rmse_um``,
+#: a scorecard's ``unit`` column ``degC``, an axis in ``deg``).
+UNIT_SYMBOLS = {"um": "µm", "degC": "°C", "deg": "°", "percent": "%"}
+
+
+def unit_symbol(unit: str) -> str:
+    """``"um/m/degC"`` -> ``"µm/m/°C"``: each part of an ASCII unit written with its symbol
+    (:data:`UNIT_SYMBOLS`), for labels and tables a reader sees."""
+    return "/".join(UNIT_SYMBOLS.get(part, part) for part in str(unit).split("/"))
+
+
 def use_style() -> None:
     """Apply the compendium's figure style to matplotlib's global settings."""
     mpl.rcParams.update(STYLE)

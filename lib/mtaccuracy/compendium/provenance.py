@@ -51,12 +51,7 @@ def sha256(path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def _rel(path) -> str:
-    p = Path(path).resolve()
-    try:
-        return p.relative_to(paths.ROOT).as_posix()
-    except ValueError:
-        return p.as_posix()
+_rel = paths.relative
 
 
 def git_commit() -> str:

@@ -441,11 +441,7 @@ def _parameterised(path: Path, params: dict) -> dict:
     return nb
 
 
-def _rel(p: Path) -> str:
-    try:
-        return str(p.resolve().relative_to(paths.ROOT))
-    except ValueError:
-        return str(p)
+_rel = paths.relative
 
 
 #: The signals :func:`_on_signal` received during the current run (a library may wrap the

@@ -58,6 +58,20 @@ def published_models(folder=None):
                                   folder)
 
 
+def published_inputs(folder=None) -> dict[str, list[str]]:
+    """The paper's sensitive points, read off the terms of its printed models
+    (``data/papers/xu2022_models.csv``): ``{"point": Eq. 8's sensors, "k": Eq. 9's for the
+    slope, "b": Eq. 9's for the intercept}``, each in the order the paper prints them."""
+    models = published_models(folder)
+    terms = models[models.term != "intercept"]
+
+    def of(model, prefix=""):
+        rows = terms[(terms.model == model) & terms.target.str.startswith(prefix)]
+        return list(dict.fromkeys(t.removeprefix("d") for t in rows.term))
+    return {"point": of("point_by_point_mlr"), "k": of("decoupled_mlr", "k"),
+            "b": of("decoupled_mlr", "b")}
+
+
 def reconstruct(seed: int = synthetic.DEFAULT_SEED, papers_folder=None) -> thermal.ThermalData:
     """:func:`mtaccuracy.thermal.synthetic.reconstruct` on the published targets."""
     return synthetic.reconstruct(published_targets(papers_folder), seed)
