@@ -116,7 +116,7 @@ lock:
 clean:
 	@$(RECOVER)
 	rm -rf notebooks/.running notebooks/.failed .pytest_cache .ruff_cache .test-output build
-	rm -rf figures/index.html figures/html figures/.runs.json build/book
+	rm -rf figures/index.html figures/html figures/.runs.json
 	find . -path ./.venv -prune -o -name __pycache__ -type d -exec rm -rf {} +
 	find . -path ./.venv -prune -o -name .ipynb_checkpoints -type d -exec rm -rf {} +
 
