@@ -197,25 +197,86 @@ def test_the_basis_follows_the_declared_inputs():
     sim = card.simulated("probe signals", how="set profile plus noise")
     table = card.printed("Table 2 values")
     assert added(card.number, "Table 3", "x", "1", 1.0)["basis"] == "independent"
-    assert added(card.number, "Table 3", "y", "1", 1.0, uses=[pose])["basis"] == "fitted"
+    assert added(card.number, "Table 2", "y", "1", 1.0, uses=[pose])["basis"] == "fitted"
     assert added(card.number, "Table 7", "RMSE", "1", 1.0, uses=[data])["basis"] == "constructed"
     assert added(card.number, "Eq. 8", "slope at 185 mm", "1", 1.0, uses=[data])["basis"] == \
         "constructed"
-    assert added(card.number, "Eq. 8", "slope at 300 mm", "1", 1.0, uses=[data])["basis"] == \
-        "simulated"
+    # rule 2: every row using a constructed input is constructed, target or not
+    row = added(card.number, "Eq. 8", "slope at 300 mm", "1", 1.0, uses=[data])
+    assert row["basis"] == "constructed" and "set to published values" in row["note"]
+    assert added(card.number, "Eq. 8", "x", "1", 1.0, uses=[data, sim])["basis"] == "constructed"
     assert added(card.number, "Fig. 9", "roundness", "1", 1.0, uses=[sim])["basis"] == "simulated"
     assert added(card.number, "Table 2", "share", "1", 1.0, uses=[table])["basis"] == "internal"
     assert added(card.number, "Table 2", "mixed", "1", 1.0, uses=[table, pose])["basis"] == "fitted"
+    assert added(card.number, "Table 2", "sim", "1", 1.0, uses=[table, sim])["basis"] == \
+        "simulated"
     row = added(card.claim, "Fig. 4", "z", "printed", why="the paper does not give the data")
     assert (row["verdict"], row["basis"]) == ("not reproducible", "unchecked")
     row = added(card.claim, "Fig. 5", "z", "printed", why="no data", ours=0.25)
     assert row["reproduced"] == 0.25
     assert "pose fitted to Table 2" in card.rows[1]["note"]
+    assert "derived from other" not in card.rows[1]["note"]
     other = R.Card().fitted("pose", to=["Table 9"], how="x")
     with pytest.raises(ValueError, match="not an input of this card"):
         card.number("Table 3", "z", "1", 1.0, uses=[other])
     with pytest.raises(ValueError, match="name the published items"):
         card.fitted("range", to=[], how="x")
+
+
+def test_a_fitted_reference_scoring_another_published_item_is_internal():
+    """Rule 1: an input fitted to one published column, used to score another, compares the
+    paper with itself; with simulated data or printed numbers beside it, still internal."""
+    card = R.Card()
+    pose = card.fitted("pose", to=["Table 2: PCE *"], how="least squares on the PCE column")
+    sim = card.simulated("runs", how="Monte Carlo on the model")
+    table = card.printed("Table 2")
+    row = added(card.number, "Table 2", "PCE S_T of dx", "0.5", 0.5, uses=[pose])
+    assert row["basis"] == "fitted"
+    for uses in ([pose], [pose, sim], [pose, table], [pose, sim, table]):
+        row = added(card.number, "Table 2", f"MCS S_T of dx {len(uses)}{uses[-1].kind}", "0.5",
+                    0.5, uses=uses)
+        assert row["basis"] == "internal", uses
+        assert "derived from other published numbers" in row["note"]
+    assert added(card.set, "Table 2", "MCS key set", list("ab"), list("ab"),
+                 uses=[pose, sim])["basis"] == "internal"
+
+
+@pytest.mark.parametrize("method", ["number", "statement", "set"])
+def test_no_row_using_a_fitted_or_constructed_input_is_independent_or_simulated(method):
+    card = R.Card()
+    inputs = [card.fitted("f", to=["A*"], how="x"),
+              card.constructed("c", targets=["B*"], how="y"),
+              card.simulated("s", how="z"), card.printed("p")]
+    args = {"number": ("1", 1.0), "statement": ("holds", "holds", True),
+            "set": (["a"], ["a"])}[method]
+    import itertools
+    for n in range(1, 5):
+        for uses in itertools.combinations(inputs, n):
+            kinds = {u.kind for u in uses}
+            for item in ("A1", "B1", "C1"):
+                q = f"{method} {n} {'+'.join(sorted(kinds))}"
+                if any(r["item"] == item and r["quantity"] == q for r in card.rows):
+                    continue
+                row = added(getattr(card, method), item, q, *args, uses=list(uses))
+                if kinds & {"fitted", "constructed"}:
+                    assert row["basis"] not in ("independent", "simulated"), (item, kinds)
+                if "constructed" in kinds:
+                    assert row["basis"] == "constructed"
+
+
+def test_an_assumption_that_settles_a_row_never_scores_reproduced():
+    card = R.Card()
+    same = card.assumed("synchronous error equal at every speed", settles=["Fig. 21: *equal*"],
+                        how="the simulation draws one synchronous profile for all speeds")
+    sim = card.simulated("runs", how="noise")
+    row = added(card.statement, "Fig. 21", "synchronous error equal at every speed", "equal",
+                "equal within 0.1 um", True, uses=[same, sim])
+    assert (row["verdict"], row["basis"]) == ("not reproducible", "unchecked")
+    assert "true by design" in row["note"]
+    row = added(card.number, "Fig. 21", "roundness at 600 r/min", "1.0", 1.0, uses=[same, sim])
+    assert (row["verdict"], row["basis"]) == ("reproduced", "simulated")
+    with pytest.raises(ValueError, match="settles"):
+        card.assumed("x", settles=[], how="y")
 
 
 def test_card_tally_and_write(tmp_path):
@@ -246,3 +307,20 @@ def test_the_tolerance_column_is_compared_by_its_number(tmp_path):
     (tmp_path / "old.csv").write_text(other.replace("0.05 (sampling)", "0.05 (paper)"))
     assert "'0.05 (sampling)' != committed '0.05 (paper)'" in \
         R.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv", tol)[0]
+
+
+def test_a_bracket_of_defensible_inputs_is_not_reproducible_inside_and_scored_outside():
+    card = R.Card()
+    row = added(card.bracket, "C3", "count", "12", 17, 7, why="ranges lost")
+    assert (row["verdict"], row["basis"], row["reproduced"]) == ("not reproducible", "unchecked",
+                                                                 "7-17")
+    assert "lies inside" in row["note"]
+    row = added(card.bracket, "F5", "max", "0.35", 0.125, 0.103, "mm", why="scale", digits=3)
+    assert (row["verdict"], row["basis"], row["reproduced"]) == ("differs", "independent", 0.125)
+    assert "outside 0.103-0.125" in row["note"]
+    row = added(card.bracket, "F6", "min", "0.103", 0.125, 0.1034, why="scale")
+    assert row["verdict"] == "reproduced" and row["reproduced"] == 0.1034
+    with pytest.raises(R.NonFiniteResult):
+        card.bracket("F7", "x", "1", float("nan"), 2, why="w")
+    with pytest.raises(ValueError, match="what is missing"):
+        card.bracket("F8", "x", "1", 0, 2, why=" ")

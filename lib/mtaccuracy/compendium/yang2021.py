@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-__all__ = ["check_run"]
+__all__ = ["check_run", "experiment_genes", "experiment_inputs", "ga_settings_study",
+           "single_run_speedups"]
 
 
 def check_run(stem: str, probe_positions, n_samples: int, lowpass_harmonic: int,
@@ -168,3 +169,113 @@ def fig21_figure(theta, layouts, rotation_errors, profiles, true_profile, d600, 
     fig.legend(handles + true_h, labels + [f"{t} profile" for t in true_l], fontsize=7,
                ncol=4, loc="upper center", bbox_to_anchor=(0.36, 0.02))
     return fig
+
+
+def experiment_genes(facts):
+    """The layout of the paper's lathe experiment, as printed: genes ``(phi_1, phi_2, phi_3,
+    a_3)`` (rad, rad, rad, 1) from ``data/papers/yang2021_facts.csv`` (Table 1's k = 20 row, which
+    Section 3 says the experiment used); ``a_1, a_2`` are left to Eq. 15.  ``facts``: the
+    published facts indexed by quantity (strings)."""
+    import numpy as np
+
+    phi = [float(v) for v in str(facts["experiment_angles"]).split()]
+    if len(phi) != 3:
+        raise ValueError(f"yang2021_facts.csv: experiment_angles needs 3 angles, got {phi}")
+    return np.array([*phi, float(facts["experiment_a3"])])
+
+
+def experiment_inputs(card, mandrel_roundness_um: float, calibration_um: float):
+    """Declare on ``card`` the inputs of the simulated lathe experiment (Section 3, simulated)
+    and return ``(mandrel, simulation, same_sync)``.
+
+    The mandrel is ``constructed`` when its roundness is the paper's calibration value (the
+    value Table 2's shape errors, Fig. 21 and the abstract's deviation are compared with: the
+    simulation then returns it by design), else ``simulated``; the noise, the asynchronous
+    motion and the layouts are ``simulated``; the synchronous motion, the printed Section 1.3
+    rotation error at every speed, is ``assumed``: it makes the separated curves coincide
+    across speeds (Figs. 19-20) by design."""
+    at_calibration = abs(float(mandrel_roundness_um) - float(calibration_um)) <= 1e-12
+    what = f"a mandrel of minimum-zone roundness {mandrel_roundness_um:g} um"
+    if at_calibration:
+        mandrel = card.constructed(
+            "simulated mandrel at the calibration roundness",
+            targets=["Table 2 (simulated)*", "Abstract (simulated)*", "Fig. 21 (simulated)*"],
+            how=f"{what}, set to the paper's calibration value {calibration_um:g} um, the value "
+                "Table 2, Fig. 21 and the abstract's deviation are compared with")
+    else:
+        mandrel = card.simulated("simulated mandrel", how=f"{what} (not the paper's calibration "
+                                                          f"value {calibration_um:g} um)")
+    simulation = card.simulated(
+        "simulated lathe experiment",
+        how="asynchronous motion, probe noise, acquisition, filter and layouts as assumed in "
+            "Section 9; the paper publishes no measured data")
+    same_sync = card.assumed(
+        "synchronous motion the same at every speed",
+        settles=["Fig. 19 (simulated)*", "Fig. 20 (simulated)*"],
+        how="the printed Section 1.3 rotation error is the synchronous motion at every speed and "
+            "the mandrel is one object, so the separated mean curves of the four speeds agree by "
+            "design, up to the noise")
+    return mandrel, simulation, same_sync
+
+
+def ga_settings_study(k: int, *, bounds, generation_counts, pc_values, pm_values,
+                      traditional_pc: float, traditional_pm: float, generations: int,
+                      n_runs: int, pop_size: int, encoding: str, seed: int):
+    """How the GA comparison of Figs. 8-9 depends on settings the paper omits: the plateau
+    generation (:func:`~mtaccuracy.spindle.convergence_generation`, 0.1 % of the final best)
+    of the improved and the traditional GA at every count of ``generation_counts``, and the
+    speed-up of the improved GA (``generations``) over a traditional GA at every fixed
+    ``(pc, pm)`` of ``pc_values`` x ``pm_values``.  ``n_runs`` seeded runs per setting, each
+    setting its own seed (``seed + 100 + i`` in table order).
+
+    Returns a DataFrame, one row per setting: ``study`` ("generation count" or "fixed rates"),
+    ``generations``, ``pc``, ``pm`` (the traditional GA's), ``runs``, the plateau medians of
+    both GAs (``improved_median``, ``traditional_median``) and ``speedup_percent``
+    (:func:`~mtaccuracy.spindle.speedup`)."""
+    import numpy as np
+    import pandas as pd
+
+    from .. import spindle as sp
+
+    common = dict(bounds=bounds, n_runs=n_runs, pop_size=pop_size, encoding=encoding)
+    seeds = iter(range(seed + 100, seed + 100 + 2 * len(generation_counts)
+                       + len(pc_values) * len(pm_values) + 1))
+
+    def plateau(res):
+        return sp.convergence_generation(res.history, res.history[-1], 1e-3)
+
+    rows, base = [], None
+    for g in generation_counts:
+        imp = plateau(sp.run_ga(k, adaptive=True, generations=int(g), seed=next(seeds), **common))
+        trad = plateau(sp.run_ga(k, adaptive=False, pc=traditional_pc, pm=traditional_pm,
+                                 generations=int(g), seed=next(seeds), **common))
+        if int(g) == int(generations):
+            base = imp
+        rows.append(dict(study="generation count", generations=int(g), pc=traditional_pc,
+                         pm=traditional_pm, runs=n_runs, improved_median=np.median(imp),
+                         traditional_median=np.median(trad), speedup_percent=sp.speedup(imp, trad)))
+    if base is None:
+        base = plateau(sp.run_ga(k, adaptive=True, generations=int(generations), seed=next(seeds),
+                                 **common))
+    for pc in pc_values:
+        for pm in pm_values:
+            trad = plateau(sp.run_ga(k, adaptive=False, pc=float(pc), pm=float(pm),
+                                     generations=int(generations), seed=next(seeds), **common))
+            rows.append(dict(study="fixed rates", generations=int(generations), pc=float(pc),
+                             pm=float(pm), runs=n_runs, improved_median=np.median(base),
+                             traditional_median=np.median(trad),
+                             speedup_percent=sp.speedup(base, trad)))
+    return pd.DataFrame(rows)
+
+
+def single_run_speedups(improved, traditional):
+    """The speed-up (percent) that one run of each algorithm would show, as Figs. 8-9 do, over
+    every pair of runs: ``100 (1 - g_i / g_t)`` for every improved-GA convergence generation
+    ``g_i`` (runs,) and traditional-GA one ``g_t`` (runs,) with ``g_t > 0``; shape
+    ``(n_improved * n_traditional_positive,)``."""
+    import numpy as np
+
+    gi = np.asarray(improved, float)[:, None]
+    gt = np.asarray(traditional, float)
+    gt = gt[gt > 0][None, :]
+    return (100 * (1 - gi / gt)).ravel()

@@ -12,7 +12,7 @@ import pandas as pd
 
 __all__ = ["tidy", "fmt", "normalise", "sobol_reference", "pce_indices", "group_label",
            "fixed_ratio_checks", "group_head", "converged_at", "bars_figure",
-           "fig04_figure"]
+           "fig04_figure", "group_shares", "relative_scatter"]
 
 
 def tidy(df: pd.DataFrame) -> pd.DataFrame:
@@ -149,20 +149,70 @@ def fixed_ratio_checks(t2, half, groups, cross, any_sd, methods=("pce", "mcs", "
     return pd.DataFrame(eq_rows), pd.DataFrame(cr_rows), floor, scatter
 
 
-def converged_at(g, r_max: float = 3.0):
-    """The first sample size from which the fluctuation R (``g.R_percent``, Eq. 24) stays at
-    or below ``r_max`` percent (``g.n`` ascending); NaN if never."""
-    ok = (g.R_percent <= r_max).to_numpy()
-    for i in range(1, len(g)):
+def converged_at(g, r_max: float = 3.0, assign: str = "larger"):
+    """The first sample size from which the fluctuation R (``g.R_percent``, Eq. 24, the
+    change from the previous size, so NaN at the first) stays at or below ``r_max`` percent
+    (``g.n`` ascending); NaN if never.
+
+    Eq. 24, R = |S_(l+1) - S_l| / S_l, does not say to which of the two sizes R belongs:
+    ``assign="larger"`` gives it to size l+1 (the reading under which the largest size of a
+    series can be the one that converges, as the paper says of MCS and LHS at 1e5),
+    ``assign="smaller"`` to size l (Eq. 24 literally; the largest size then has no R)."""
+    if assign not in ("larger", "smaller"):
+        raise ValueError(f"assign must be 'larger' or 'smaller', got {assign!r}")
+    r = g.R_percent.to_numpy(dtype=float)
+    n = g.n.to_numpy()
+    if assign == "smaller":
+        r, n = r[1:], n[:-1]   # R of the step l -> l+1 belongs to size l
+    else:
+        r, n = r[1:], n[1:]
+    ok = r <= r_max
+    for i in range(len(r)):
         if ok[i:].all():
-            return int(g.n.iloc[i])
+            return int(n[i])
     return np.nan
+
+
+def group_shares(s, catalogue, comps) -> pd.DataFrame:
+    """Section 3.2's comparisons of groups of errors, from normalised total indices.
+
+    ``s`` (6, 41): indices of the components ``comps`` (summing to 1 over the errors);
+    ``catalogue``: the machine's 41 errors (``translational``, ``axis``, ``kind``).  Returns
+    one row per component with the summed index of the translational and of the angular
+    errors, of the errors of the rotary axes (A, C: their error motions and location errors)
+    and of the linear axes (X, Y, Z and the squareness errors), and the mean index per error
+    of the location errors (PIGEs) and of the error motions (PDGEs, squareness counted as
+    PIGE as in Table 1)."""
+    s = np.asarray(s, dtype=float)
+    trans = np.array([e.translational for e in catalogue])
+    rotary = np.array([e.axis in ("A", "C") for e in catalogue])
+    pige = np.array([e.kind != "error motion" for e in catalogue])
+    return pd.DataFrame({"component": list(comps),
+                         "translational": s[:, trans].sum(axis=1),
+                         "angular": s[:, ~trans].sum(axis=1),
+                         "rotary_axes": s[:, rotary].sum(axis=1),
+                         "linear_axes": s[:, ~rotary].sum(axis=1),
+                         "pige_mean": s[:, pige].mean(axis=1),
+                         "pdge_mean": s[:, ~pige].mean(axis=1)})
+
+
+def relative_scatter(estimate, exact, threshold: float = 0.05) -> float:
+    """RMS relative deviation of sampled indices ``estimate`` from the ``exact`` ones (same
+    shape) over the entries whose exact index exceeds ``threshold`` (the key errors): the
+    sampling scatter of one printed value, comparable with the paper's own scatter around
+    the equalities its model fixes."""
+    estimate, exact = np.asarray(estimate, dtype=float), np.asarray(exact, dtype=float)
+    key = exact > threshold
+    if not key.any():
+        raise ValueError(f"no exact index above {threshold}")
+    return float(np.sqrt(np.mean((estimate[key] / exact[key] - 1) ** 2)))
 
 
 def bars_figure(st, comps, all_comps, names, t2, key_threshold: float, title: str,
                 published_colour):
-    """Figs. 5-6: normalised total indices of every error by method (bars) beside Table 2's
-    PCE values (diamonds) for the components ``comps``."""
+    """Figs. 5-6: normalised total indices of every error by method (bars) for the
+    components ``comps``, beside Table 2's PCE values (diamonds) unless ``t2`` is None (the
+    bars drawn at a pose other than Table 2's)."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(len(comps), 1, figsize=(13, 3.2 * len(comps)), sharex=True)
@@ -172,9 +222,10 @@ def bars_figure(st, comps, all_comps, names, t2, key_threshold: float, title: st
         k = all_comps.index(c)
         for j, (m, col) in enumerate(zip(st, ("#1b9e77", "#7570b3", "#66a61e"), strict=True)):
             ax.bar(xpos + (j - 1) * w, st[m][k], w, label=m, color=col)
-        p = t2[t2.comp == c]
-        ax.scatter([names.index(s) for s in p.symbol], p.pce, marker="D", color=published_colour,
-                   zorder=3, label="published (Table 2, PCE)")
+        if t2 is not None:
+            p = t2[t2.comp == c]
+            ax.scatter([names.index(s) for s in p.symbol], p.pce, marker="D",
+                       color=published_colour, zorder=3, label="published (Table 2, PCE)")
         ax.axhline(key_threshold, color="k", lw=0.7, ls="--")
         ax.set_ylabel(f"{c}: normalised ST")
     axes[0].legend(ncol=4, fontsize=8)
