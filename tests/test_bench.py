@@ -37,3 +37,22 @@ def test_every_row_names_a_task_and_unknown_tasks_are_refused():
     assert all(task in bench.TASKS for _, task, *_ in bench.ROWS)
     with pytest.raises(SystemExit):
         bench.main(["--task", "no_such_task"])
+
+
+def test_memory_rows_go_up_in_n_and_quick_leaves_out_the_largest(monkeypatch, capsys):
+    ran = []
+
+    def fake(name, timeout=None):
+        ran.append(name)
+        return dict(time=1.0, peak_mb=1.0, task_mb=1.0)
+    monkeypatch.setattr(bench, "_in_subprocess", fake)
+    bench.main(["--quick", "--only", "sobol_memory"])
+    assert ran == ["sobol_memory_1e4", "sobol_memory_1e5", "sobol_memory_1e6"]
+    ran.clear()
+    bench.main(["--only", "sobol_memory"])
+    assert ran[-1] == "sobol_memory_1e7" and len(ran) == 4
+
+
+def test_the_memory_task_estimates_the_linear_model():
+    r = bench._sobol_memory(10_000)      # a linear model: S1 = ST = the closed form
+    assert r["err_s1"] < 0.05 and r["err_st"] < 0.05 and r["time"] > 0

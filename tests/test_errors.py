@@ -14,7 +14,7 @@ def test_three_axis_catalogue_counts_and_uniqueness():
 
 
 def test_iso_codes_agree_with_the_shared_mapping():
-    """data/iso230 writes dx(z) as d_xz and ez(x) as e_zx; every code must agree."""
+    """mtaccuracy/data writes dx(z) as d_xz and ez(x) as e_zx; every code must agree."""
     iso = errors.iso_names()
     for e in errors.three_axis_catalogue():
         key = e.symbol if e.kind == "squareness" else f"{e.symbol[0]}_{e.symbol[1]}{e.axis}"

@@ -51,6 +51,165 @@ def test_the_check_sees_an_import_and_covers_every_science_package():
     # ``mtaccuracy.compendium``
     assert "compendium" in _imports(LIB / "compendium" / "book.py")
     # every top-level package or module of the library is science or the compendium
+    # (package data, such as a folder of CSV files, holds no module)
     top = {p.name for p in LIB.iterdir() if p.name != "__pycache__" and not p.name.startswith(".")
-           and (p.is_dir() or p.suffix == ".py")}
+           and (p.is_dir() and any(p.rglob("*.py")) or p.suffix == ".py")}
     assert top == {*SCIENCE, "compendium", "__init__.py"}
+
+
+# --- no import cycles; layers in one direction (issue 25 item 4) -----------------------------
+#
+# The import graph of every mtaccuracy module, from the source (ast): module-level imports and
+# function-local ones alike (a function-local import is still a dependency, only a later one).
+# ``from pkg import name`` is an edge to ``pkg.name`` when that is a module, else to ``pkg``.
+
+def _module_name(path: Path) -> str:
+    parts = ["mtaccuracy", *path.relative_to(LIB).with_suffix("").parts]
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {_module_name(p): p for p in sorted(LIB.rglob("*.py"))}
+
+
+def _known(name: str) -> str:
+    """The module ``name`` lies in (``mtaccuracy.sensitivity.linear.linear_indices`` is
+    ``mtaccuracy.sensitivity.linear``)."""
+    while name not in MODULES:
+        name = name.rpartition(".")[0]
+    return name
+
+
+def _edges(name: str, source: str) -> list[str]:
+    """The mtaccuracy modules one module imports, one entry per imported name (repeats kept)."""
+    is_package = MODULES.get(name, Path()).name == "__init__.py"
+    package = name.split(".") if is_package else name.split(".")[:-1]
+    out = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom):
+            base = package[:len(package) - node.level + 1] if node.level else []
+            full = ".".join(base + (node.module.split(".") if node.module else []))
+            if full.split(".")[0] != "mtaccuracy":
+                continue
+            out += [_known(f"{full}.{a.name}") for a in node.names]
+        elif isinstance(node, ast.Import):
+            out += [_known(a.name) for a in node.names if a.name.split(".")[0] == "mtaccuracy"]
+    return [t for t in out if t != name]
+
+
+def import_graph(modules=None) -> dict[str, list[str]]:
+    """``{module: [imported modules]}`` (``modules``: ``{name: source}``, else the library)."""
+    if modules is None:
+        modules = {m: p.read_text(encoding="utf-8") for m, p in MODULES.items()}
+    return {m: _edges(m, src) for m, src in modules.items()}
+
+
+def cycles(graph: dict[str, list[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    out = []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in sorted(set(graph.get(v, ()))):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while comp[-1:] != [v]:
+                comp.append(stack.pop())
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return sorted(out)
+
+
+#: Cycles that exist today and are being removed; the list may only shrink (the test fails
+#: when one of them is gone, so that it is taken off here).
+ALLOWED_CYCLES: list[list[str]] = []
+
+
+def test_no_import_cycles():
+    found = cycles(import_graph())
+    assert found == ALLOWED_CYCLES, (
+        f"import cycles among mtaccuracy modules (function-local imports count): "
+        f"{[c for c in found if c not in ALLOWED_CYCLES]}; allowed ones gone (remove them "
+        f"from ALLOWED_CYCLES): {[c for c in ALLOWED_CYCLES if c not in found]}")
+
+
+#: The science layer, bottom first: a module imports only from a lower layer or its own
+#: package.  csvlines, roundness and optimise import no mtaccuracy module (leaf tools:
+#: spindle builds on roundness and optimise, machines, spindle and thermal on csvlines);
+#: sensitivity, thermal and spindle do not import one another.  The compendium comes last
+#: and may import anything below it.
+LAYERS = [{"csvlines", "roundness", "optimise"}, {"kinematics"}, {"errors"}, {"machines"},
+          {"sensitivity", "thermal", "spindle"}, {"compendium"}]
+LAYER = {pkg: k for k, layer in enumerate(LAYERS) for pkg in layer}
+
+#: Imports against the direction that exist today, ``(importer, imported): statements``.
+#: The list may only shrink: the test fails on a new one and on one that is gone.
+PAPER_CODE = "paper code to move to compendium (issue 25 item 1)"
+ALLOWED_UPWARD = {
+    ("mtaccuracy.machines.ac_double_turntable", "mtaccuracy.sensitivity.linear"): (3, PAPER_CODE),
+    ("mtaccuracy.machines.ac_double_turntable", "mtaccuracy.sensitivity.posefit"): (2, PAPER_CODE),
+    ("mtaccuracy.machines.ac_double_turntable", "mtaccuracy.sensitivity.screening"):
+        (2, PAPER_CODE),
+    ("mtaccuracy.machines.horizontal_3axis", "mtaccuracy.sensitivity.linear"): (2, PAPER_CODE),
+}
+
+
+def _top(module: str) -> str:
+    return module.split(".")[1] if "." in module else ""
+
+
+def upward_imports(graph: dict[str, list[str]]) -> dict[tuple[str, str], int]:
+    """``{(importer, imported): count}`` of the imports from a layer into a higher one or a
+    sibling package of its own layer (the package ``mtaccuracy`` itself is no layer)."""
+    out: dict[tuple[str, str], int] = {}
+    for m, targets in graph.items():
+        for t in targets:
+            a, b = _top(m), _top(t)
+            if a and b and a != b and LAYER[b] >= LAYER[a]:
+                out[(m, t)] = out.get((m, t), 0) + 1
+    return out
+
+
+def test_science_layers_import_downwards_only():
+    found = upward_imports(import_graph())
+    allowed = {k: n for k, (n, _why) in ALLOWED_UPWARD.items()}
+    new = {k: n for k, n in found.items() if allowed.get(k) != n}
+    gone = {k: n for k, n in allowed.items() if found.get(k) != n}
+    assert not new and not gone, (
+        f"imports against the layers {' -> '.join('/'.join(sorted(la)) for la in LAYERS)}: "
+        f"new or changed {new}; allowed ones gone or changed (shrink ALLOWED_UPWARD): {gone}")
+
+
+def test_every_top_level_module_has_a_layer():
+    assert {_top(m) for m in MODULES} - {""} == set(LAYER)
+
+
+def test_the_graph_sees_local_imports_cycles_and_upward_imports():
+    mods = {"mtaccuracy.kinematics": "def f():\n    from .machines import chain\n",
+            "mtaccuracy.machines": "",
+            "mtaccuracy.machines.chain": "from .. import kinematics\n",
+            "mtaccuracy.errors": "import mtaccuracy.kinematics\n"}
+    saved = dict(MODULES)
+    MODULES.update({m: Path(f"{m}.py") for m in mods})
+    MODULES["mtaccuracy.machines"] = Path("machines/__init__.py")
+    try:
+        graph = import_graph(mods)
+    finally:
+        MODULES.clear()
+        MODULES.update(saved)
+    assert graph["mtaccuracy.kinematics"] == ["mtaccuracy.machines.chain"]   # function-local
+    assert graph["mtaccuracy.machines.chain"] == ["mtaccuracy.kinematics"]   # relative
+    assert cycles(graph) == [["mtaccuracy.kinematics", "mtaccuracy.machines.chain"]]
+    assert upward_imports(graph) == {("mtaccuracy.kinematics", "mtaccuracy.machines.chain"): 1}

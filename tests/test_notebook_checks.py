@@ -3,7 +3,7 @@
 import pytest
 
 from mtaccuracy.compendium import rong, xu2022
-from mtaccuracy.compendium.runner import ParameterError
+from mtaccuracy.compendium.parameters import ParameterError
 
 GOOD = dict(workspace_mm=[800, 700, 600], tool_offset_mm=[0, 0, 100],
             sweep_thresholds=[0.5, 0.99, 0.01], tool_lengths_mm=[0, 300, 10], n_plot=100,
@@ -23,7 +23,7 @@ def test_check_sweeps_counts_the_thresholds():
     (dict(sweep_thresholds=[0.01, 0.99, 0.001]), "gives 981 thresholds; at most 200"),
 ])
 def test_check_sweeps_refuses_with_a_clear_message(change, message):
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(ParameterError, match=message):   # the one type of a parameter error
         rong.check_sweeps(**{**GOOD, **change})
 
 

@@ -54,6 +54,25 @@ def test_cli_refuses_before_any_work(capsys):
     assert "name=value" in capsys.readouterr().err
 
 
+def test_the_parameter_language_stands_apart_from_the_runner():
+    """Notebooks import the parameter language (``compendium.parameters``), not the execution
+    engine; one exception type, a ValueError, for every parameter error."""
+    code = ("import sys, mtaccuracy.compendium.parameters; print(sorted(m for m in sys.modules "
+            "if m in ('mtaccuracy.compendium.runner', 'mtaccuracy.compendium.commit', "
+            "'papermill', 'nbformat')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=paths.ROOT)
+    assert out.stdout.strip() == "[]"
+    from mtaccuracy.compendium import parameters, rong, xu2022
+
+    assert runner.ParameterError is parameters.ParameterError is rong.ParameterError \
+        is xu2022.ParameterError and issubclass(parameters.ParameterError, ValueError)
+    for nb in runner.all_notebooks():
+        text = nb.read_text(encoding="utf-8")
+        assert "from mtaccuracy.compendium.parameters import check_parameters" in text, nb.stem
+        assert "compendium.runner import" not in text and "import runner" not in text, nb.stem
+
+
 def test_parse_value():
     assert runner.parse_value("12") == 12 and runner.parse_value("1e-3") == 1e-3
     assert runner.parse_value("[1, 2]") == [1, 2] and runner.parse_value("abc") == "abc"
@@ -97,6 +116,19 @@ def test_constraints_of_all_kinds(tmp_path, monkeypatch):
     with pytest.raises(runner.ParameterError, match="'n' = 101 is not allowed; it must be <= 100"):
         runner.validate(path, {"n": 101})
     assert runner.validate(path, {"errs": ["S_xy"], "label": "c"})
+
+
+def test_a_long_comment_continues_on_indented_comment_lines(tmp_path, monkeypatch):
+    """Notebooks are linted at 100 characters: a parameter's constraints and help, and the
+    memory expression, may continue on indented comment lines; an unindented one does not."""
+    path = _tiny(tmp_path, monkeypatch, "print(n)",
+                 "m = 2  # {>= 1,\n    # <= 5} a long\n    #  help\n# not help\n"
+                 "# {memory: 1e8 +\n    # 1e9 * m}  peak bytes\n")
+    m = runner.read_parameters(path)["m"]
+    assert m.constraints == [(">=", 1.0), ("<=", 5.0)] and m.help == "a long help"
+    with pytest.raises(runner.ParameterError, match="'m' = 6 is not allowed; it must be <= 5"):
+        runner.validate(path, {"m": 6})
+    assert runner.memory_estimate(path, {"n": 3, "m": 4}) == 1e8 + 4e9
 
 
 @pytest.mark.parametrize("value", [float("inf"), float("-inf"), float("nan"), 1e400])

@@ -115,13 +115,33 @@ def test_threshold_sweep_is_monotone():
 
 
 def test_key_set_bootstrap_is_stable_for_a_clear_case():
-    rng = np.random.default_rng(3)
     ua, ub = S.base_samples(512, 4, "sobol", 3)
     model = lambda v: (v - 0.5) @ np.array([[4.0], [2.0], [0.3], [0.1]])  # noqa: E731
-    ya, yb, yab = S.sobol_evaluate(model, ua, ub)
-    freq, counts = S.key_set_bootstrap(ya, yb, yab, NAMES, 50, rng, ["y"])
+    _, st_boot = S.sobol_bootstrap_samples(*S.sobol_evaluate(model, ua, ub), 50, 3)
+    freq, counts = S.key_set_bootstrap(st_boot, NAMES, ["y"])
     assert list(freq.y) == [1.0, 1.0, 0.0, 0.0] and (counts.union == 2).all()
     assert list(freq.columns) == ["symbol", "y", "union"] and len(counts) == 50
+
+
+def test_key_set_bootstrap_breaks_rounding_ties_by_catalogue_order():
+    """b and c enter the output alike; the rule needs one of them.  Their estimates differ by
+    rounding noise whose sign flips between resamples: the key one is b (catalogue order) in
+    every resample, never whichever the noise favours (the former key_set_frequencies is gone:
+    one function, one tie rule)."""
+    assert not hasattr(S, "key_set_frequencies")
+    noise = np.array([1e-13, -1e-13, 3e-14, -5e-14])
+    st = np.stack([np.array([0.5, 0.2 * (1 + e), 0.2 * (1 - e), 0.1]) for e in noise])[..., None]
+    freq, counts = S.key_set_bootstrap(st, NAMES, ["y"], threshold=0.6)
+    assert list(freq.y) == [1.0, 1.0, 0.0, 0.0] and (counts.y == 2).all()
+    # the rule on the raw values follows the noise: this is what the merge prevents
+    raw = [S.key_errors(s[:, 0], NAMES, 0.6).names for s in st]
+    assert {r[1] for r in raw} == {"b", "c"}
+
+
+def test_cumulative_share_margin():
+    st = np.array([[5.0, 4.0, 1.0], [1.0, 1.0, 1.0]]).T
+    assert np.allclose(S.cumulative_share_margin(st, 0.85), [0.05, 0.15])
+    assert S.cumulative_share_margin(np.array([3.0, 1.0]), 0.5)[0] == pytest.approx(0.25)
 
 
 @pytest.mark.parametrize("st, threshold, message", [
@@ -164,8 +184,10 @@ def test_other_bad_inputs():
         S.expected_rms_ratio(1.5)
     with pytest.raises(ValueError, match=r"shape \(n, 4\)"):
         S.threshold_sweep(np.ones((4, 1)), [0.9], np.ones((3, 5)), lambda v: v, NAMES)
-    with pytest.raises(ValueError, match="n_boot"):
-        S.key_set_bootstrap(np.ones((4, 1)), np.ones((4, 1)), np.ones((4, 4, 1)), NAMES, 0, 0)
+    with pytest.raises(ValueError, match=r"\(n_boot, D, q\)"):
+        S.key_set_bootstrap(np.ones((4, 1)), NAMES)
+    with pytest.raises(ValueError, match="only 3 inputs"):
+        S.key_set_bootstrap(np.ones((2, 3, 1)), NAMES)
 
 
 def test_rank_with_ties_breaks_near_equal_values_by_the_key_not_by_noise():

@@ -1,8 +1,12 @@
-"""Sobol estimators: agreement with SALib, the Ishigami function, chunking invariance."""
+"""Sobol estimators: agreement with SALib, the Ishigami function, chunking and streaming
+invariance."""
+
+import warnings
 
 import numpy as np
 import pytest
 from SALib.analyze import sobol as salib_sobol
+from scipy.stats import qmc
 
 from mtaccuracy import sensitivity as S
 
@@ -179,25 +183,82 @@ def test_merge_ties_makes_the_sort_canonical():
     assert np.array_equal(many[0, :, 1], merged[::-1])
 
 
-def test_cumulative_share_margin():
-    st = np.array([[5.0, 4.0, 1.0], [1.0, 1.0, 1.0]]).T
-    assert np.allclose(S.cumulative_share_margin(st, 0.85), [0.05, 0.15])
-    assert S.cumulative_share_margin(np.array([3.0, 1.0]), 0.5)[0] == pytest.approx(0.25)
+@pytest.mark.parametrize("method", ["mc", "lhs", "sobol"])
+@pytest.mark.parametrize("rows", [1, 37, 128, 1000])
+def test_base_blocks_are_the_whole_draw_in_pieces(method, rows):
+    """Drawn a block at a time, A and B are bitwise the whole draw: the B stream of ``mc``
+    starts n d draws on, the Sobol' sequence continues where the last block stopped."""
+    n, d = 128, 5
+    whole = S.base_samples(n, d, method, 7)
+    rng = np.random.default_rng(7)        # the designs as scipy and numpy draw them whole
+    ref = {"mc": lambda: (rng.random((n, d)), rng.random((n, d))),
+           "lhs": lambda: tuple(qmc.LatinHypercube(d=d, rng=rng).random(n) for _ in "ab"),
+           "sobol": lambda: np.split(qmc.Sobol(d=2 * d, scramble=True, rng=rng).random(n), 2,
+                                     axis=1)}[method]()
+    assert all(np.array_equal(w, r) for w, r in zip(whole, ref, strict=True))
+    blocks = list(S.base_blocks(n, d, method, 7, rows=rows))
+    assert len(blocks) == -(-n // rows) and all(len(a) <= rows for a, _ in blocks)
+    for k in (0, 1):
+        assert np.array_equal(np.concatenate([blk[k] for blk in blocks]), whole[k])
 
 
-def test_key_set_frequencies_equal_the_screening_bootstrap():
-    ua, ub = S.base_samples(512, 4, "sobol", 1)
-    bounds = np.array([[-1.0] * 4, [1.0] * 4])
+@pytest.mark.parametrize("bit_generator", [np.random.PCG64, np.random.MT19937])
+def test_a_generator_seed_gives_the_whole_draw_and_ends_where_it_would(bit_generator):
+    """PCG64 jumps to B (advance); a generator without ``advance`` draws and discards."""
+    whole_rng = np.random.Generator(bit_generator(3))
+    whole = (whole_rng.random((50, 4)), whole_rng.random((50, 4)))    # numpy's whole draw
+    rng = np.random.Generator(bit_generator(3))
+    blocks = list(S.base_blocks(50, 4, "mc", rng, rows=16))
+    for k in (0, 1):
+        assert np.array_equal(np.concatenate([blk[k] for blk in blocks]), whole[k])
+    assert rng.random() == whole_rng.random()
 
-    def model(x):
-        return np.c_[x @ [3.0, 2.0, 2.0, 0.5], x @ [0.2, 1.0, 0.0, 3.0]]
 
-    a, b = S.from_unit_uniform(ua, bounds), S.from_unit_uniform(ub, bounds)
-    ya, yb, yab = S.sobol_evaluate(model, a, b)
-    names, outputs = ["a", "b", "c", "d"], ["y0", "y1"]
-    ref_freq, ref_counts = S.key_set_bootstrap(ya, yb, yab, names, 60, 4, outputs, 0.7)
-    _, stb = S.sobol_bootstrap_samples(ya, yb, yab, 60, 4)
-    freq, counts = S.key_set_frequencies(stb, names, outputs, 0.7)
-    assert freq.equals(ref_freq) and counts.equals(ref_counts)
-    # b and c enter y0 alike and the rule needs one of them: each is key in some resamples
-    assert 0 < freq.set_index("symbol").loc["b", "y0"] < 1
+def _offset_model(x):   # two outputs far from zero (pooling must not cancel) with interactions
+    return np.c_[ishigami(x) + 40.0, x[:, 3] * x[:, 4] - 3.0 + x[:, 0]]
+
+
+@pytest.mark.parametrize("method", ["mc", "lhs", "sobol"])
+def test_streamed_design_equals_the_whole_array_estimate(method):
+    """Base rows drawn and run in blocks give the whole-array estimate (sobol_estimate on all
+    runs of base_samples' A and B, the same seed) to rounding; one block gives it bitwise."""
+    n, d = 256, 5
+    to_inputs = lambda u: S.from_unit_uniform(u, np.array([[-np.pi] * d, [np.pi] * d]))  # noqa
+    ua, ub = S.base_samples(n, d, method, 12)
+    a, b = to_inputs(ua), to_inputs(ub)
+    e1, et = S.sobol_estimate(*S.sobol_evaluate(_offset_model, a, b))
+    design = S.SobolDesign(n, d, method, 12, to_inputs=to_inputs)
+    for rows in (37, 64):   # uneven and even blocks
+        seen = []
+        s1, st = S.sobol_indices(_offset_model, design, chunk=300, rows=rows,
+                                 progress=lambda done, total, seen=seen: seen.append((done, total)))
+        assert np.allclose(s1, e1, rtol=0, atol=1e-12) and np.allclose(st, et, rtol=0, atol=1e-12)
+        assert seen[-1] == (n * (d + 2), n * (d + 2))
+    one = S.sobol_indices(_offset_model, design, chunk=300, rows=n)
+    arrays = S.sobol_indices(_offset_model, a, b, chunk=300, rows=n)
+    for x, y in zip(one, arrays, strict=True):
+        assert np.array_equal(x, y)
+    blocked = S.sobol_indices(_offset_model, a, b, chunk=300, rows=50)   # arrays, in blocks
+    assert np.allclose(blocked[0], e1, rtol=0, atol=1e-12)
+
+
+def test_sobol_balance_warning_is_about_the_design_not_the_block():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        list(S.base_blocks(256, 2, "sobol", 0, rows=48))          # N a power of 2: silent
+    with pytest.warns(UserWarning, match="power of 2"):
+        list(S.base_blocks(300, 2, "sobol", 0, rows=64))          # N is not
+
+
+def test_design_bad_input():
+    design = S.SobolDesign(16, 2, "mc", 0)
+    with pytest.raises(ValueError, match="not both"):
+        S.sobol_indices(lambda x: x, design, np.zeros((16, 2)))
+    with pytest.raises(ValueError, match="rows must be"):
+        S.sobol_indices(lambda x: x, design, rows=0)
+    with pytest.raises(ValueError, match="allowed: mc, lhs, sobol"):
+        S.sobol_indices(lambda x: x, S.SobolDesign(16, 2, "halton", 0))
+    with pytest.raises(ValueError, match="n must be"):
+        S.base_blocks(1, 2, "mc", 0)
+    ya, yb, yab = S.sobol_evaluate(lambda x: x, design)      # a design, drawn whole
+    assert np.array_equal(ya, S.base_samples(16, 2, "mc", 0)[0]) and yab.shape == (2, 16, 2)

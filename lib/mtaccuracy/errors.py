@@ -9,14 +9,15 @@ from __future__ import annotations
 
 import csv
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-#: The working map of paper symbols to ISO 230-1 codes, a data file of the repository
-#: (``lib/mtaccuracy/errors.py`` -> ``data/iso230/``); found from this file, so that the science
-#: modules need nothing of the compendium's machinery (``paths``).
-ISO230_NAMES = Path(__file__).resolve().parents[2] / "data" / "iso230" / "iso230_names.csv"
+#: The working map of paper symbols to ISO 230-1 codes: package data (``mtaccuracy/data/``),
+#: read through :mod:`importlib.resources`, so that it is found in a checkout, an installed
+#: wheel or a zip alike.
+ISO230_NAMES = resources.files("mtaccuracy") / "data" / "iso230_names.csv"
 
 #: Paper units -> library units (mm, rad).
 UNIT_SCALE = {"um": 1e-3, "mm": 1.0, "rad": 1.0, "urad": 1e-6, "um/m": 1e-6,
@@ -77,7 +78,7 @@ def three_axis_catalogue(angular_unit: str = "rad") -> tuple[ErrorSpec, ...]:
 
     3 positioning, 6 straightness, 9 angular error motions, 3 squareness errors.  Squareness
     ``S_ij`` is the out-of-squareness of axes i and j, as an angle in um/m; its ISO 230-1 code
-    follows ../iso230-names.csv (``S_xy`` -> EC0Y: Y to X about Z, X the reference).
+    follows :data:`ISO230_NAMES` (``S_xy`` -> EC0Y: Y to X about Z, X the reference).
 
     Parameters
     ----------
@@ -123,7 +124,7 @@ def symbols(catalogue: tuple[ErrorSpec, ...]) -> list[str]:
 
 
 def iso_names(path=None) -> dict[str, str]:
-    """The working map paper symbol -> ISO 230-1 code from ``data/iso230/iso230_names.csv``.
+    """The working map paper symbol -> ISO 230-1 code from :data:`ISO230_NAMES`.
 
     That file writes the symbols as ``d_xz`` (x error of Z) and ``e_zx``; this returns them
     as given there.
@@ -131,15 +132,16 @@ def iso_names(path=None) -> dict[str, str]:
     Parameters
     ----------
     path : path, optional
-        Another map file (default the repository's).
+        Another map file with the columns ``paper_symbol`` and ``iso230_code`` (default the
+        package's own, :data:`ISO230_NAMES`).
 
     Returns
     -------
     dict
         Paper symbol -> ISO 230-1 code.
     """
-    path = path or ISO230_NAMES
-    with open(path, newline="", encoding="utf-8") as fh:
+    path = ISO230_NAMES if path is None else Path(path)
+    with path.open("r", newline="", encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
     missing = {"paper_symbol", "iso230_code"} - set(rows[0] if rows else {})
     if missing:
@@ -209,7 +211,7 @@ def five_axis_ac_catalogue() -> tuple[ErrorSpec, ...]:
     30 error motions (6 per axis X, Y, Z, A, C), 3 squareness errors, 6 location errors of A
     with respect to the machine and 2 of C with respect to A.  Symbols as in
     ``data/papers/zheng2024_table1_errors.csv`` (``d_xc``: x error motion of C; ``a_AM``,
-    ``b_AM``, ``g_AM``: alpha, beta, gamma of A); ISO 230-1 codes from ``data/iso230``.
+    ``b_AM``, ``g_AM``: alpha, beta, gamma of A); ISO 230-1 codes from :data:`ISO230_NAMES`.
     Translational errors are in um, angular ones in arcsec (the paper's ranges).
 
     Returns

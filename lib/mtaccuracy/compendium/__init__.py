@@ -7,8 +7,10 @@ None of it is science; the science packages (:mod:`mtaccuracy.kinematics`,
 direction, so they can be taken into other work without this repository's runner.
 
 =================  ====================================================================
-``runner``         runs a notebook with papermill: parameter checks, staging, Ctrl-C
-                   safety (``python -m mtaccuracy.compendium.runner``, ``make reproduce``)
+``parameters``     the notebooks' parameter language: declarations, checks,
+                   ``check_parameters``, ``ParameterError`` (what notebooks import)
+``runner``         runs a notebook with papermill: staging, the commit, Ctrl-C safety
+                   (``python -m mtaccuracy.compendium.runner``, ``make reproduce``)
 ``paths``          the repository's folders, output folders, input files checked
 ``provenance``     which code, notebook, parameters and inputs made each output
 ``reproduction``   published values (``data/papers/``), tolerances, the scorecard ``Card``,
@@ -20,10 +22,15 @@ direction, so they can be taken into other work without this repository's runner
 ``lab``            ``make lab``: JupyterLab at the repository root
 ``explore``        ``make explore``: the interactive explorer (Panel)
 ``zheng2024``      notebook 01's paper-specific checks, references and figures
-``rong``           notebook 02's parameter checks and the tool-length figure
+``rong``           notebook 02's parameter checks, ranking at the tables' precision, the
+                   range-set bracket and the tool-length figure
+``guo2016``        notebook 03: the units-slip reading of Eq. 12, exchangeable pairs and what
+                   an XY circle sees in the paper's model
 ``xu2022``         notebook 04: published tables, the reconstruction's folders, tolerances,
                    scorecard helpers and figures
-``yang2021``       notebook 05's parameter checks, Table 1's consistency check and figures
+``yang2021``       notebook 05's parameter checks, Table 1's consistency check, the GA
+                   settings study, the simulated experiment's inputs and figures
+``your_machine``   notebook 06's chain figure and the numbers of its conclusion
 ``commit``         the journalled commit of a finished run; finishes one a kill interrupted
 ``memory``         the memory a run may use (available memory, cgroups, ``ulimit -v``)
 ``ownenv``         refuses a ``.venv`` that runs another checkout's code

@@ -49,7 +49,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from . import paths, provenance, reproduction, runner
+from . import parameters, paths, provenance, reproduction
 from .plotting import unit_symbol
 
 BOOK = paths.ROOT / "book"
@@ -428,7 +428,7 @@ def build(out: Path = BUILD, figures: Path | None = None, *, quiet: bool = True
 
     figures = Path(figures or paths.FIGURES)
     out = Path(out)
-    stems = [p.stem for p in runner.all_notebooks()]
+    stems = [p.stem for p in parameters.all_notebooks()]
     caps = captions()
     broken = check(figures, stems, caps)
     out.mkdir(parents=True, exist_ok=True)

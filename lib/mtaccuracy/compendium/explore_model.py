@@ -55,7 +55,7 @@ from .. import spindle as SP
 from .. import thermal
 from ..machines import build
 from ..machines import chain as _chain
-from . import paths, runner, xu2022
+from . import parameters, paths, xu2022
 
 __all__ = [
     "MACHINES", "TOPOLOGY", "GRID_STEPS", "ARCSEC", "AxisRange", "MachineSetup", "PoseIndices",
@@ -621,7 +621,7 @@ def time_slider_update(setup: MachineSetup, *, repeat: int = 10, steps: int = GR
 def _yang_layout() -> tuple[tuple[int, ...], int, float]:
     """Notebook 05's defaults, the paper's Section 1.3 layout: ``probe_positions``,
     ``n_samples`` and ``a3`` (one source: the notebook's parameters cell)."""
-    p = runner.read_parameters("05_yang2021_spindle_four_point_ga")
+    p = parameters.read_parameters("05_yang2021_spindle_four_point_ga")
     return (tuple(int(v) for v in p["probe_positions"].default), int(p["n_samples"].default),
             float(p["a3"].default))
 

@@ -1,7 +1,7 @@
 """Provenance of every output: which code, notebook, parameters and input data made it.
 
-A notebook's first call, :func:`mtaccuracy.compendium.runner.check_parameters`, starts a record
-(:func:`start`); every input file read through the library is hashed into it (:func:`track`,
+A notebook's first call, :func:`mtaccuracy.compendium.parameters.check_parameters`, starts a
+record (:func:`start`); every input file read through the library is hashed into it (:func:`track`,
 called by ``reproduction.published`` and the data readers); every figure and table saved
 through ``plotting.save`` and ``reproduction.save_table`` carries it: PNG text chunk
 ``mtaccuracy:provenance``, SVG ``Description``, and for CSVs the sidecar ``provenance.json`` of
@@ -80,11 +80,13 @@ def notebook_source_hash(path) -> str:
 
 @functools.cache
 def library_hash() -> str:
-    """SHA-256 over the library's Python sources, in path order.  Computed once per process:
-    the code a process runs is the code it imported, whatever changes on disk later."""
+    """SHA-256 over the library's Python sources and its package data (``mtaccuracy/data``:
+    the error catalogue), in path order.  Computed once per process: the code a process runs
+    is the code it imported, whatever changes on disk later."""
     h = hashlib.sha256()
     lib = Path(__file__).resolve().parent.parent   # the mtaccuracy package
-    for p in sorted(lib.rglob("*.py")):
+    data = [p for p in (lib / "data").rglob("*") if p.is_file()]
+    for p in sorted([*lib.rglob("*.py"), *data]):
         h.update(p.relative_to(lib).as_posix().encode())
         h.update(p.read_bytes())
     return h.hexdigest()

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .parameters import ParameterError
+
 __all__ = ["check_sweeps", "ranked", "half_widths_from_ranges", "range_path_study"]
 
 #: Decimals at which the total indices are ranked by the 90 % rule and written to the tables.
@@ -131,24 +133,26 @@ def range_path_study(machine, half_a, half_b, ts, *, unit_rows, workspace_mm, to
 def check_sweeps(workspace_mm, tool_offset_mm, sweep_thresholds, tool_lengths_mm, n_plot: int,
                  n_base: int) -> int:
     """Refuse sweep parameters the notebook cannot run (a clear message each); returns the
-    number of thresholds of the sweep."""
+    number of thresholds of the sweep.  Raises
+    :class:`~mtaccuracy.compendium.parameters.ParameterError`."""
     if len(workspace_mm) != 3 or len(tool_offset_mm) != 3:
-        raise ValueError("workspace_mm and tool_offset_mm need three values (x, y, z)")
+        raise ParameterError("workspace_mm and tool_offset_mm need three values (x, y, z)")
     if len(sweep_thresholds) != 3 or not 0 < sweep_thresholds[0] <= sweep_thresholds[1] < 1 \
             or sweep_thresholds[2] <= 0:
-        raise ValueError("sweep_thresholds = [first, last, step] with 0 < first <= last < 1, "
-                         "step > 0")
+        raise ParameterError("sweep_thresholds = [first, last, step] with 0 < first <= last < 1, "
+                             "step > 0")
     if len(tool_lengths_mm) != 3 or tool_lengths_mm[0] > tool_lengths_mm[1] \
             or tool_lengths_mm[2] <= 0:
-        raise ValueError("tool_lengths_mm = [first, last, step] with first <= last and step > 0")
+        raise ParameterError("tool_lengths_mm = [first, last, step] with first <= last and "
+                             "step > 0")
     if int((tool_lengths_mm[1] - tool_lengths_mm[0]) / tool_lengths_mm[2] + 1e-9) + 1 > 200:
-        raise ValueError("tool_lengths_mm gives more than 200 tool lengths (raise the step)")
+        raise ParameterError("tool_lengths_mm gives more than 200 tool lengths (raise the step)")
     if n_plot > n_base:
-        raise ValueError(f"n_plot = {n_plot} must be at most n_base = {n_base}")
+        raise ParameterError(f"n_plot = {n_plot} must be at most n_base = {n_base}")
     n_sweep = int((sweep_thresholds[1] - sweep_thresholds[0]) / sweep_thresholds[2] + 1e-9) + 1
     if n_sweep > 200:
-        raise ValueError(f"sweep_thresholds gives {n_sweep} thresholds; at most 200 (raise the "
-                         f"step)")
+        raise ParameterError(f"sweep_thresholds gives {n_sweep} thresholds; at most 200 "
+                             f"(raise the step)")
     return n_sweep
 
 

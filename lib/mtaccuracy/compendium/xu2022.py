@@ -14,6 +14,7 @@ from pathlib import Path
 from .. import thermal
 from ..thermal import synthetic
 from . import paths, provenance, reproduction
+from .parameters import ParameterError
 
 __all__ = [
     "DEFAULT_DIR", "LSTSQ_TOLERANCE", "SVR_TOLERANCE", "published_targets", "published_models",
@@ -281,8 +282,6 @@ def resolve_split(stem: str, data, train, test) -> tuple[list[int], int]:
     ``train`` every other one (on the reconstruction: train 1 2 3, test 4, as the paper).
     Refuses (``ParameterError``) experiments the data lack, a test experiment also trained on,
     and fewer than 2 training experiments (the SVR's cross-validation leaves one out)."""
-    from .runner import ParameterError
-
     test = int(data.experiments[-1]) if test == 0 else int(test)
     train = [int(e) for e in train] or [int(e) for e in data.experiments if e != test]
     absent = sorted(set(train + [test]) - set(int(e) for e in data.experiments))
@@ -302,8 +301,6 @@ def resolve_inputs(inputs: str, paper: bool) -> str:
 def check_experiments(stem: str, train, test) -> None:
     """Refuse a split whose test experiment is also trained on, or with < 2 training
     experiments (the SVR's cross-validation leaves one out)."""
-    from .runner import ParameterError
-
     if test in train:
         raise ParameterError(f"{stem}: test_experiment {test} is also a training experiment")
     if len(set(train)) < 2:
@@ -314,8 +311,6 @@ def check_experiments(stem: str, train, test) -> None:
 def check_data(stem: str, data, folder, train, test, n_clusters: int, inputs: str,
                paper_inputs: dict) -> list[str]:
     """Refuse parameters the data cannot serve; returns the paper's sensors the data lack."""
-    from .runner import ParameterError
-
     absent = sorted(set(train + [test]) - set(data.experiments))
     if absent:
         raise ParameterError(f"{stem}: experiment(s) {absent} are not in {folder}; "

@@ -35,12 +35,11 @@ def normalise(st):
 def sobol_reference(machine, pose, sd, method: str, n: int, rng_seed: int, progress=False):
     """Sampled Sobol' indices of the six pose-error components at ``pose``, errors normal with
     standard deviations ``sd`` (41,): ``method`` "mc" or "lhs" designs of ``n`` base rows,
-    streamed (``sensitivity.sobol_indices``); returns (s1, st), each (41, 6).  With
-    ``progress`` a line per quarter of the runs."""
+    streamed (``sensitivity.sobol_indices`` on a ``SobolDesign``); returns (s1, st), each
+    (41, 6).  With ``progress`` a line per quarter of the runs."""
     from .. import sensitivity as S
 
-    ua, ub = S.base_samples(n, 41, method, rng_seed)
-    a, b = S.from_unit_normal(ua, sd), S.from_unit_normal(ub, sd)
+    design = S.SobolDesign(n, 41, method, rng_seed, to_inputs=lambda u: S.from_unit_normal(u, sd))
     marks = set()
 
     def report(done, total):
@@ -49,8 +48,9 @@ def sobol_reference(machine, pose, sd, method: str, n: int, rng_seed: int, progr
             marks.add(q)
             print(f"  {method.upper()}: {done:,} / {total:,} model runs", flush=True)
 
-    # streaming: the AB runs are reduced to per-error sums as they come, never stored
-    return S.sobol_indices(lambda x: machine.pose_error(x, pose), a, b, chunk=250_000,
+    # streaming: base rows drawn block by block, the AB runs reduced to per-error sums as they
+    # come, never stored (an LHS design is held whole: see sensitivity.SobolDesign)
+    return S.sobol_indices(lambda x: machine.pose_error(x, pose), design, chunk=250_000,
                            progress=report)
 
 

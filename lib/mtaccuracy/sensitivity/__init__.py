@@ -6,7 +6,8 @@ One submodule per method; everything is re-exported here, so notebooks write
 | submodule | what |
 | --- | --- |
 | ``spearman`` | Latin hypercube sampling (scipy.qmc), Spearman ranking (Guo et al. 2016) |
-| ``sobol`` | Sobol first-order and total indices (Saltelli/Jansen), chunked model evaluation |
+| ``sobol`` | Sobol first-order and total indices (Saltelli/Jansen), designs drawn and run in
+  blocks of base rows (memory flat in N) |
 | ``linear`` | closed-form Sobol indices of the first-order model J(pose) e: at poses, pose uniform
   in a box (Gauss-Legendre), and the size of the nonlinear remainder it misses |
 | ``checks`` | the closed form over a workspace (atlas, dominant errors) and checked against
@@ -14,7 +15,8 @@ One submodule per method; everything is re-exported here, so notebooks write
 | ``pce`` | sparse polynomial chaos (OMP/LARS, bases by input law, validated basis adaptivity) and
   Sobol indices from its coefficients (Zheng et al.) |
 | ``benchmarks`` | Ishigami, G function, interaction polynomial: exact indices for tests and bench |
-| ``screening`` | key-error selection rules and reduced models (Rong et al.) |
+| ``screening`` | key-error selection rules (the 90 % rule, its bootstrap frequencies and
+  margin) and reduced models (Rong et al.); imports ``sobol``, never the reverse |
 | ``posefit`` | which pose explains a published table: candidate screening and least-squares or
   Powell refinement for any statistic (notebooks 01 and 03) |
 """

@@ -14,7 +14,13 @@ indices therefore leaves an RMS residual of ``sqrt(1 - s)`` of the full model's 
 (:func:`expected_rms_ratio`); the threshold sweep shows it.
 
 Written by hand because the rule is the paper's own (a few lines); the indices come from
-:mod:`.sobol`.
+:mod:`.sobol` (this module imports it, never the reverse).
+
+Ties: every rule here that ranks estimated indices (:func:`key_set_bootstrap`,
+:func:`cumulative_share_margin`) first merges values equal within the floating-point resolution
+of the estimates (:func:`mtaccuracy.sensitivity.merge_ties`), so that errors entering the model
+identically are ordered by catalogue position, on every machine.  :func:`key_errors` itself
+breaks exact ties by catalogue order (a stable sort) and takes the values as given.
 
 :func:`rank_with_ties` is the ranking every selection here and elsewhere in the compendium
 uses when candidates can be equal up to rounding (optimiser minima, competing models): values
@@ -26,7 +32,7 @@ from __future__ import annotations
 __all__ = ["KeySet", "key_errors", "key_errors_by_output", "union_key_set",
            "simplification_rate", "pooled_indices", "zero_non_key", "reduced_model",
            "residual_summary", "expected_rms_ratio", "threshold_sweep", "key_set_bootstrap",
-           "rank_with_ties"]
+           "cumulative_share_margin", "rank_with_ties"]
 
 import functools
 from collections.abc import Callable, Sequence
@@ -35,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .sobol import sobol_estimate
+from .sobol import merge_ties
 
 #: A share counts as exceeding the threshold only if it is larger by more than this (so that a
 #: share equal to the threshold up to rounding, e.g. 0.6 + 0.3 against 0.9, does not count).
@@ -507,65 +513,86 @@ def threshold_sweep(st, thresholds, x, model: Callable[[np.ndarray], np.ndarray]
     return pd.DataFrame(rows)
 
 
-def key_set_bootstrap(ya, yb, yab, names: Sequence[str], n_boot: int, seed,
-                      outputs: Sequence[str] | None = None, threshold: float = 0.9,
-                      chunk: int = 20) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """How stable is the key set?  Resample the N base rows ``n_boot`` times (as
-    :func:`mtaccuracy.sensitivity.sobol_bootstrap` does), re-estimate the total indices and
-    re-apply :func:`key_errors`.
+def cumulative_share_margin(values, threshold: float) -> np.ndarray:
+    """How far the 90 %-type rule is from changing its decision, per output.
 
-    Only the first ``len(names)`` inputs are candidates (further inputs, e.g. the pose, are
-    left out of the rule).  Returns ``freq`` (one row per error: the share of resamples in which
-    it is key for each output and for the union) and ``counts`` (one row per resample: the
-    number of key errors per output and in the union).
+    Per column of ``values`` (D, q) (e.g. total indices), clipped at 0 with ties merged
+    (:func:`mtaccuracy.sensitivity.merge_ties`): sort descending and take the cumulative
+    shares; the rule stops at the first share above ``threshold``; the margin is the distance
+    of the threshold from the nearer of that share and the one before.  A margin far above the
+    floating-point resolution of the shares means rounding cannot change the key set.
 
     Parameters
     ----------
-    ya, yb : arrays (N, q)
-    yab : array (D, N, q)
-        As ``sobol_evaluate`` returns them.
-    names : sequence of str
-        The candidate inputs (the first ``len(names)``).
-    n_boot : int
-        Resamples.
-    seed : int
-        Seed of the resampling.
-    outputs : sequence of str, optional
-        Output names.
+    values : array (D, q) or (D,)
+        Non-negative values (total indices).
     threshold : float
-        The rule's share.
-    chunk : int
-        Resamples per draw.
+        The rule's share (0.9 in Rong et al.).
 
     Returns
     -------
-    freq : DataFrame
-    counts : DataFrame
+    array (q,)
     """
+    a = merge_ties(np.clip(np.asarray(values, dtype=float), 0, None))
+    a = a[:, None] if a.ndim == 1 else a
+    s = -np.sort(-a, axis=0)
+    share = np.cumsum(s, axis=0) / s.sum(0)
+    k = np.argmax(share > threshold, axis=0)
+    cols = np.arange(a.shape[1])
+    above = share[k, cols] - threshold
+    below = np.where(k > 0, threshold - share[np.maximum(k - 1, 0), cols], np.inf)
+    return np.minimum(above, below)
+
+
+def key_set_bootstrap(st_samples, names: Sequence[str], outputs: Sequence[str] | None = None,
+                      threshold: float = 0.9) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """How stable is the key set?  :func:`key_errors` applied to each bootstrap re-estimate.
+
+    ``st_samples`` (n_boot, >= D, q) are total indices re-estimated on resamples of the base
+    rows, e.g. the second array of :func:`mtaccuracy.sensitivity.sobol_bootstrap_samples`, so
+    that the key-set frequencies come from the very resamples of the confidence intervals.
+    Only the first ``len(names)`` inputs are candidates (further inputs, e.g. the pose, are left
+    out of the rule).  Each resample is clipped at 0 and its ties merged
+    (:func:`mtaccuracy.sensitivity.merge_ties`: indices within the floating-point resolution
+    are equal, and equal indices go in catalogue order), then :func:`key_errors_by_output` and
+    :func:`union_key_set` decide.
+
+    Parameters
+    ----------
+    st_samples : array (n_boot, >= D, q)
+        Re-estimated total indices.
+    names : sequence of str (D,)
+        The candidate inputs (the first ``len(names)``).
+    outputs : sequence of str (q,), optional
+        Output names (default ``y0``, ...).
+    threshold : float
+        The rule's share.
+
+    Returns
+    -------
+    freq : DataFrame (D, 2 + q)
+        symbol, the share of resamples in which it is key per output, and in the union.
+    counts : DataFrame (n_boot, q + 1)
+        Key errors per output and in the union, per resample.
+    """
+    st = np.asarray(st_samples, dtype=float)
     names = list(names)
-    if int(n_boot) != n_boot or n_boot < 1:
-        raise ValueError(f"n_boot must be a positive integer, got {n_boot!r}")
-    ya = np.asarray(ya, dtype=float)
-    yab = np.asarray(yab, dtype=float)
-    if yab.shape[0] < len(names):
-        raise ValueError(f"{len(names)} names but only {yab.shape[0]} inputs in yab")
-    q = ya.shape[1]
-    outputs = list(outputs) if outputs is not None else [f"y{k}" for k in range(q)]
-    rng = np.random.default_rng(seed)
-    n = ya.shape[0]
+    if st.ndim != 3 or st.shape[0] < 1:
+        raise ValueError(f"st_samples must be an (n_boot, D, q) array with n_boot >= 1, "
+                         f"got shape {st.shape}")
+    if st.shape[1] < len(names):
+        raise ValueError(f"{len(names)} names but only {st.shape[1]} inputs in st_samples")
+    names = _names(names, len(names))
+    outputs = list(outputs) if outputs is not None else [f"y{k}" for k in range(st.shape[2])]
+    st = merge_ties(np.clip(st[:, :len(names)], 0, None))
     hits = {o: np.zeros(len(names)) for o in [*outputs, "union"]}
     counts = []
-    for start in range(0, int(n_boot), chunk):
-        k = min(chunk, int(n_boot) - start)
-        idx = rng.integers(0, n, size=(k, n))
-        _, st = sobol_estimate(ya[idx], np.asarray(yb)[idx], np.moveaxis(yab[:, idx], 0, 1))
-        for b in range(k):
-            sets = key_errors_by_output(np.clip(st[b, :len(names)], 0, None), names, outputs,
-                                        threshold)
-            union = union_key_set(sets, names)
-            for o, s in sets.items():
-                hits[o][list(s.index)] += 1
-            hits["union"][[names.index(u) for u in union]] += 1
-            counts.append({**{o: s.n_key for o, s in sets.items()}, "union": len(union)})
-    freq = pd.DataFrame({"symbol": names, **{o: h / n_boot for o, h in hits.items()}})
+    for b in range(st.shape[0]):  # the rule per resample: a sort of D values, cheap
+        sets = key_errors_by_output(st[b], names, outputs, threshold)
+        for o, ks in sets.items():
+            hits[o][list(ks.index)] += 1
+        union = union_key_set(sets, names)
+        hits["union"][[names.index(u) for u in union]] += 1
+        counts.append({**{o: ks.n_key for o, ks in sets.items()}, "union": len(union)})
+    freq = pd.DataFrame({"symbol": names, **{o: h / st.shape[0] for o, h in hits.items()}})
     return freq, pd.DataFrame(counts)

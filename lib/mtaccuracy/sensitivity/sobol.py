@@ -1,11 +1,14 @@
-"""Sobol first-order and total indices from A, B and AB_i blocks, evaluated in chunks.
+"""Sobol first-order and total indices from A, B and AB_i blocks, drawn and evaluated in blocks.
 
 The estimators are SALib's (``SALib.analyze.sobol`` with ``calc_second_order=False``):
 Saltelli et al. 2010 for the first order, Jansen 1999 for the total index, on outputs
 standardised over all N(D+2) runs.  SALib's sampler materialises every run at once (at D=41,
-N=2^17 it takes 44 s and 1.8 GB); here A and B are drawn once and each AB_i block is built and
-evaluated chunk by chunk, so the model sees one batched call per chunk and memory stays bounded.
-A test checks these numbers against SALib's at small N.
+N=2^17 it takes 44 s and 1.8 GB).  Here :func:`sobol_indices` takes the base rows
+:data:`BASE_ROWS` at a time: given a :class:`SobolDesign` it draws them block by block (the
+Monte Carlo stream and the Sobol' sequence continue exactly where the previous block ended),
+builds and evaluates each AB_i block chunk by chunk, and keeps per-block sums, so the model sees
+one batched call per chunk and memory is flat in N.  A test checks these numbers against
+SALib's at small N.
 
 Layout: ``ya``, ``yb`` are (N, q); ``yab`` is (D, N, q) with ``yab[i]`` the model on AB_i (A
 with column i taken from B).
@@ -13,12 +16,15 @@ with column i taken from B).
 
 from __future__ import annotations
 
-__all__ = ["base_samples", "from_unit_uniform", "from_unit_normal", "sobol_evaluate",
-           "sobol_estimate", "bootstrap_counts", "sobol_bootstrap_samples", "ci_half_width",
-           "sobol_bootstrap", "sobol_indices", "linear_indices", "FLOAT_NOISE", "TIE_REL",
-           "TIE_ABS", "merge_ties", "cumulative_share_margin", "key_set_frequencies"]
+__all__ = ["base_samples", "base_blocks", "BASE_ROWS", "SobolDesign", "from_unit_uniform",
+           "from_unit_normal", "sobol_evaluate", "sobol_estimate", "bootstrap_counts",
+           "sobol_bootstrap_samples", "ci_half_width", "sobol_bootstrap", "sobol_indices",
+           "linear_indices", "FLOAT_NOISE", "TIE_REL", "TIE_ABS", "merge_ties"]
 
-from collections.abc import Callable
+import copy
+import warnings
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
@@ -27,13 +33,58 @@ from scipy.stats import qmc
 
 from .linear import linear_indices  # it lives in .linear; kept here for old callers
 
+#: Base rows (of A and of B) drawn and run at a time by :func:`sobol_indices`.  Peak memory
+#: is that of one block whatever N (``make bench``: about 210 MB above the imports at D = 41,
+#: q = 6, plus the model's own temporaries on one batch).  A design of at most this many rows
+#: is one block, computed with exactly the arithmetic of the whole-array estimate (the
+#: notebooks' N <= 1e5 are).
+BASE_ROWS = 2**17
 
-def base_samples(n: int, d: int, method: str, seed) -> tuple[np.ndarray, np.ndarray]:
-    """Two independent (n, d) designs on the unit hypercube: the A and B matrices.
+_SOBOL_BALANCE = "The balance properties of Sobol' points require n to be a power of 2."
 
-    method ``mc``: independent uniforms; ``lhs``: two independent Latin hypercubes
-    (scipy.qmc); ``sobol``: one scrambled 2d-dimensional Sobol' sequence split in halves, as
-    SALib's Saltelli sampler does (n should be a power of 2).
+
+def _check_method(n, method):
+    if int(n) != n or n < 2:
+        raise ValueError(f"n must be an integer >= 2, got {n!r}")
+    if method not in ("mc", "lhs", "sobol"):
+        raise ValueError(f"unknown sampling method {method!r}; allowed: mc, lhs, sobol")
+    return int(n)
+
+
+def _skip_ahead(rng: np.random.Generator, draws: int) -> np.random.Generator:
+    """A copy of ``rng`` standing ``draws`` float64 draws further on, ``rng`` untouched.
+
+    PCG64 (``default_rng``'s) and PCG64DXSM spend one 64-bit output per float64 and jump there
+    in O(log draws) (``advance``); any other bit generator draws and discards, a block at a
+    time (time O(draws), memory flat)."""
+    out = copy.deepcopy(rng)
+    bg = out.bit_generator
+    if isinstance(bg, (np.random.PCG64, np.random.PCG64DXSM)):
+        bg.advance(draws)
+        return out
+    left = draws
+    while left:
+        k = min(left, 2**22)
+        out.random(k)
+        left -= k
+    return out
+
+
+def base_blocks(n: int, d: int, method: str, seed, *, rows: int = BASE_ROWS
+                ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """The A and B of :func:`base_samples`, drawn ``rows`` base rows at a time.
+
+    Yields ``(a, b)`` blocks, (m, d) each with m <= rows, as they are needed; their
+    concatenation is bitwise :func:`base_samples`' A and B (same arguments).
+
+    ``mc``: A continues one stream of ``numpy.random.default_rng(seed)``; B, which the whole
+    draw takes after all of A, comes from a copy of the generator advanced by ``n d`` draws
+    (PCG64's ``advance``).  ``sobol``: successive blocks of one scrambled 2d-dimensional
+    sequence (``scipy.stats.qmc.Sobol.random`` continues where it stopped).  ``lhs``: a Latin
+    hypercube is not a stream: each column is one random permutation of all n strata, so no
+    row is known before the whole permutation is drawn; both designs are drawn whole (2 n d
+    floats, 16 d bytes per row) and handed out in blocks.  A generator passed as ``seed`` ends
+    where :func:`base_samples` leaves it once every block is drawn.
 
     Parameters
     ----------
@@ -43,7 +94,68 @@ def base_samples(n: int, d: int, method: str, seed) -> tuple[np.ndarray, np.ndar
         Inputs.
     method : {"mc", "lhs", "sobol"}
         The design.
-    seed : int or SeedSequence
+    seed : int, SeedSequence or Generator
+        Seed of ``numpy.random.default_rng``.
+    rows : int
+        Rows per block.
+
+    Yields
+    ------
+    a, b : arrays (m, d)
+        In [0, 1).
+    """
+    n = _check_method(n, method)
+    if int(rows) != rows or rows < 1:
+        raise ValueError(f"rows must be a positive integer, got {rows!r}")
+    return _blocks(n, int(d), method, np.random.default_rng(seed), int(rows))
+
+
+def _blocks(n, d, method, rng, rows):
+    if method == "lhs":
+        a, b = (qmc.LatinHypercube(d=d, rng=rng).random(n),
+                qmc.LatinHypercube(d=d, rng=rng).random(n))
+        for s in range(0, n, rows):
+            yield a[s:s + rows], b[s:s + rows]
+    elif method == "mc":
+        rng_b = _skip_ahead(rng, n * d)
+        for s in range(0, n, rows):
+            m = min(rows, n - s)
+            yield rng.random((m, d)), rng_b.random((m, d))
+        rng.bit_generator.state = rng_b.bit_generator.state   # where the whole draw ends
+    else:
+        if n > rows and n & (n - 1):   # the whole draw's first call would warn
+            warnings.warn(_SOBOL_BALANCE, UserWarning, stacklevel=3)
+        seq = qmc.Sobol(d=2 * d, scramble=True, rng=rng)
+        for s in range(0, n, rows):
+            yield _sobol_halves(seq, min(rows, n - s), d, quiet=n > rows)
+
+
+def _sobol_halves(seq, m, d, quiet):
+    """The next m points of ``seq`` as (A, B) halves (no name left holding the block)."""
+    with warnings.catch_warnings():
+        if quiet:   # said above for the whole design, not for the block
+            warnings.filterwarnings("ignore", message="The balance properties")
+        u = seq.random(m)
+    return u[:, :d], u[:, d:]
+
+
+def base_samples(n: int, d: int, method: str, seed) -> tuple[np.ndarray, np.ndarray]:
+    """Two independent (n, d) designs on the unit hypercube: the A and B matrices.
+
+    method ``mc``: independent uniforms; ``lhs``: two independent Latin hypercubes
+    (scipy.qmc); ``sobol``: one scrambled 2d-dimensional Sobol' sequence split in halves, as
+    SALib's Saltelli sampler does (n should be a power of 2).  :func:`base_blocks` draws the
+    same numbers a block of rows at a time.
+
+    Parameters
+    ----------
+    n : int
+        Base rows N.
+    d : int
+        Inputs.
+    method : {"mc", "lhs", "sobol"}
+        The design.
+    seed : int, SeedSequence or Generator
         Seed of ``numpy.random.default_rng``.
 
     Returns
@@ -51,19 +163,69 @@ def base_samples(n: int, d: int, method: str, seed) -> tuple[np.ndarray, np.ndar
     a, b : arrays (n, d)
         In [0, 1).
     """
-    if int(n) != n or n < 2:
-        raise ValueError(f"n must be an integer >= 2, got {n!r}")
-    rng = np.random.default_rng(seed)
-    n = int(n)
-    if method == "mc":
-        return rng.random((n, d)), rng.random((n, d))
-    if method == "lhs":
-        return (qmc.LatinHypercube(d=d, rng=rng).random(n),
-                qmc.LatinHypercube(d=d, rng=rng).random(n))
-    if method == "sobol":
-        u = qmc.Sobol(d=2 * d, scramble=True, rng=rng).random(n)
-        return u[:, :d], u[:, d:]
-    raise ValueError(f"unknown sampling method {method!r}; allowed: mc, lhs, sobol")
+    n = _check_method(n, method)
+    (a, b), = base_blocks(n, d, method, seed, rows=n)   # drawn to the end: a Generator too
+    return a, b
+
+
+@dataclass(frozen=True)
+class SobolDesign:
+    """The A and B designs of a Sobol' estimate, described instead of held.
+
+    :func:`sobol_indices` draws them a block of base rows at a time (:func:`base_blocks`), so
+    its memory does not grow with N.
+
+    Attributes
+    ----------
+    n : int
+        Base rows N (N (D + 2) model runs).
+    d : int
+        Inputs D.
+    method : {"mc", "lhs", "sobol"}
+        The design on the unit cube (``lhs`` is held whole: see :func:`base_blocks`).
+    seed : int, SeedSequence or Generator
+        Seed of ``numpy.random.default_rng``.
+    to_inputs : callable, optional
+        Unit-cube rows (m, d) to model inputs (m, d), row by row (e.g.
+        ``lambda u: from_unit_normal(u, sd)``); default: the unit cube itself.
+    """
+
+    n: int
+    d: int
+    method: str = "sobol"
+    seed: object = None
+    to_inputs: Callable[[np.ndarray], np.ndarray] | None = None
+
+    def blocks(self, rows: int = BASE_ROWS) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """``(a, b)`` blocks of at most ``rows`` rows, mapped to the model's inputs.
+
+        Parameters
+        ----------
+        rows : int
+            Rows per block.
+
+        Yields
+        ------
+        a, b : arrays (m, d)
+        """
+        f = self.to_inputs or (lambda u: u)
+        for ua, ub in base_blocks(self.n, self.d, self.method, self.seed, rows=rows):
+            a = np.asarray(f(ua), dtype=float)
+            del ua              # the unit-cube block is not kept beside the inputs
+            b = np.asarray(f(ub), dtype=float)
+            del ub
+            yield a, b
+            del a, b            # nor this block beside the next one
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The whole A and B, (N, D) each, mapped to the model's inputs.
+
+        Returns
+        -------
+        a, b : arrays (N, D)
+        """
+        (a, b), = self.blocks(rows=self.n)
+        return a, b
 
 
 def from_unit_uniform(u: np.ndarray, bounds: np.ndarray) -> np.ndarray:
@@ -147,6 +309,10 @@ def _ab_blocks(a: np.ndarray, b: np.ndarray, chunk: int):
 
 
 def _check_ab(a, b):
+    if isinstance(a, SobolDesign):
+        if b is not None:
+            raise ValueError("give either a SobolDesign or the arrays A and B, not both")
+        a, b = a.arrays()
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
     if a.shape != b.shape or a.ndim != 2:
@@ -154,7 +320,7 @@ def _check_ab(a, b):
     return a, b
 
 
-def sobol_evaluate(model: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarray,
+def sobol_evaluate(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | None = None,
                    chunk: int = 200_000, progress: Callable[[int, int], None] | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Run ``model`` on A, B and every AB_i; returns ``ya`` (N, q), ``yb`` (N, q), ``yab``
@@ -170,8 +336,10 @@ def sobol_evaluate(model: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: 
     ----------
     model : callable
         ``(m, D) -> (m, q)`` or ``(m,)``.
-    a, b : arrays (N, D)
-        The two designs.
+    a : array (N, D) or SobolDesign
+        The design A, or a :class:`SobolDesign` (then drawn whole; ``b`` is not given).
+    b : array (N, D), optional
+        The design B.
     chunk : int
         Model runs per call.
     progress : callable, optional
@@ -240,7 +408,8 @@ def bootstrap_counts(n: int, n_boot: int, seed, chunk: int = 20, block: int = 2*
 
     The draws are ``rng.integers(0, n, size=(k, n))`` for successive chunks of ``k <= chunk``
     resamples of one ``numpy.random.default_rng(seed)``: the resamples that
-    ``sobol_bootstrap`` and ``key_set_bootstrap`` have always used.
+    :func:`sobol_bootstrap` has always used (and the key-set frequencies of
+    ``screening.key_set_bootstrap``, which take its re-estimates).
 
     Parameters
     ----------
@@ -374,27 +543,58 @@ def sobol_bootstrap(ya, yb, yab, n_boot: int, seed, conf: float = 0.95, chunk: i
     return ci_half_width(s1s, conf), ci_half_width(sts, conf)
 
 
-def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarray,
-                  chunk: int = 200_000, progress: Callable[[int, int], None] | None = None
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """First-order and total Sobol indices of ``model``, streaming over the AB runs.
+def _row_blocks(a, b, rows):
+    """(n, d, iterator of (a, b) row blocks) of a :class:`SobolDesign` or of arrays A, B."""
+    if int(rows) != rows or rows < 1:
+        raise ValueError(f"rows must be a positive integer, got {rows!r}")
+    rows = int(rows)
+    if isinstance(a, SobolDesign):
+        if b is not None:
+            raise ValueError("give either a SobolDesign or the arrays A and B, not both")
+        _check_method(a.n, a.method)
+        return int(a.n), int(a.d), a.blocks(rows)
+    a, b = _check_ab(a, b)
+    n = a.shape[0]
+    return n, a.shape[1], ((a[s:s + rows], b[s:s + rows]) for s in range(0, n, rows))
+
+
+def _sum(terms):
+    """Left-to-right sum of a list of arrays (one term: that term, bitwise)."""
+    out = terms[0]
+    for t in terms[1:]:
+        out = out + t
+    return out
+
+
+def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | None = None,
+                  chunk: int = 200_000, progress: Callable[[int, int], None] | None = None,
+                  *, rows: int = BASE_ROWS) -> tuple[np.ndarray, np.ndarray]:
+    """First-order and total Sobol indices of ``model``, streaming over base rows and AB runs.
 
     The estimators are Saltelli et al. 2010 (first order) and Jansen 1999 (total), on outputs
     standardised over all N (D + 2) runs, as SALib's ``sobol.analyze``; the numbers equal
     :func:`sobol_estimate` on :func:`sobol_evaluate` within rounding (a test checks 1e-12)
     without ever holding ``yab`` (D N q floats: 200 MB for 41 inputs, N = 1e5, six outputs).
+    Given a :class:`SobolDesign`, the base rows are drawn ``rows`` at a time too, and memory is
+    that of one block whatever N (``lhs`` designs excepted, see :func:`base_blocks`).
 
     Parameters
     ----------
     model : callable
         ``(m, D)`` inputs to ``(m, q)`` (or ``(m,)``) outputs; must not modify its input (the
         AB blocks share one buffer).
-    a, b : (N, D) arrays
-        The two independent designs (:func:`base_samples`, mapped to the input laws).
+    a : SobolDesign or array (N, D)
+        The design, drawn block by block; or the design A (:func:`base_samples`, mapped to the
+        input laws), taken block by block.
+    b : array (N, D), optional
+        The design B, with an array ``a``.
     chunk : int
         Model runs per call.
     progress : callable, optional
         ``progress(done, total)`` after each call, counting runs.
+    rows : int
+        Base rows per block (:data:`BASE_ROWS`).  With N <= ``rows`` the result is bitwise
+        that of a whole-array pass; with more blocks it differs by rounding only.
 
     Returns
     -------
@@ -403,31 +603,41 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: n
 
     Notes
     -----
-    Each AB_i batch, once run, adds its per-input sums of ``yab_i - ya``,
-    ``(yb - c)(yab_i - ya)`` and ``(yab_i - ya)^2`` and is dropped; ``c`` is the mean of ``ya``
-    and ``yb``, and the overall mean ``mu`` enters at the end:
-    ``mean((yb - mu) d) = mean((yb - c) d) - (mu - c) mean(d)``, without cancellation because
-    the outputs are centred.  Memory: A, B, one batch of ``chunk`` runs, ``ya`` and ``yb``.
+    Each block k of m_k base rows runs A and B, then each AB_i batch, which adds its per-input
+    sums of ``yab_i - ya``, ``(yb - c_k)(yab_i - ya)`` and ``(yab_i - ya)^2`` and is dropped;
+    ``c_k`` is the block's mean of ``ya`` and ``yb``.  At the end the overall mean ``mu`` enters
+    (``sum((yb - mu) d) = sum((yb - c_k) d) - (mu - c_k) sum(d)``, without cancellation because
+    the outputs are centred) and the block variances are pooled exactly
+    (``sum_k w_k (var_k + (c_k - c)^2)``, ``w_k = m_k / N``).  Memory: one block of A and B, one
+    batch of ``chunk`` runs, its ``ya`` and ``yb``, and three (D, q) sums per block.
     """
-    a, b = _check_ab(a, b)
-    n, d = a.shape
+    n, d, blocks = _row_blocks(a, b, rows)
     run = _model_runs(model, n, d, chunk, progress)
-    ya, yb = run(a), run(b)
-    q = ya.shape[1]
-    both = np.concatenate([ya, yb])
-    centre, var = both.mean(0), both.var(0)
-    ybc = yb - centre
-    total = both.sum(0)
-    sd_, sbd, sd2 = np.empty((d, q)), np.empty((d, q)), np.empty((d, q))
-    for i0, i1, x in _ab_blocks(a, b, chunk):
-        y = run(x).reshape(i1 - i0, n, q)
-        total += y.sum((0, 1))
-        diff = y - ya                   # a new array: y may be a view of the model's input
-        sd_[i0:i1] = diff.sum(1)
-        sbd[i0:i1] = np.einsum("inq,nq->iq", diff, ybc)
-        sd2[i0:i1] = np.einsum("inq,inq->iq", diff, diff)
-    mu_c = total / (n * (d + 2)) - centre
-    return (sbd - mu_c * sd_) / (n * var), 0.5 * sd2 / (n * var)
+    parts = []
+    for ab, bb in blocks:
+        m = ab.shape[0]
+        ya, yb = run(ab), run(bb)
+        q = ya.shape[1]
+        both = np.concatenate([ya, yb])
+        centre, var = both.mean(0), both.var(0)
+        ybc = yb - centre
+        total = both.sum(0)
+        sd_, sbd, sd2 = np.empty((d, q)), np.empty((d, q)), np.empty((d, q))
+        for i0, i1, x in _ab_blocks(ab, bb, chunk):
+            y = run(x).reshape(i1 - i0, m, q)
+            total += y.sum((0, 1))
+            diff = y - ya                   # a new array: y may be a view of the model's input
+            sd_[i0:i1] = diff.sum(1)
+            sbd[i0:i1] = np.einsum("inq,nq->iq", diff, ybc)
+            sd2[i0:i1] = np.einsum("inq,inq->iq", diff, diff)
+        parts.append((m / n, centre, var, total, sd_, sbd, sd2))
+        del ab, bb, x, ya, yb, both, ybc, y, diff   # before the next block is drawn
+    w, centre, var, total, sd_, sbd, sd2 = zip(*parts, strict=True)
+    mu = _sum(total) / (n * (d + 2))
+    c = _sum([wk * ck for wk, ck in zip(w, centre, strict=True)])
+    var = _sum([wk * (vk + (ck - c) ** 2) for wk, vk, ck in zip(w, var, centre, strict=True)])
+    num = _sum([sb - (mu - ck) * s for sb, ck, s in zip(sbd, centre, sd_, strict=True)])
+    return num / (n * var), 0.5 * _sum(sd2) / (n * var)
 
 
 # --------------------------------------------------------------------------------------------
@@ -489,77 +699,3 @@ def merge_ties(values, rel: float = TIE_REL, abs_tol: float = TIE_ABS) -> np.nda
     out = np.empty_like(a)
     np.put_along_axis(out, order, merged, axis=-2)
     return out[:, 0] if flat else out
-
-
-def cumulative_share_margin(values, threshold: float) -> np.ndarray:
-    """How far the 90 %-type rule is from changing its decision: per column of ``values``
-    (D, q) (e.g. total indices), sort descending and take the cumulative shares; the rule
-    stops at the first share above ``threshold``; the margin is the distance of the
-    threshold from the nearer of that share and the one before.  A margin far above the
-    floating-point resolution of the shares means rounding cannot change the key set.
-
-    Parameters
-    ----------
-    values : array (D, q)
-        Non-negative values (total indices).
-    threshold : float
-        The rule's share (0.9 in Rong et al.).
-
-    Returns
-    -------
-    array (q,)
-    """
-    a = merge_ties(np.clip(np.asarray(values, dtype=float), 0, None))
-    a = a[:, None] if a.ndim == 1 else a
-    s = -np.sort(-a, axis=0)
-    share = np.cumsum(s, axis=0) / s.sum(0)
-    k = np.argmax(share > threshold, axis=0)
-    cols = np.arange(a.shape[1])
-    above = share[k, cols] - threshold
-    below = np.where(k > 0, threshold - share[np.maximum(k - 1, 0), cols], np.inf)
-    return np.minimum(above, below)
-
-
-def key_set_frequencies(st_samples, names, outputs, threshold: float = 0.9):
-    """The 90 % rule applied to each of many re-estimated total indices (``st_samples``
-    (n_boot, >= D, q), e.g. from :func:`sobol_bootstrap_samples`; only the first
-    ``len(names)`` inputs are candidates), after clipping at 0 and :func:`merge_ties`.
-    Returns ``freq`` (per error: the share of resamples in which it is key, per output and
-    for the union) and ``counts`` (per resample: the number of key errors per output and in
-    the union), as ``key_set_bootstrap`` of :mod:`.screening` (which resamples itself).
-
-    Parameters
-    ----------
-    st_samples : array (n_boot, >= D, q)
-        Re-estimated total indices.
-    names : sequence of str (D,)
-        The candidate inputs.
-    outputs : sequence of str (q,)
-        Output names.
-    threshold : float
-        The rule's share.
-
-    Returns
-    -------
-    freq : DataFrame (D, 2 + q)
-        symbol, the share of resamples in which it is key per output, and in the union.
-    counts : DataFrame (n_boot, q + 1)
-        Key errors per output and in the union, per resample.
-    """
-    import pandas as pd
-
-    from .screening import key_errors_by_output, union_key_set
-
-    names, outputs = list(names), list(outputs)
-    st = merge_ties(np.clip(np.asarray(st_samples, dtype=float)[:, :len(names)], 0, None))
-    hits = {o: np.zeros(len(names)) for o in [*outputs, "union"]}
-    counts = []
-    for b in range(st.shape[0]):  # the rule per resample: a sort of D values, cheap
-        sets = key_errors_by_output(st[b], names, outputs, threshold)
-        for o, ks in sets.items():
-            hits[o][list(ks.index)] += 1
-        union = union_key_set(sets, names)
-        hits["union"][[names.index(u) for u in union]] += 1
-        counts.append({**{o: ks.n_key for o, ks in sets.items()}, "union": len(union)})
-    freq = pd.DataFrame({"symbol": names, **{o: h / st.shape[0] for o, h in hits.items()}})
-    return freq, pd.DataFrame(counts)

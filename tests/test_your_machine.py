@@ -1,0 +1,74 @@
+"""Notebook 06's compendium module: the chain's drawing and the numbers of its conclusion."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+import pytest  # noqa: E402
+
+from mtaccuracy.compendium import paths, your_machine  # noqa: E402
+from mtaccuracy.machines import chain  # noqa: E402
+
+TOPOLOGY = "w C b X Y Z B t"
+
+
+@pytest.fixture(scope="module")
+def swivel_head():
+    travels, pivots = chain.read_axis_table(paths.DATA / "machines" / "swivel_head_axes.csv",
+                                            TOPOLOGY)
+    machine = chain.iso_machine(TOPOLOGY, pivots=pivots, travels=travels,
+                                tool_offsets=("tool_x", "tool_y", "tool_z"), name="m")
+    return machine, travels, pivots
+
+
+def test_the_chain_figure_draws_every_body_and_the_tool_over_the_head_axis(swivel_head):
+    machine, travels, pivots = swivel_head
+    tool = dict(tool_x=0.0, tool_y=0.0, tool_z=-120.0)
+    fig = your_machine.chain_figure(machine, TOPOLOGY, travels=travels, pivots=pivots,
+                                    tool=tool, tool_length_mm=120.0)
+    ax0, ax1 = fig.axes
+    bodies = [t.get_text().split("\n")[0] for t in ax0.texts if t.get_fontsize() == 8]
+    # from the workpiece: the table side reversed (C), the bed, then the head side out to the tool
+    assert bodies == ["workpiece", "C", "bed", "X", "Y", "Z", "B", "tool"]
+    assert any("pivot" in t.get_text() for t in ax0.texts if t.get_fontsize() == 7)
+    assert "B pivot" in [t.get_text() for t in ax1.get_legend().get_texts()]
+    # nine tools over the B travel, each 120 mm from tip to spindle nose
+    tools = [ln for ln in ax1.lines if ln.get_linestyle() == "-" and len(ln.get_xdata()) == 2]
+    assert len(tools) == 9
+    lengths = [np.hypot(*np.diff(ln.get_xdata()), *np.diff(ln.get_ydata())) for ln in tools]
+    np.testing.assert_allclose(lengths, 120.0, atol=1e-9)
+    plt.close(fig)
+
+
+def test_without_a_rotary_head_axis_the_tool_panel_is_blank():
+    topo = "w X b Y Z t"
+    machine = chain.iso_machine(topo, tool_offsets=("tool_x", "tool_y", "tool_z"), name="m3")
+    travels = {a: (-100.0, 100.0) for a in "XYZ"}
+    fig = your_machine.chain_figure(machine, topo, travels=travels, pivots={},
+                                    tool=dict(tool_x=0.0, tool_y=0.0, tool_z=-50.0),
+                                    tool_length_mm=50.0)
+    assert not fig.axes[1].axison and not fig.axes[1].lines
+    plt.close(fig)
+
+
+def test_the_conclusion_numbers_count_and_rank_what_the_tables_hold():
+    catalogue = pd.DataFrame({"kind": ["positioning", "angular", "error motion", "squareness",
+                                       "location", "location"]})
+    removed = pd.DataFrame({"symbol": ["EX0C"], "why removed": ["zero of X"]})
+    shares = pd.DataFrame({"Px": [0.9, 0.2, 0.0, 0.1, 0.1, 0.1, 0.3],
+                           "Vz": [0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0]},
+                          index=["EXX", "EBB", "ECB", "EAX", "EBX", "ECX", "EYY"])
+    lines = your_machine.conclusion_numbers(catalogue, removed, shares, centred_ratio=3e-5,
+                                            check_ratio=0.87)
+    assert lines[0] == ("catalogue: 6 errors (3 error motions, 1 squareness, 2 location); 1 of 3 "
+                        "location errors removed as redundant (EX0C)")
+    assert "at most 3e-05" in lines[1] and "about 6e-05" in lines[1]
+    # ties keep the catalogue's order (a stable sort)
+    assert lines[2] == ("Px: key over >= 50% of the workspace: EXX 90%; next: EYY 30%, EBB 20%, "
+                        "EAX 10%, EBX 10% and 1 more")
+    assert lines[3] == "Vz: key over >= 50% of the workspace: EBB 50%; next: none"
+    assert lines[4] == "never key: ECB"
+    assert lines[5] == "sampled check: the largest difference uses 0.87 of the allowance"
