@@ -496,10 +496,8 @@ def partition_fits(rows, sensors, n_clusters: int = 3):
     a = np.arange(n_clusters ** len(sensors), dtype=np.int64)
     labels = ((a[:, None] // n_clusters ** np.arange(len(sensors))) % n_clusters).astype(np.int8)
     lab = labels[:, np.array(index, dtype=np.intp).reshape(len(index), n_clusters)]  # (A, R, n)
-    hit = np.zeros(lab.shape[:2], dtype=np.int64)
-    for c in range(n_clusters):       # a loop over the few labels, not over assignments
-        hit |= (lab == c).any(axis=-1).astype(np.int64) << c
-    return hit == (1 << n_clusters) - 1
+    # a row of n sensors is producible when its labels are 0..n-1, one per cluster
+    return (np.sort(lab, axis=-1) == np.arange(n_clusters)).all(axis=-1)
 
 
 def table3_consistency(rows, sensors, n_clusters: int = 3) -> dict:

@@ -232,14 +232,15 @@ def ga_settings_study(k: int, *, bounds, generation_counts, pc_values, pm_values
     ``generations``, ``pc``, ``pm`` (the traditional GA's), ``runs``, the plateau medians of
     both GAs (``improved_median``, ``traditional_median``) and ``speedup_percent``
     (:func:`~mtaccuracy.spindle.speedup`)."""
+    import itertools
+
     import numpy as np
     import pandas as pd
 
     from .. import spindle as sp
 
     common = dict(bounds=bounds, n_runs=n_runs, pop_size=pop_size, encoding=encoding)
-    seeds = iter(range(seed + 100, seed + 100 + 2 * len(generation_counts)
-                       + len(pc_values) * len(pm_values) + 1))
+    seeds = itertools.count(seed + 100)
 
     def plateau(res):
         return sp.convergence_generation(res.history, res.history[-1], 1e-3)

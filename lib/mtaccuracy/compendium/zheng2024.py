@@ -160,17 +160,12 @@ def converged_at(g, r_max: float = 3.0, assign: str = "larger"):
     ``assign="smaller"`` to size l (Eq. 24 literally; the largest size then has no R)."""
     if assign not in ("larger", "smaller"):
         raise ValueError(f"assign must be 'larger' or 'smaller', got {assign!r}")
-    r = g.R_percent.to_numpy(dtype=float)
+    r = g.R_percent.to_numpy(dtype=float)[1:]
     n = g.n.to_numpy()
-    if assign == "smaller":
-        r, n = r[1:], n[:-1]   # R of the step l -> l+1 belongs to size l
-    else:
-        r, n = r[1:], n[1:]
-    ok = r <= r_max
-    for i in range(len(r)):
-        if ok[i:].all():
-            return int(n[i])
-    return np.nan
+    n = n[:-1] if assign == "smaller" else n[1:]   # "smaller": R of step l -> l+1 is size l's
+    fails = np.flatnonzero(~(r <= r_max))
+    first = fails[-1] + 1 if fails.size else 0     # from here on R stays small
+    return int(n[first]) if first < len(n) else np.nan
 
 
 def group_shares(s, catalogue, comps) -> pd.DataFrame:
