@@ -73,16 +73,20 @@ explore: $(STAMP)
 browser:
 	bash .ci/install-browser
 
+# Two pytest sessions at once (tests/parallel.py): the unit tests, and nbval's notebook checks
+# with the tests of what they wrote; `.venv/bin/python -m pytest` alone runs both in one session.
 test: $(STAMP)
 	$(GUARD)
 	$(PY) -m ruff check lib tests notebooks conftest.py
-	$(PY) -m pytest
+	$(PY) tests/parallel.py "--part=unit" "--part=notebooks"
 
 # The notebook checks alone: nbval executes every notebook and compares its marked cells, then
-# the regenerated CSVs are compared; CI runs them once more with OPENBLAS_NUM_THREADS=1.
+# the regenerated CSVs are compared (two sessions, the notebooks shared out by running time);
+# CI runs them once more with OPENBLAS_NUM_THREADS=1.
 test-notebooks: $(STAMP)
 	$(GUARD)
-	$(PY) -m pytest notebooks tests/test_notebooks.py
+	$(PY) tests/parallel.py "--part=notebooks --notebooks=01,03,04,07" \
+	    "--part=notebooks --notebooks=02,05,06"
 
 lint: $(STAMP)
 	$(GUARD)

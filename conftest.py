@@ -142,7 +142,49 @@ def _needs_runs(item) -> bool:
     return bool({"notebook_runs", "nbval_output"} & set(getattr(item, "fixturenames", ())))
 
 
+def pytest_addoption(parser):
+    group = parser.getgroup("mtaccuracy")
+    group.addoption("--part", choices=("all", "unit", "notebooks"), default="all",
+                    help="unit: every test but nbval's notebook cells and the tests of what "
+                         "they wrote; notebooks: only those (make test runs the two parts at "
+                         "once, tests/parallel.py); all (default): everything, one after another")
+    group.addoption("--notebooks", default="",
+                    help="comma-separated notebook numbers (01,03): nbval runs only these, and "
+                         "the tests of what nbval wrote only for these")
+
+
+def _notebook_side(item) -> bool:
+    return _is_nbval(item) or "nbval_output" in getattr(item, "fixturenames", ())
+
+
+def _stem(item) -> str | None:
+    """The notebook an nbval cell or a test parametrized by ``stem`` is about."""
+    if _is_nbval(item):
+        return Path(item.nodeid.split("::")[0]).stem
+    return getattr(getattr(item, "callspec", None), "params", {}).get("stem")
+
+
+def _select(config, items) -> None:
+    """Deselect what ``--part`` and ``--notebooks`` leave out (reported as deselected)."""
+    part, numbers = config.getoption("--part"), config.getoption("--notebooks")
+    wanted = {n.strip() for n in numbers.split(",") if n.strip()}
+
+    def keep(item) -> bool:
+        if part != "all" and _notebook_side(item) != (part == "notebooks"):
+            return False
+        stem = _stem(item)
+        return not (wanted and _notebook_side(item) and stem is not None
+                    and stem.split("_")[0] not in wanted)
+
+    kept = [i for i in items if keep(i)]
+    if len(kept) < len(items):
+        ids = {id(i) for i in kept}
+        config.hook.pytest_deselected(items=[i for i in items if id(i) not in ids])
+        items[:] = kept
+
+
 def pytest_collection_modifyitems(config, items):
+    _select(config, items)
     # the unit tests first (the extra runs execute in the background meanwhile), then nbval's
     # cells notebook by notebook, then the tests of what the runs wrote
     nbval = [i for i in items if _is_nbval(i)]

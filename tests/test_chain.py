@@ -32,16 +32,16 @@ def _poses(names, n):
 CASES = [("ac_double_turntable", {}), ("ac_double_turntable", {"convention": "fixed"}),
          ("vertical_xyfz", {}), ("vertical_xyfz", {"exact": True}),
          *[("horizontal_3axis", {"layout": lay, "exact": ex})
-           for lay in ("z/xy", "x/zy", "/xyz", "xyz/") for ex in (True, False)]]
+           for lay in ("z/xy", "x/zy", "w b X Y Z t", "w Z Y X b t") for ex in (True, False)]]
 
 
 @pytest.mark.parametrize("case", CASES, ids=str)
 def test_closed_form_jacobian(case):
     m = build(case[0], **case[1])
     poses = _poses(m.axes + m.tool_offsets, 40)
-    jac = m.linear_jacobian(poses)
+    jac = m.jacobian(poses)
     # against central differences of the chain itself (which lose ~8 digits: 1e-7 here)
-    fd = m.jacobian(poses)
+    fd = m.jacobian(poses, step=1e-6)
     assert np.abs(jac - fd).max() < 1e-6 * max(1.0, np.abs(jac).max())
 
 
@@ -84,8 +84,8 @@ def test_a_machine_no_paper_covers_swivel_head_with_pivot():
     m = C.iso_machine("w C b X Y Z B t", pivots={"B": (0.0, 0.0, 150.0)}, tool_offsets=("L",))
     poses = _poses(m.axes, 30)
     poses["L"] = np.full(30, 120.0)
-    jac = m.linear_jacobian(poses)
-    assert np.abs(jac - m.jacobian(poses)).max() < 1e-6 * np.abs(jac).max()
+    jac = m.jacobian(poses)
+    assert np.abs(jac - m.jacobian(poses, step=1e-6)).max() < 1e-6 * np.abs(jac).max()
     # the ideal chain: the tool axis is the head's B rotation seen from the turned table
     r, t = m.relative(np.zeros((30, m.n_errors)), poses, with_errors=False)
     b, c = poses["B"], poses["C"]
@@ -105,7 +105,7 @@ def test_zero_errors_give_zero_and_errors_are_linear_to_first_order():
     m = C.iso_machine("w C A b Y X Z t")
     poses = _poses(m.axes + m.tool_offsets, 50)
     assert np.abs(m.pose_error(np.zeros((50, m.n_errors)), poses)).max() < 1e-12
-    jac = m.linear_jacobian(poses)
+    jac = m.jacobian(poses)
 
     def remainder(scale):
         e = _errors(m, 50, scale)
@@ -249,3 +249,40 @@ def test_a_range_file_that_does_not_match_the_catalogue_is_refused(tmp_path):
         C.read_ranges(_range_file(m, tmp_path, bad), m)
     with pytest.raises(FileNotFoundError, match="range file"):
         C.read_ranges(tmp_path / "nothing.csv", m)
+
+
+def test_every_machine_checks_its_errors_and_pose_the_same_way():
+    """What every machine shares (the catalogue's columns, the pose checks), on ChainMachine."""
+    m = C.iso_machine("w C b X Y Z t")
+    assert isinstance(build("horizontal_3axis"), C.ChainMachine)
+    assert repr(m) == (f"<ChainMachine 'iso_machine': {m.n_errors} errors, "
+                       "axes ('C', 'x', 'y', 'z')>")
+    assert m.n_errors == len(m.catalogue) == len(m.error_names)
+    with pytest.raises(ValueError, match=rf"shape \(n, {m.n_errors}\)"):
+        m.check_errors(np.zeros((2, m.n_errors + 1)))
+    p = m.check_pose({"C": [0.1, 0.2], "x": 1.0, "y": 2.0, "z": 3.0}, 2)
+    assert set(p) == {"C", "x", "y", "z", "L"} and p["L"].tolist() == [0.0, 0.0]
+    assert p["x"].tolist() == [1.0, 1.0]
+    with pytest.raises(TypeError, match="mapping"):
+        m.check_pose([1.0, 2.0], 1)
+    with pytest.raises(ValueError, match="unknown pose name"):
+        m.check_pose({"C": 0.0, "x": 0.0, "y": 0.0, "z": 0.0, "B": 1.0}, 1)
+    with pytest.raises(ValueError, match="lacks axis"):
+        m.check_pose({"x": 0.0, "y": 0.0, "z": 0.0}, 1)
+    with pytest.raises(ValueError, match=r"shape \(3,\)"):
+        m.check_pose({"C": [0.1, 0.2], "x": 0.0, "y": 0.0, "z": 0.0}, 3)
+
+
+def test_counts_and_seeds_are_checked_by_the_one_helper():
+    m = build("horizontal_3axis")
+    with pytest.raises(ValueError, match="chunk must be an integer >= 1, got 0"):
+        C.ChainMachine("w b X t", m.catalogue[:1], {"dx(x)": C.Placement("X", "motion", 0)},
+                       chunk=0)
+    iso = C.iso_machine("w C b X t", keep_redundant=True)
+    with pytest.raises(ValueError, match="n_poses must be an integer >= 1, got 2.5"):
+        C.redundant_location_errors(iso, n_poses=2.5)
+    with pytest.raises(ValueError, match="seed must be"):
+        C.redundant_location_errors(iso, seed=True)
+    # the same seed, the same answer (an int or a Generator seeded alike)
+    assert C.redundant_location_errors(iso, seed=3) == C.redundant_location_errors(
+        iso, seed=np.random.default_rng(3))

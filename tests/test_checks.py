@@ -30,7 +30,7 @@ def test_an_output_with_no_first_order_term_is_named_and_has_no_dominant_error()
     m = build("ac_double_turntable")
     sd = np.array([1e-3 if e.translational else 5e-6 for e in m.catalogue])
     pose = dict(x=10.0, y=20.0, z=30.0, A=0.0, C=0.4)   # tool along z: Vz second order
-    jac = m.linear_jacobian(pose)
+    jac = m.jacobian(pose)
     first = S.first_order_outputs(jac, sd**2)[0]
     assert first.tolist() == [True] * 5 + [False]
     assert S.dominant_errors(jac, sd**2)[0, 5] == -1

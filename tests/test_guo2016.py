@@ -1,6 +1,7 @@
-"""Guo et al. 2016 (notebook 03), second audit: the model-free eigenvalue bound on sums of
-squared Spearman coefficients, its law over Latin hypercube designs, the exchangeable pairs,
-the units-slip reading of Eq. 12 and what an XY circle sees in the paper's model."""
+"""Guo et al. 2016 (notebook 03): the printed Eqs. 8, 11-13 against the second-order expansion
+of the matrix product; the second audit: the model-free eigenvalue bound on sums of squared
+Spearman coefficients, its law over Latin hypercube designs, the exchangeable pairs, the
+units-slip reading of Eq. 12 and what an XY circle sees in the paper's model."""
 
 import numpy as np
 import pandas as pd
@@ -10,7 +11,6 @@ import sympy as sp
 from mtaccuracy import errors, sensitivity
 from mtaccuracy.compendium import guo2016
 from mtaccuracy.machines import build
-from mtaccuracy.machines import vertical_xyfz as guo
 
 MACHINE = build("vertical_xyfz")
 NAMES = MACHINE.error_names
@@ -18,6 +18,71 @@ KINDS = [e.kind for e in MACHINE.catalogue]
 RANGES = {"positioning": (0.0, 3.0), "straightness": (0.0, 4.0), "angular": (0.0, 3.2e-5),
           "squareness": (0.0, 1.9)}
 BOUNDS = errors.uniform_bounds(MACHINE.catalogue, RANGES)
+#: errors of realistic size (mm, rad) by kind, in catalogue order, and a pose (mm)
+SCALE = np.array([3e-3] * 3 + [4e-3] * 6 + [3.2e-5] * 9 + [1.9e-6] * 3)
+POSE = dict(x=120.0, y=-80.0, z=150.0, D1=10.0, D2=-20.0, D3=90.0)
+
+
+def test_second_order_expansion_has_third_order_remainder():
+    rng = np.random.default_rng(2)
+    sym_e, sym_p = guo2016.symbols()
+    f2 = sp.lambdify([list(sym_e.values()), list(sym_p.values())], guo2016.second_order(), "numpy")
+    e = rng.uniform(-1, 1, size=(4, 21)) * SCALE
+    gaps = []
+    for t in (10.0, 20.0):
+        full = MACHINE.pose_error(t * e, POSE)[:, :3]
+        gaps.append(np.abs(full - np.column_stack(f2((t * e).T, [POSE[k] for k in sym_p]))).max())
+    assert gaps[1] / gaps[0] == pytest.approx(8.0, rel=0.05)  # scales as t^3
+
+
+def test_typo_list_finds_the_known_typos():
+    rows = {(r["equation"], r["term"]): r for r in guo2016.closed_form_typos()}
+    assert rows[("Eq. 11", "1")]["printed"] == "D1"  # spurious constant
+    assert rows[("Eq. 12", "1")]["printed"] == "D2"
+    assert rows[("Eq. 11", "dy(y)*ez(x)")]["printed"] == "-2"  # dy(y) written twice
+    assert rows[("Eq. 11", "dy(z)*ez(x)")]["kind"] == "missing"
+    assert rows[("Eq. 12", "dx(y)*dz(x)")]["kind"] == "spurious"  # dz(x) for ez(x)
+    assert rows[("Eq. 13", "ey(x)*ey(y)")]["printed"] == "-D3 + z"  # sign of z term
+    assert ("Eq. 8", "-ey(z)") in rows
+    # No first-order term is wrong except the spurious constants.
+    in_eqs = [r for r in rows.values() if r["equation"] != "Eq. 8" and r["kind"] != "bracket"]
+    assert {r["degree"] for r in in_eqs} == {0, 2}  # no first-order term is wrong
+    # Eq. 13: the missing z*S_xz*ey(x) and the bracket after y, never closed as printed
+    assert rows[("Eq. 13", "S_xz*ey(x)")]["derived"] == "z"
+    assert rows[("Eq. 13", "y*(S_xy*ey(x) + ex(x))")]["kind"] == "bracket"
+
+
+def test_the_bracket_reading_is_the_one_compared():
+    """The y terms of the transcribed Eq. 13 are exactly the declared reading of its unclosed
+    bracket, and that reading is also what the matrix product gives."""
+    e, p = guo2016.symbols()
+    assert list(p) == ["x", "y", "z", "D1", "D2", "D3"]
+    ez = sp.expand(guo2016.printed_closed_form(e, **p)[2])
+    y_terms = sp.expand(sp.diff(ez, p["y"]) * p["y"])
+    (eq, comp, _, reading, degree), = guo2016.PRINTED_UNBALANCED
+    assert (eq, comp, degree) == ("Eq. 13", "Ez", 1)
+    expected = p["y"] * (e["S_xy"] * e["ey(x)"] + e["ex(x)"])
+    assert str(expected) == reading
+    assert sp.expand(y_terms - expected) == 0
+    derived_y = sp.expand(sp.diff(guo2016.second_order()[2], p["y"]) * p["y"])
+    assert sp.expand(derived_y - expected) == 0
+
+
+def test_printed_form_differs_from_product_only_by_its_typos():
+    e = np.random.default_rng(3).uniform(0, 1, size=(50, 21)) * SCALE
+    named = {s: e[:, j] for j, s in enumerate(NAMES)}
+    printed = np.column_stack(guo2016.printed_closed_form(named, **POSE))
+    full = MACHINE.pose_error(e, POSE)[:, :3]
+    gap = printed - full - np.array([POSE["D1"], POSE["D2"], 0.0])
+    assert np.abs(gap).max() < 1e-4  # second-order size (the dz*dx typo is ~1e-5 mm)
+    assert np.abs(gap).max() > 1e-7  # but not zero: the typos are real
+
+
+
+def test_the_pose_is_passed_by_name():
+    e, p = guo2016.symbols()
+    with pytest.raises(TypeError, match="positional"):
+        guo2016.printed_closed_form(e, *p.values())
 
 
 def _lambda_max(x):
@@ -112,7 +177,7 @@ def test_monte_carlo_p_and_the_panel_verdicts():
                         "spearman": [0.5, 0.5, 1.0, 0.8, 0.7, 0.7, 0.95, 0.7]})
     lam8 = np.linspace(1.0, 1.3, 999)
     lam21 = np.linspace(1.2, 1.5, 999)
-    t = guo2016.eigen_bound_table(pub, lam8, lam21, alpha=0.01).set_index("output")
+    t = guo2016.eigen_bound_table(pub, lam_set=lam8, lam_all=lam21, alpha=0.01).set_index("output")
     assert t.loc["Ey", "fixed_set"] == t.loc["Ey", "any_set"] == "impossible"   # 1.64
     assert t.loc["Ey", "p_any_set"] == 1 / 1000
     assert t.loc["Ex", "fixed_set"] == "not excluded"                           # 0.50
@@ -120,9 +185,9 @@ def test_monte_carlo_p_and_the_panel_verdicts():
 
 
 def _first():
-    sym_e, _ = guo.symbols()
+    sym_e, _ = guo2016.symbols()
     return {o: {s: sp.diff(c, sym_e[s]).subs({v: 0 for v in sym_e.values()}) for s in NAMES}
-            for o, c in zip(("Ex", "Ey", "Ez"), guo.second_order(), strict=True)}
+            for o, c in zip(("Ex", "Ey", "Ez"), guo2016.second_order(), strict=True)}
 
 
 @pytest.fixture(scope="module")
@@ -158,7 +223,7 @@ def test_pair_table_gaps_and_bounds():
                         "spearman": [0.6, 0.4, 0.1, 0.75, -0.2]})
     rep = np.random.default_rng(0).normal(0, 0.05, (300, 21, 4))
     pairs = [("Ex", "dx(y)", "dx(z)"), ("Et", "dz(x)", "dz(y)"), ("Et", "dy(x)", "dy(z)")]
-    t = guo2016.pair_table(pub, pairs, rep, NAMES)
+    t = guo2016.pair_table(pub, pairs=pairs, rho_rep=rep, names=NAMES)
     assert list(t.pair) == ["dx(y) vs dx(z)", "dz(x) vs dz(y)"]      # neither dy printed: left out
     assert t.printed_gap.tolist() == pytest.approx([0.2, 0.55])       # 0.75 - |-0.2|
     assert t.gap_is_bound.tolist() == [False, True] and t.listed.tolist() == ["both", "dz(x)"]

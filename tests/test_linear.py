@@ -23,7 +23,7 @@ def test_uniform_moments_and_linear_indices_equal_sampling_with_uniform_offset_e
     mean, var = S.uniform_moments(bounds)
     assert np.allclose(mean, SCALE) and np.allclose(var, (2 * SCALE) ** 2 / 12)
     pose = dict(x=560.0, y=120.0, z=410.0, tool_z=-80.0)
-    jac = H3.first_order_jacobian(pose)[0, :3]                       # (3, 21)
+    jac = H3.jacobian(pose)[0, :3]                       # (3, 21)
     lin = S.linear_indices(jac, np.sqrt(var))                        # (3, 21)
     ua, ub = S.base_samples(2**13, 21, "sobol", 3)
     s1, st = S.sobol_indices(lambda e: e @ jac.T, S.from_unit_uniform(ua, bounds),
@@ -115,13 +115,13 @@ def test_pose_box_indices_equal_sampling_with_the_pose_as_an_input_on_h3():
     mean, var = S.uniform_moments(bounds, 21)
     box = dict(x=(0.0, 700.0), y=(0.0, 600.0), z=(0.0, 500.0))
     tool = dict(tool_x=0.0, tool_y=0.0, tool_z=-150.0)
-    s1, st, v = S.pose_box_indices(H3.first_order_jacobian, mean, var, tool, box, 3,
+    s1, st, v = S.pose_box_indices(H3.jacobian, mean, var, tool, box, 3,
                                    names=H3.axes + H3.tool_offsets, required=H3.axes)
     full = np.hstack([bounds, np.array(list(box.values())).T])      # (2, 24)
 
     def model(z):
         p = dict(zip("xyz", z[:, 21:].T, strict=True), **tool)
-        return np.einsum("nqd,nd->nq", H3.first_order_jacobian(p)[:, :3], z[:, :21])
+        return np.einsum("nqd,nd->nq", H3.jacobian(p)[:, :3], z[:, :21])
     ua, ub = S.base_samples(2**13, 24, "sobol", 8)
     a, b = S.from_unit_uniform(ua, full), S.from_unit_uniform(ub, full)
     es1, est = S.sobol_indices(model, a, b)
@@ -135,7 +135,7 @@ def test_rotary_box_on_the_zheng_machine_converges():
     mean, var = np.zeros(41), ZHENG_SD**2
     fixed = {k: ZHENG_POSE[k] for k in "xyz"}
     box = dict(A=(0.0, 1.2), C=(0.0, 2.0))
-    st = [S.pose_box_indices(ZHENG.linear_jacobian, mean, var, fixed, box, nodes=n)[1][0]
+    st = [S.pose_box_indices(ZHENG.jacobian, mean, var, fixed, box, nodes=n)[1][0]
           for n in (2, 4, 8, 12)]
     steps = [np.abs(st[i + 1] - st[i]).max() for i in range(3)]
     assert steps[0] > 1e-4 and steps[1] < steps[0] / 10 and steps[2] < 1e-10
@@ -144,7 +144,7 @@ def test_rotary_box_on_the_zheng_machine_converges():
 def test_indices_at_poses_sum_to_one_and_equal_one_pose_at_a_time():
     rng = np.random.default_rng(5)
     poses = {k: rng.uniform(lo, hi, 7) for k, (lo, hi) in ZHENG.travels.items()}
-    jac = ZHENG.linear_jacobian(poses)                           # (7, 6, 41)
+    jac = ZHENG.jacobian(poses)                           # (7, 6, 41)
     s = S.indices_at_poses(jac, ZHENG_SD**2)
     assert s.shape == (7, 41, 6)
     assert np.allclose(s.sum(1), 1.0, rtol=0, atol=1e-14)
@@ -201,7 +201,7 @@ def test_remainder_bounds_the_index_drift_and_is_second_order_on_a_machine():
     assert np.isclose(r.centred_ratio[0], np.sqrt(2) * c / np.sqrt(vy), rtol=0.03)
     drift = abs((a**2 + 2 * c**2) / vy - a**2 / (a**2 + b**2))
     assert drift < 2 * r.centred_ratio[0]
-    jac = ZHENG.linear_jacobian(ZHENG_POSE)[0]
+    jac = ZHENG.jacobian(ZHENG_POSE)[0]
     z = np.random.default_rng(6).standard_normal((4000, 41))
     small, large = (S.nonlinear_remainder(lambda x: ZHENG.pose_error(x, ZHENG_POSE), jac,
                                           z * ZHENG_SD * k) for k in (1.0, 10.0))

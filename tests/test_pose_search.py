@@ -1,13 +1,12 @@
-"""The pose search of notebook 01: symmetry group of the linear indices, canonical pose,
-canonical ranking of optimiser output, least-squares fit of a known pose."""
+"""The pose search of notebook 01 (compendium.zheng2024): symmetry group of the linear indices,
+canonical pose, canonical ranking of optimiser output, least-squares fit of a known pose."""
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from mtaccuracy import sensitivity as S
-from mtaccuracy.machines import build
-from mtaccuracy.machines.ac_double_turntable import (
+from mtaccuracy.compendium.zheng2024 import (
     POSE_SYMMETRIES,
     canonical_pose,
     fit_pose_average_to_indices,
@@ -17,6 +16,7 @@ from mtaccuracy.machines.ac_double_turntable import (
     rank_poses,
     ratio_interval,
 )
+from mtaccuracy.machines import build
 
 M = build("ac_double_turntable")
 SD = np.array([5e-3 if e.translational else 1.6e-5 for e in M.catalogue])
@@ -25,7 +25,7 @@ AXES = ("x", "y", "z", "A", "C")
 
 
 def indices(pose):
-    return S.linear_indices(M.linear_jacobian(pose), SD)
+    return S.linear_indices(M.jacobian(pose), SD)
 
 
 def random_pose(rng=RNG):
@@ -144,22 +144,23 @@ def test_fit_recovers_the_canonical_image_of_a_known_pose():
     target = target_all[rows, cols]
     expected = canonical_pose(truth)
     start = np.array([[expected[k] for k in AXES]]) + [[20.0, -15.0, 10.0, 0.05, -0.05]]
-    fits = fit_pose_to_indices(M, SD, target, rows, cols, start)
+    fits = fit_pose_to_indices(M, SD, target, rows=rows, cols=cols, starts=start)
     best = rank_poses(fits).iloc[0]
     assert best.misfit < 1e-9
     for k in AXES:
         assert best[k] == pytest.approx(expected[k], abs=1e-5)
     # A and C alone, x, y, z fixed at the truth (not canonical: only the half-turns apply)
-    fits = fit_pose_to_indices(M, SD, target, rows, cols, [[-0.8, 4.0]], free=("A", "C"),
-                               fixed={k: truth[k] for k in "xyz"})
+    fits = fit_pose_to_indices(M, SD, target, rows=rows, cols=cols, starts=[[-0.8, 4.0]],
+                               free=("A", "C"), fixed={k: truth[k] for k in "xyz"})
     best = rank_poses(fits, fixed_position=True).iloc[0]
     half = canonical_pose(truth, fixed_position=True)
     assert best.misfit < 1e-9 and best.A == pytest.approx(half["A"], abs=1e-7)
     assert best.C == pytest.approx(half["C"], abs=1e-7)
     with pytest.raises(ValueError, match="must split the axes"):
-        fit_pose_to_indices(M, SD, target, rows, cols, [[0.0, 0.0]], free=("A", "C"))
+        fit_pose_to_indices(M, SD, target, rows=rows, cols=cols, starts=[[0.0, 0.0]],
+                            free=("A", "C"))
     with pytest.raises(ValueError, match="starts must have 5 columns"):
-        fit_pose_to_indices(M, SD, target, rows, cols, [[0.0, 0.0]])
+        fit_pose_to_indices(M, SD, target, rows=rows, cols=cols, starts=[[0.0, 0.0]])
 
 
 # --- necessary conditions: ratios the model fixes at every pose ------------------------------
@@ -191,7 +192,7 @@ def test_vx_vy_ratio_is_the_same_at_every_pose_tool_length_and_variance():
     rng = np.random.default_rng(3)
     for tool in (False, True):
         sd = SD * rng.uniform(0.2, 5.0, SD.size)
-        s = S.linear_indices(M.linear_jacobian(random_poses(rng, 400, tool)), sd)
+        s = S.linear_indices(M.jacobian(random_poses(rng, 400, tool)), sd)
         j, k = NAMES.index("e_yx"), NAMES.index("e_za")
         q = (s[:, VX, j] / s[:, VX, k]) / (s[:, VY, j] / s[:, VY, k])
         assert np.abs(q - 1).max() < 1e-9
@@ -200,7 +201,7 @@ def test_vx_vy_ratio_is_the_same_at_every_pose_tool_length_and_variance():
     # the mean over two poses with different A breaks it: the test can tell
     two = dict(x=np.array([100.0, 300.0]), y=np.array([200.0, 350.0]),
                z=np.array([20.0, 50.0]), A=np.deg2rad([40.0, 80.0]), C=np.deg2rad([60.0, 120.0]))
-    s = S.linear_indices(M.linear_jacobian(two), SD).mean(axis=0)
+    s = S.linear_indices(M.jacobian(two), SD).mean(axis=0)
     q = (s[VX, j] / s[VX, k]) / (s[VY, j] / s[VY, k])
     assert abs(q - 1) > 0.02
 
@@ -209,7 +210,8 @@ def test_index_invariants_finds_the_structural_groups_and_cross_ratios():
     pairs = [("Vx", s) for s in Y_ROT + Z_ROT] + [("Vy", s) for s in Y_ROT + Z_ROT] \
         + [("Pz", "d_yx"), ("Pz", "d_za"), ("Px", "d_xc")]
     rows, cols = entries(pairs)
-    groups, cross = index_invariants(M, SD, rows, cols, random_poses(np.random.default_rng(4), 50))
+    groups, cross = index_invariants(M, SD, rows=rows, cols=cols,
+                                     poses=random_poses(np.random.default_rng(4), 50))
     g = groups.group.to_numpy()
     assert len(set(g[:4])) == 1 and len(set(g[4:7])) == 1 and g[0] != g[4]   # Vx groups
     assert len(set(g[7:11])) == 1 and len(set(g[11:14])) == 1                # Vy groups
@@ -225,34 +227,38 @@ def test_index_invariants_finds_the_structural_groups_and_cross_ratios():
     # with unequal variances the Vx/Vy quotient stays 1, the Pz one moves
     sd = SD.copy()
     sd[NAMES.index("d_yx")] *= 2.0
-    _, cross2 = index_invariants(M, sd, rows, cols, random_poses(np.random.default_rng(4), 50))
+    _, cross2 = index_invariants(M, sd, rows=rows, cols=cols,
+                                 poses=random_poses(np.random.default_rng(4), 50))
     found2 = {(int(r.num_k), int(r.den_k), int(r.num_l), int(r.den_l)): r.value
               for r in cross2.itertuples()}
     assert found2[(g[0], g[4], g[7], g[11])] == pytest.approx(1.0, abs=1e-9)
     assert found2[(g[0], g[4], g[15], g[14])] == pytest.approx(4.0, rel=1e-9)
     with pytest.raises(ValueError, match="at least 3 poses"):
-        index_invariants(M, SD, rows, cols, random_poses(np.random.default_rng(4), 2))
+        index_invariants(M, SD, rows=rows, cols=cols,
+                         poses=random_poses(np.random.default_rng(4), 2))
 
 
 def test_ratio_interval_propagates_the_printed_precision():
-    lo, hi = ratio_interval(0.08755, 0.08765, 0.07205, 0.07215)
+    lo, hi = ratio_interval((0.08755, 0.08765), (0.07205, 0.07215))
     assert lo == pytest.approx(0.08755 / 0.07215) and hi == pytest.approx(0.08765 / 0.07205)
     with pytest.raises(ValueError, match="positive"):
-        ratio_interval(0.1, 0.2, 0.0, 0.1)
+        ratio_interval((0.1, 0.2), (0.0, 0.1))
 
 
 def test_fit_pose_average_recovers_the_mean_of_two_known_poses():
     truth = dict(x=np.array([120.0, 300.0]), y=np.array([200.0, 50.0]),
                  z=np.array([30.0, 150.0]), A=np.deg2rad([35.0, 75.0]),
                  C=np.deg2rad([50.0, 110.0]))
-    mean = S.linear_indices(M.linear_jacobian(truth), SD).mean(axis=0)
+    mean = S.linear_indices(M.jacobian(truth), SD).mean(axis=0)
     rows, cols = np.nonzero(mean > 0.02)
     start = np.stack([np.c_[truth["x"], truth["y"], truth["z"], truth["A"], truth["C"]]])
     start = start + [[10.0, -10.0, 5.0, 0.03, -0.03]]
-    fits = fit_pose_average_to_indices(M, SD, mean[rows, cols], rows, cols, start)
+    fits = fit_pose_average_to_indices(M, SD, mean[rows, cols], rows=rows, cols=cols,
+                                       starts=start)
     assert len(fits) == 2 and fits.misfit.max() < 1e-8
     assert list(fits.pose) == [0, 1] and fits.A.iloc[0] >= fits.A.iloc[1]
     # the poses up to the symmetries: sin^2 A and sin^2 C of each
     assert np.sort(np.sin(fits.A) ** 2) == pytest.approx(np.sort(np.sin(truth["A"]) ** 2), abs=1e-6)
     with pytest.raises(ValueError, match="starts must be"):
-        fit_pose_average_to_indices(M, SD, mean[rows, cols], rows, cols, np.zeros((2, 5)))
+        fit_pose_average_to_indices(M, SD, mean[rows, cols], rows=rows, cols=cols,
+                                    starts=np.zeros((2, 5)))

@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 from mtaccuracy import sensitivity as S
+from mtaccuracy.compendium.zheng2024 import fit_pose_to_indices
 from mtaccuracy.machines import build
-from mtaccuracy.machines.ac_double_turntable import TRAVELS, fit_pose_to_indices
+from mtaccuracy.machines.ac_double_turntable import TRAVELS
 
 
 def _toy(pose):
@@ -68,11 +69,11 @@ def test_notebook_01s_search_is_the_shared_one():
     rows, cols = np.array([0, 1, 2, 3, 4]), np.array([0, 5, 10, 20, 30])
 
     def stat(p):
-        return S.linear_indices(m.linear_jacobian(p), sd)
+        return S.linear_indices(m.jacobian(p), sd)
 
     target = stat(pose)[0][rows, cols]
     start = [[70.0, 50.0, 50.0, 0.5, 1.0 + 2 * np.pi]]
-    a = fit_pose_to_indices(m, sd, target, rows, cols, start)
+    a = fit_pose_to_indices(m, sd, target, rows=rows, cols=cols, starts=start)
     travel = [TRAVELS[a] if a != "C" else (-np.inf, np.inf) for a in "xyzAC"]
     b = S.fit_pose(stat, target, (rows, cols), start, ("x", "y", "z", "A", "C"),
                    bounds=tuple(np.array(v) for v in zip(*travel, strict=True)),

@@ -1,6 +1,7 @@
 """Notebook 02 (Rong et al.), issue 24: the ranking precision of the 90 % rule (ties broken in
 catalogue order, the saved table in the rule's order), the ranges of Zheng 2024 as a second
-defensible set, the study between two range sets, and the bracket scoring."""
+defensible set, the study between two range sets, and the bracket scoring; the closed-form
+indices of the linearised model, the study's models and the tool lengths."""
 
 import numpy as np
 import pandas as pd
@@ -10,7 +11,6 @@ from mtaccuracy import errors
 from mtaccuracy import sensitivity as S
 from mtaccuracy.compendium import reproduction, rong
 from mtaccuracy.machines import build
-from mtaccuracy.machines import horizontal_3axis as h3
 
 MACHINE = build("horizontal_3axis", layout="z/xy")
 NAMES = MACHINE.error_names
@@ -80,7 +80,7 @@ def test_range_path_ends_match_an_independent_grid_formulation():
                                  workspace_mm=WORKSPACE, tool=TOOL, threshold=0.9)
     g = [np.linspace(0, v, 9)[:-1] + v / 16 for v in WORKSPACE]        # 8 midpoints per axis
     pts = [c.ravel() for c in np.meshgrid(*g, indexing="ij")]
-    jac = MACHINE.first_order_jacobian(dict(zip("xyz", pts, strict=True), **TOOL))[:, :3]
+    jac = MACHINE.jacobian(dict(zip("xyz", pts, strict=True), **TOOL))[:, :3]
     for h, row in zip((BORROWED, hz), path.itertuples(), strict=True):
         v = (jac ** 2).mean(0) * (h ** 2 / 3)                          # (3, D): E[J^2] var
         st = (v / v.sum(1, keepdims=True)).T
@@ -121,11 +121,127 @@ def test_range_path_refuses_bad_inputs():
 
 
 def test_exact_indices_tie_exchangeable_pairs_and_ranked_keeps_the_catalogue_member():
-    _, st = h3.linear_sobol_indices(MACHINE, np.vstack([-BORROWED, BORROWED]), pose=TOOL,
-                                    pose_bounds=BOX)
+    _, st = rong.linear_sobol_indices(MACHINE, np.vstack([-BORROWED, BORROWED]), pose=TOOL,
+                                      pose_bounds=BOX)
     r = rong.ranked(st)
     i, j = NAMES.index("dx(y)"), NAMES.index("dx(z)")
     assert r[i, 0] == r[j, 0] > 0
     sets = S.key_errors_by_output(r, NAMES, ["Ex", "Ey", "Ez"], 0.9)
     assert "dx(y)" in sets["Ex"].names and "dx(z)" not in sets["Ex"].names
     assert "dy(x)" in sets["Ey"].names and "dy(z)" not in sets["Ey"].names
+
+
+def test_linear_indices_are_exact_shares_of_variance():
+    b = np.vstack([-BORROWED, BORROWED])
+    s1, st = rong.linear_sobol_indices(MACHINE, b, pose=dict(x=700.0, y=600.0, z=500.0))
+    assert np.allclose(s1, st) and np.allclose(st.sum(0), 1.0)
+    c = MACHINE.jacobian(dict(x=700.0, y=600.0, z=500.0))[0][:3]
+    v = c**2 * BORROWED**2 / 3
+    assert np.allclose(st, (v / v.sum(1, keepdims=True)).T)
+    # pose uniform in a box: total >= first order, both sum as they must
+    s1, st = rong.linear_sobol_indices(MACHINE, b, pose_bounds=BOX)
+    assert np.all(st >= s1 - 1e-15) and np.allclose(st.sum(0), 1.0) and np.all(s1.sum(0) < 1)
+    # exact: the coefficients are affine in the pose, c = c0 + sum_k g_k (p_k - centre_k), so
+    # E[c^2] = c0^2 + sum_k g_k^2 L_k^2 / 12 for a uniform pose
+    centre, lengths = dict(x=350.0, y=300.0, z=250.0), dict(x=700.0, y=600.0, z=500.0)
+    c0 = MACHINE.jacobian(centre)[0][:3]
+    ec2 = c0**2
+    for k in "xyz":
+        def coef(pose):
+            return MACHINE.jacobian(pose)[0]
+        g = coef(dict(centre, **{k: centre[k] + 100.0}))[:3] - c0
+        back = coef(dict(centre, **{k: centre[k] - 250.0}))[:3] - c0
+        assert np.allclose(back, -2.5 * g, atol=1e-5)  # affine in the pose
+        ec2 = ec2 + (g / 100.0) ** 2 * lengths[k] ** 2 / 12
+    v = ec2 * BORROWED**2 / 3
+    assert np.allclose(st, (v / v.sum(1, keepdims=True)).T, atol=1e-9)
+    assert np.allclose(s1, (c0**2 * BORROWED**2 / 3 / v.sum(1, keepdims=True)).T, atol=1e-9)
+
+
+def test_linear_indices_at_poses_equal_one_pose_at_a_time_and_tie_exactly():
+    b = np.vstack([-BORROWED, BORROWED])
+    poses = dict(x=np.array([0.0, 175.0, 700.0]), y=np.array([0.0, 450.0, 600.0]),
+                 z=np.array([0.0, 125.0, 500.0]))
+    many = rong.linear_indices_at_poses(MACHINE, b, poses=poses)
+    assert many.shape == (3, 21, 3)
+    for i in range(3):
+        _, st = rong.linear_sobol_indices(MACHINE, b, pose={k: v[i] for k, v in poses.items()})
+        assert np.allclose(many[i], st, rtol=1e-14, atol=0)
+    # exchangeable errors (coefficient +-1, same range) get the same index to the bit
+    assert many[1, NAMES.index("dx(y)"), 0] == many[1, NAMES.index("dx(z)"), 0]
+    assert many[1, NAMES.index("dz(x)"), 2] == many[1, NAMES.index("dz(y)"), 2]
+
+
+def test_a_coincidental_tie_is_broken_by_catalogue_order():
+    """At z = 125 mm the Abbe term of ey(z) (125 mm x 80 urad = 10 um) equals the straightness
+    range of dx(y) and dx(z): three tied indices in Ex, of which the 90 % rule needs one.  The
+    tie is decided by catalogue order (dx(y) first), not by the last bit of the arithmetic."""
+    b = np.vstack([-BORROWED, BORROWED])
+    st = rong.linear_indices_at_poses(MACHINE, b, poses=dict(x=175.0, y=450.0, z=125.0))[0]
+    j = [NAMES.index(s) for s in ("ey(z)", "dx(y)", "dx(z)")]
+    assert np.ptp(st[j, 0]) < 1e-15 * st[j, 0].max()  # equal up to rounding
+    keys = S.key_errors_by_output(S.merge_ties(st), NAMES, ["Ex", "Ey", "Ez"], 0.9)
+    assert keys["Ex"].names == ("ez(x)", "ez(z)", "dx(y)")
+    # whichever of the three the rounding favours, the answer is the same
+    for winner in j:
+        nudged = st.copy()
+        nudged[winner, 0] *= 1 + 4e-16
+        again = S.key_errors_by_output(S.merge_ties(nudged), NAMES, ["Ex", "Ey", "Ez"], 0.9)
+        assert again["Ex"].names == keys["Ex"].names
+
+
+def test_tool_length_sweep_is_batched_and_gives_the_last_tool_axis_an_arm():
+    """Batched over tool lengths: bitwise equal to one case at a time; the variance is the
+    pooled one (S_T = share of it); a tool of length L along -z gives the roll ex(y) of the
+    Y headstock the coefficient +L in Ey at every pose (eps x s = e_x x (0, 0, -L)), while
+    ez(y) (about the spindle axis) still cannot move the tip."""
+    b = np.vstack([-BORROWED, BORROWED])
+    box = dict(x=(0, 700), y=(0, 600), z=(0, 500))
+    lengths = np.array([0.0, 50.0, 200.0])
+    tools = rong.tool_length_offsets(lengths, base=(0.0, 0.0, 0.0))
+    assert np.array_equal(tools["tool_z"], -lengths) and np.all(tools["tool_x"] == 0)
+    s1, st, v = rong.linear_sobol_indices_batch(MACHINE, b, poses=dict(tools), pose_bounds=box)
+    assert s1.shape == st.shape == (3, 21, 3) and v.shape == (3, 3)
+    for i in range(3):
+        one = {k: t[i] for k, t in tools.items()}
+        one_s1, one_st = rong.linear_sobol_indices(MACHINE, b, pose=one, pose_bounds=box)
+        assert np.array_equal(one_s1, s1[i]) and np.array_equal(one_st, st[i])
+    j_ex, j_ez = NAMES.index("ex(y)"), NAMES.index("ez(y)")
+    var_angle = BORROWED[j_ex] ** 2 / 3
+    assert np.allclose(st[:, j_ex, 1], lengths**2 * var_angle / v[:, 1], rtol=1e-12)
+    assert st[0, j_ex, 1] == 0 and st[2, j_ex, 1] > 0.1
+    assert np.all(st[:, j_ez] == 0)
+    # the variance is that of the first-order model with the pose uniform in the box
+    rng = np.random.default_rng(1)
+    n = 200_000
+    p = {k: rng.uniform(lo, hi, n) for k, (lo, hi) in box.items()}
+    c = MACHINE.jacobian(dict(p, tool_x=0.0, tool_y=0.0, tool_z=-200.0))[:, :3]
+    e = rng.uniform(-1, 1, (n, 21)) * BORROWED
+    y = np.einsum("nqj,nj->nq", c, e)
+    assert np.allclose(y.var(0), v[2], rtol=0.02)
+    with pytest.raises(ValueError, match=">= 0"):
+        rong.tool_length_offsets([-5.0])
+    with pytest.raises(ValueError, match="different lengths"):
+        rong.linear_sobol_indices_batch(MACHINE, b, poses=dict(tools, tool_x=np.zeros(2)),
+                                        pose_bounds=box)
+    with pytest.raises(ValueError, match="one pose"):
+        rong.linear_sobol_indices(MACHINE, b, pose=dict(tools), pose_bounds=box)
+
+
+def test_linear_indices_refuse_bad_ranges_and_poses():
+    with pytest.raises(ValueError, match="high > low"):
+        rong.linear_sobol_indices(MACHINE, np.zeros((2, 21)), pose=TOOL)
+    with pytest.raises(ValueError, match="lacks axis"):
+        rong.linear_sobol_indices(MACHINE, np.vstack([-BORROWED, BORROWED]), pose=dict(x=0.0))
+    with pytest.raises(TypeError):             # keyword-only after the data
+        rong.linear_sobol_indices(MACHINE, np.vstack([-BORROWED, BORROWED]), TOOL)
+
+
+def test_the_study_models_are_the_machines_position_error_with_the_pose_as_inputs():
+    rng = np.random.default_rng(8)
+    e = rng.uniform(-1, 1, (6, D)) * BORROWED
+    xyz = rng.uniform(0, 500, (6, 3))
+    tool = dict(tool_x=1.0, tool_y=-2.0, tool_z=-50.0)
+    want = MACHINE.position_error(e, dict(x=xyz[:, 0], y=xyz[:, 1], z=xyz[:, 2], **tool))
+    assert np.array_equal(rong.errors_and_pose_model(MACHINE, tool)(np.c_[e, xyz]), want)
+    assert np.array_equal(rong.errors_at_poses_model(MACHINE, xyz, tool)(e), want)

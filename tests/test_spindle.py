@@ -7,6 +7,7 @@ import pytest
 import scipy.linalg
 
 from mtaccuracy import spindle as S
+from mtaccuracy.optimise import ga
 
 N = 128
 POS = [0, 14, 65, 116]
@@ -178,7 +179,7 @@ def test_lower_bound_of_h_holds_and_is_reached_at_even_k():
     for k in (2, 10, 20, 80):
         assert S.objective_H(S.bound_layout(k), k) == pytest.approx(0.25, abs=1e-12)
     # odd k: the bound is not reached (numerical optimum stays above 1/4)
-    h3, _ = S.reference_optimum(3, S.FULL_BOX, n_starts=1)
+    h3, _ = S.reference_optimum(3, bounds=S.FULL_BOX, n_starts=1)
     assert h3 > 0.27
     with pytest.raises(ValueError, match="even k"):
         S.bound_layout(7)
@@ -243,21 +244,49 @@ def test_worst_case_bound_for_grid_layouts():
         assert q2.max() >= S.worst_case_bound(n) - 1e-12
 
 
-def test_adaptive_probabilities_follow_eqs_22_23():
+#: The paper's bounds of the adaptive rates (Section 2.2), as notebook 05 passes them.
+PAPER_RATES = dict(pc_max=S.PC_MAX, pc_min=S.PC_MIN, pm_max=S.PM_MAX, pm_min=S.PM_MIN)
+
+
+def _rates(f, generation, max_generation=200, **kw):
+    return ga.adaptive_rates(f, 1.0, generation=generation, max_generation=max_generation,
+                             **PAPER_RATES, **kw)
+
+
+def test_adaptive_rates_with_the_papers_bounds_follow_eqs_22_23():
+    assert (S.PC_MAX, S.PC_MIN, S.PM_MAX, S.PM_MIN) == (0.99, 0.4, 0.09, 0.005)
     f = np.array([0.5, 1.0, 2.0])
-    pc, pm = S.adaptive_probabilities(f, 1.0, 50, 200)
+    pc, pm = _rates(f, 50)
     assert np.allclose(pc, [0.99, 0.99 - 0.59 * 0.25, 0.99 - 0.59 * 0.25])
     assert np.allclose(pm, [0.005, 0.005 + 0.085 * 0.25, 0.005 + 0.085 * 0.25])
-    pc0, pm0 = S.adaptive_probabilities(f, 1.0, 0, 200)
-    pc1, pm1 = S.adaptive_probabilities(f, 1.0, 200, 200)
+    pc0, pm0 = _rates(f, 0)
+    pc1, pm1 = _rates(f, 200)
     assert np.allclose(pc0, 0.99) and np.allclose(pm0, 0.005)
     assert np.allclose(pc1, [0.99, 0.4, 0.4]) and np.allclose(pm1, [0.005, 0.09, 0.09])
     # printed Eq. 23: falls from 0.005, negative for the fit individuals once alpha / alpha_max >
     # 0.005 / 0.085, i.e. from generation 12 of 200 on
-    _, pmp = S.adaptive_probabilities(f, 1.0, 50, 200, eq23="printed")
+    _, pmp = _rates(f, 50, eq23="printed")
     assert pmp[0] == pytest.approx(0.005) and np.all(pmp[1:] < 0)
-    assert np.all(S.adaptive_probabilities(f, 1.0, 11, 200, eq23="printed")[1] > 0)
-    assert np.all(S.adaptive_probabilities(f, 1.0, 12, 200, eq23="printed")[1][1:] < 0)
+    assert np.all(_rates(f, 11, eq23="printed")[1] > 0)
+    assert np.all(_rates(f, 12, eq23="printed")[1][1:] < 0)
+
+
+def test_printed_eq23_over_a_whole_run_turns_negative_at_generation_12_as_notebook_05_prints():
+    """Notebook 05 evaluates Eq. 23 as printed for an above-average individual at every
+    generation in one call (``generation`` an array); it must equal the generation-by-generation
+    values exactly, and turn negative where the analytic threshold says."""
+    alpha = np.arange(201)
+    _, pm = ga.adaptive_rates(1.0, 0.0, generation=alpha, max_generation=200, eq23="printed",
+                              **PAPER_RATES)
+    one_by_one = [ga.adaptive_rates(1.0, 0.0, generation=int(a), max_generation=200,
+                                    eq23="printed", **PAPER_RATES)[1] for a in alpha]
+    assert pm.shape == (201,) and np.array_equal(pm, np.array(one_by_one))
+    first_negative = int(alpha[pm < 0][0])
+    threshold = 200 * S.PM_MIN / (S.PM_MAX - S.PM_MIN)     # alpha / alpha_max > Pm_min / range
+    assert first_negative == int(np.floor(threshold)) + 1 == 12
+    _, corrected = ga.adaptive_rates(1.0, 0.0, generation=alpha, max_generation=200,
+                                     **PAPER_RATES)
+    assert np.all(np.diff(corrected) > 0) and corrected[-1] == pytest.approx(S.PM_MAX)
 
 
 def test_ga_runs_are_batched_reproducible_and_use_the_probabilities():
@@ -333,16 +362,16 @@ def test_select_best_breaks_ties_by_the_canonical_member_whatever_the_order():
 def test_batched_reference_optima_and_differential_evolution():
     box = list(S.PAPER_BOX)
     ks = np.array([5, 10, 20])
-    h, g = S.reference_optima(ks, box, n_starts=2, seed=3)
+    h, g = S.reference_optima(ks, bounds=box, n_starts=2, seed=3)
     assert h.shape == (3,) and g.shape == (3, 4)
     assert np.all(h >= S.lower_bound_H(4)) and np.all(h < 0.27)
     assert np.allclose(S.objective_H(g, ks), h, rtol=1e-9)       # Eq. 20 at the genes reported
     assert np.allclose(S.canonical_genes(g, box), g)             # canonical members
-    h1, g1 = S.reference_optimum(10, box, n_starts=2, seed=3)
+    h1, g1 = S.reference_optimum(10, bounds=box, n_starts=2, seed=3)
     assert h1 <= h[1] * (1 + 1e-9) or np.isclose(h1, h[1], rtol=1e-6)
     # over the whole circle the bound 1/4 is never passed (the near-degenerate labellings, where
     # the closed form breaks down, are excluded), and at k = 4 it is reached (a pair layout)
-    hf, _ = S.reference_optima([4, 9, 20], S.FULL_BOX, n_starts=2, seed=1)
+    hf, _ = S.reference_optima([4, 9, 20], bounds=S.FULL_BOX, n_starts=2, seed=1)
     assert np.all(hf >= 0.25 - 1e-12) and hf[0] < 0.2501
     # the baseline: all runs in one batch, reproducible, best-so-far history
     d = S.run_de(20, bounds=box, n_runs=24, generations=60, seed=np.random.default_rng(4))
@@ -351,7 +380,7 @@ def test_batched_reference_optima_and_differential_evolution():
     assert np.all(np.diff(d.history, axis=0) <= 0)
     assert np.allclose(d.history[-1], d.best_h)
     assert np.allclose(S.objective_H(d.best_x, 20), d.best_h)
-    assert np.median(d.best_h) < 1.02 * S.reference_optimum(20, box, n_starts=2, seed=0)[0]
+    assert np.median(d.best_h) < 1.02 * S.reference_optimum(20, bounds=box, n_starts=2, seed=0)[0]
 
 
 def test_convergence_generation():
@@ -369,7 +398,7 @@ def test_roundness_lsc_and_minimum_zone():
     rng = np.random.default_rng(0)
     rr = S.lowpass(rng.standard_normal((10, 256)), 30)
     assert np.all(S.mz_roundness(rr)[0] <= S.lsc_roundness(rr)[0] + 1e-12)
-    prof = S.random_profile(128, np.arange(2, 30), rng, roundness=3.0)
+    prof = S.random_profile(128, np.arange(2, 30), rng=rng, roundness=3.0)
     assert S.mz_roundness(prof)[0] == pytest.approx(3.0)
 
 
@@ -399,13 +428,27 @@ def test_simulated_measurements_average_the_noise():
     (lambda: S.objective_H(np.array([0.3, 2.0, 5.0, 1.0]), 1), "k = 1 is cancelled"),
     (lambda: S.run_ga(20, pop_size=7), "even"),
     (lambda: S.run_ga(20, generations=0), "generations"),
-    (lambda: S.run_ga(20, pc=1.5), "probabilities"),
+    (lambda: S.run_ga(20, pc=1.5), r"pc must be a probability in \[0, 1\], got 1.5"),
+    (lambda: S.run_ga(20, n_runs=2.5), r"n_runs must be an integer >= 1, got 2.5"),
+    (lambda: S.run_de(20, popsize=0), r"popsize must be an integer >= 1, got 0"),
+    (lambda: S.reference_optima([5], popsize=1), r"popsize must be an integer >= 2, got 1"),
+    (lambda: S.reference_optima([5], n_starts=True), r"n_starts must be an integer >= 1"),
+    (lambda: S.bound_layout(8, m=4), r"m must be an integer in \[1, 3\], got 4"),
+    (lambda: S.lower_bound_H(2), r"n_probes must be an integer >= 3, got 2"),
+    (lambda: S.worst_case_bound(7), r"n_samples must be an integer >= 8, got 7"),
+    (lambda: S.separate(np.zeros((4, 6)), [0.1, 2.0, 5.0], [1, 1, 1]),
+     r"samples per revolution \(the signals' last axis\) must be an integer >= 8, got 6"),
+    (lambda: S.simulate_measurements(np.zeros(8), np.zeros(8), np.zeros(8), [0, 1, 2, 3],
+                                     n_rev=2, interleave=0, async_sd=0, noise_sd=0,
+                                     n_measurements=1, rng=0), "interleave must be an integer"),
+    (lambda: S.random_profile(64, [2, 3], rng=True), "seed must be"),
     (lambda: S.run_ga(20, bounds=[(0, 1)] * 3), "four"),
     (lambda: S.run_ga(20, harmonics=[2, 3]), "either k"),
-    (lambda: S.adaptive_probabilities(1.0, 1.0, 5, 4), "generation"),
-    (lambda: S.adaptive_probabilities(1.0, 1.0, 1, 4, eq23="minus"), "eq23"),
+    (lambda: _rates(1.0, 5, 4), r"generation must be an integer in \[0, max_generation = 4\]"),
+    (lambda: _rates(1.0, 1.5), r"generation must be an integer"),
+    (lambda: _rates(1.0, 1, 4, eq23="minus"), "eq23"),
     (lambda: S.motion_from_scalar(np.zeros(8), "polar"), "unknown mapping"),
-    (lambda: S.lowpass(np.zeros(16), 9), "max_harmonic"),
+    (lambda: S.lowpass(np.zeros(16), 9), r"max_harmonic must be an integer in \[1, 8\], got 9"),
     (lambda: S.separate(np.zeros((4, 128)), S.probe_angles(POS, 128),
                         S.full_weights(S.probe_angles(POS, 128), 1.0), max_harmonic=65),
      "max_harmonic"),
@@ -502,9 +545,9 @@ def test_least_squares_with_more_probes_and_a_layout_it_cannot_use():
 def test_grid_layout_snaps_to_samples_and_cancelled_harmonics_match_separate():
     p, phi, w = S.grid_layout(np.r_[S.probe_angles([14, 65, 116], N) + 0.01, 1.953], N)
     assert p.tolist() == [0, 14, 65, 116] and np.allclose(w, S.full_weights(phi, 1.953))
-    assert S.cancelled_harmonics(phi, w, N) == []
+    assert S.cancelled_harmonics(phi, w, n_samples=N) == []
     _, ph2, w2 = _half_circle_layout()                      # weights (1, 0, 0, 1): every odd k
-    assert S.cancelled_harmonics(ph2, w2, N) == list(range(3, N // 2, 2))
+    assert S.cancelled_harmonics(ph2, w2, n_samples=N) == list(range(3, N // 2, 2))
     with pytest.raises(ValueError, match="one gene vector"):
         S.grid_layout(np.zeros((2, 4)), N)
 

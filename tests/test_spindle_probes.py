@@ -198,7 +198,8 @@ def test_the_noise_prediction_matches_monte_carlo():
         for method in ("least_squares", "weighted"):
             s = P.separate_probes(noise, phi, method=method)
             mc = np.sqrt((_without_01(s.profile) ** 2).mean())
-            pred = P.profile_noise_rms(s.amplification, n, sigma, n_rev)
+            pred = P.profile_noise_rms(s.amplification, n_samples=n, noise_sd=sigma,
+                                        n_revolutions=n_rev)
             assert abs(mc / pred - 1) < 0.08, (n_probes, method, mc, pred)
 
 
@@ -401,7 +402,8 @@ def test_a_file_of_the_physical_model_gives_the_true_roundness_and_error_motion(
     np.testing.assert_allclose(data.theta, c["theta"], atol=1e-9)
     s = P.separate_probe_data(data)
     truth = _form(c["coefs"])(c["theta"])
-    pred = P.profile_noise_rms(s.amplification, 360, c["noise"], 6)
+    pred = P.profile_noise_rms(s.amplification, n_samples=360, noise_sd=c["noise"],
+                                n_revolutions=6)
     for f in (roundness.lsc_roundness, roundness.mz_roundness):
         assert abs(f(s.profile)[0] - f(truth)[0]) <= 10 * pred + 1e-3
     fixed = P.fixed_directions(data, [])
@@ -682,7 +684,7 @@ def test_size_limits_and_a_missing_file(tmp_path, monkeypatch):
 def test_max_harmonic_and_a_cancelling_layout_allowed(tmp_path):
     path = _write(tmp_path, _good_text())
     with pytest.raises(P.ProbeFileError, match=r"max_harmonic must be an integer in "
-                                                r"2..\(N - 1\) // 2 = 31"):
+                                                r"\[2, 31\], got 32 \(the top is \(N - 1\) // 2"):
         P.read_probe_file(path, max_harmonic=32)
     assert P.read_probe_file(path, max_harmonic=10).max_harmonic == 10
     square = _write(tmp_path, _good_text(angles=(0.0, 90.0, 180.0, 270.0)), name="sq.csv")
@@ -738,7 +740,8 @@ def test_the_example_separates_to_its_truth_and_is_recognised_by_content(tmp_pat
     for method in ("least_squares", "weighted"):
         s = P.separate_probe_data(d, method=method)
         err = _without_01(s.profile) - _without_01(true_profile)
-        pred = P.profile_noise_rms(s.amplification, n, noise, d.n_revolutions)
+        pred = P.profile_noise_rms(s.amplification, n_samples=n, noise_sd=noise,
+                                    n_revolutions=d.n_revolutions)
         assert np.sqrt((err ** 2).mean()) < 1.3 * pred + 3e-5          # + the 1e-4 rounding
         mz_true = roundness.mz_roundness(_without_01(true_profile))[0]
         assert abs(roundness.mz_roundness(_without_01(s.profile))[0] - mz_true) < 0.02

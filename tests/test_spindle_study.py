@@ -14,7 +14,7 @@ def test_rank_check_of_the_symmetric_layout_finds_the_odd_harmonics_cancelled():
     phi = SP.probe_angles(pos, n)
     w = SP.full_weights(phi[1:], 0.5)
     r = np.random.default_rng(0).standard_normal(n)
-    rank, sv, s, warned = SP.rank_check(pos, phi[1:], w, r, 1e-9, 1e-12)
+    rank, sv, s, warned = SP.rank_check(pos, phi[1:], w, r, rtol=1e-9, roundoff=1e-12)
     assert rank == n // 2                               # every odd k vanishes (a3 != +-1)
     assert sv[0] > 0 and np.all(np.diff(sv) <= 1e-12 * sv[0])
     assert list(s.cancelled) == list(range(1, n // 2, 2)) and warned
@@ -26,18 +26,19 @@ def test_rank_check_refuses_a_threshold_below_round_off():
     phi = SP.probe_angles(pos, n)
     r = np.random.default_rng(0).standard_normal(n)
     with pytest.raises(RuntimeError, match="expected round-off below 1e-30"):
-        SP.rank_check(pos, phi[1:], SP.full_weights(phi[1:], 0.5), r, 1e-9, 1e-30)
+        SP.rank_check(pos, phi[1:], SP.full_weights(phi[1:], 0.5), r, rtol=1e-9,
+                      roundoff=1e-30)
 
 
 def test_convergence_statistics_of_hand_made_histories():
     hist = np.array([[1.0, 1.0, 1.0], [0.5, 1.0, 0.8], [0.3, 0.9, 0.3], [0.3, 0.9, 0.3]])
     res = SimpleNamespace(history=hist, best_h=hist[-1], label="toy", evaluations_per_generation=4)
-    st = SP.convergence_statistics("toy", res, 0.3, 0.01)
+    st = SP.convergence_statistics(res, name="toy", h_ref=0.3, rel_tol=0.01)
     assert st["reached_fraction"] == pytest.approx(2 / 3)   # runs 0 and 2 reach 0.3 at gen 2
     assert st["reached_median"] == 2.0
     assert st["plateau_median"] == 2.0                      # each run's own final value
     assert st["final_H_best"] == 0.3 and st["final_H_worst"] == 0.9
-    never = SP.convergence_statistics("toy", res, 0.01, 0.01)
+    never = SP.convergence_statistics(res, name="toy", h_ref=0.01, rel_tol=0.01)
     assert never["reached_fraction"] == 0 and np.isnan(never["reached_median"])
 
 

@@ -16,7 +16,7 @@ from sklearn.linear_model import Ridge
 from sklearn.model_selection import GroupKFold, cross_val_score
 
 from mtaccuracy import thermal
-from mtaccuracy.compendium import paths, runner, xu2022
+from mtaccuracy.compendium import paths, runner, xu2022, xu2022_reconstruction
 
 COMMITTED = paths.ROOT / xu2022.DEFAULT_DIR
 LAB = dict(experiments=(11, 12, 13, 14, 15), n_measurements=19,
@@ -38,9 +38,9 @@ def test_a_byte_identical_copy_of_the_reconstruction_anywhere_is_the_reconstruct
     shutil.copytree(COMMITTED, copy)
     (copy / "provenance.json").unlink()                 # what the copy says of itself is not asked
     data = thermal.read_measurements(copy)
-    assert xu2022.reconstruction_seed(copy, data) == thermal.synthetic.DEFAULT_SEED
+    assert xu2022.reconstruction_seed(copy, data) == xu2022_reconstruction.DEFAULT_SEED
     (copy / "experiments.csv").unlink()                 # optional file: its absence changes nothing
-    assert xu2022.reconstruction_seed(copy, data) == thermal.synthetic.DEFAULT_SEED
+    assert xu2022.reconstruction_seed(copy, data) == xu2022_reconstruction.DEFAULT_SEED
 
 
 def test_an_edited_copy_and_a_readers_data_are_not_the_reconstruction(tmp_path, lab):
@@ -71,18 +71,18 @@ def test_a_reconstruction_with_another_seed_is_known_by_its_numbers(tmp_path):
 
 def test_split_defaults_predict_the_last_experiment_from_all_others(lab):
     _, _, data = lab
-    assert xu2022.resolve_split("04", data, [], 0) == ([11, 12, 13, 14], 15)
-    assert xu2022.resolve_split("04", data, [], 12) == ([11, 13, 14, 15], 12)
-    assert xu2022.resolve_split("04", data, [13, 11], 15) == ([13, 11], 15)
+    assert xu2022.resolve_split("04", data, train=[], test=0) == ([11, 12, 13, 14], 15)
+    assert xu2022.resolve_split("04", data, train=[], test=12) == ([11, 13, 14, 15], 12)
+    assert xu2022.resolve_split("04", data, train=[13, 11], test=15) == ([13, 11], 15)
     recon = thermal.read_measurements(COMMITTED)
-    assert xu2022.resolve_split("04", recon, [], 0) == ([1, 2, 3], 4)      # the paper's split
+    assert xu2022.resolve_split("04", recon, train=[], test=0) == ([1, 2, 3], 4)   # the paper's
     with pytest.raises(runner.ParameterError, match=r"experiment\(s\) \[4\] are not in the data; "
                                                     r"they have \[11, 12, 13, 14, 15\]"):
-        xu2022.resolve_split("04", data, [], 4)
+        xu2022.resolve_split("04", data, train=[], test=4)
     with pytest.raises(runner.ParameterError, match="also a training experiment"):
-        xu2022.resolve_split("04", data, [11, 15], 15)
+        xu2022.resolve_split("04", data, train=[11, 15], test=15)
     with pytest.raises(runner.ParameterError, match="at least 2"):
-        xu2022.resolve_split("04", data, [11], 15)
+        xu2022.resolve_split("04", data, train=[11], test=15)
     assert [xu2022.resolve_inputs("auto", p) for p in (True, False)] == ["published", "selected"]
     assert xu2022.resolve_inputs("published", False) == "published"
 

@@ -83,7 +83,7 @@ def test_nothing_is_reused_from_a_bounded_fit_other_data_or_a_thin_tube():
 def test_the_search_with_reuse_chooses_what_fitting_every_candidate_chooses():
     x, y, groups = _linear()
     grid = [{"kernel": ["linear", "rbf"], "C": [0.1, 1.0, 10.0, 100.0], "epsilon": [0.01, 0.1]}]
-    ours = thermal.svr_search(x, y, groups, grid)
+    ours = thermal.svr_search(x, y, groups=groups, grid=grid)
     plain = _plain_search(x, y, groups, grid)
     assert ours.reused_fits_ > 0
     assert ours.cv_results_["params"] == plain.cv_results_["params"]
@@ -102,7 +102,7 @@ def test_on_the_reconstruction_the_search_is_the_one_before_issue_22():
     x_tr = thermal.design(tr, PAPER_INPUTS, "decoupled")
     x_te = thermal.design(te, PAPER_INPUTS, "decoupled")
     for cols, y in ((slice(0, 3), k), (slice(3, 6), b)):
-        ours = thermal.svr_search(x_tr[:, cols], y, tr.groups)
+        ours = thermal.svr_search(x_tr[:, cols], y, groups=tr.groups)
         plain = _plain_search(x_tr[:, cols], y, tr.groups, thermal.SVR_GRID)
         assert len(ours.cv_results_["params"]) == 40               # the full grid at 24 rows
         assert ours.best_params_ == plain.best_params_
@@ -130,16 +130,17 @@ def test_the_bounded_grid_leaves_out_exactly_the_c_above_the_bound():
         thermal.bounded_grid(one, 101, max_cn=100)
     # the search applies it to every grid, and the hyperparameter table counts what was tried
     x, y, groups = _linear(n=36)
-    s = thermal.svr_search(x, y, groups, [{"kernel": ["linear"], "C": [1.0, 10.0, 1000.0],
-                                           "epsilon": [0.1]}], max_cn=400)
+    s = thermal.svr_search(x, y, groups=groups, grid=[{"kernel": ["linear"],
+                                                       "C": [1.0, 10.0, 1000.0],
+                                                       "epsilon": [0.1]}], max_cn=400)
     assert [p["C"] for p in s.cv_results_["params"]] == [1.0, 10.0]
 
 
 def test_threads_give_the_same_numbers_as_one_thread():
     x, y, groups = _linear(noise=0.3, n=30)
-    one = thermal.svr_search(x, y, groups)
+    one = thermal.svr_search(x, y, groups=groups)
     with joblib.parallel_config(n_jobs=2):
-        two = thermal.svr_search(x, y, groups)
+        two = thermal.svr_search(x, y, groups=groups)
     assert two.best_params_ == one.best_params_
     assert np.array_equal(two.cv_results_["mean_test_score"], one.cv_results_["mean_test_score"])
     assert two.reused_fits_ == one.reused_fits_
@@ -167,8 +168,8 @@ def _small_data(n_exp=3, n_meas=8, seed=1):
 def test_progress_reports_each_step_and_the_default_is_silent(capsys):
     data = _small_data()
     said = []
-    r = thermal.evaluate_split(data, [1, 2], [3], 2, progress=said.append)
-    quiet = thermal.evaluate_split(data, [1, 2], [3], 2)
+    r = thermal.evaluate_split(data, train=[1, 2], test=[3], n_clusters=2, progress=said.append)
+    quiet = thermal.evaluate_split(data, train=[1, 2], test=[3], n_clusters=2)
     assert capsys.readouterr().out == ""
     assert r.table.equals(quiet.table)                              # progress changes nothing
     assert said[:5] == [f"sensitive points: {i} of 5 positions" for i in range(1, 6)]
@@ -178,7 +179,7 @@ def test_progress_reports_each_step_and_the_default_is_silent(capsys):
                           for t in "kb" for i in (2, 4, 6, 8, 10, 16, 22, 28, 34, 40))]
 
     said.clear()
-    thermal.leave_one_experiment_out(data, 2, reuse=[quiet], progress=said.append)
+    thermal.leave_one_experiment_out(data, n_clusters=2, reuse=[quiet], progress=said.append)
     assert said[-1] == "held out 3 (3 of 3): reused"
     assert "held out 1 (1 of 3): decoupled_svr, b: 40 of 40 candidates" in said
     assert "held out 2 (2 of 3): sensitive points: 5 of 5 positions" in said

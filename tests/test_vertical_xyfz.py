@@ -1,11 +1,12 @@
-"""The XYFZ machine of Guo et al. 2016: numpy product, sympy product, printed closed form."""
+"""The XYFZ machine of Guo et al. 2016: the chain against the independent sympy product of the
+paper's matrices (:mod:`mtaccuracy.compendium.guo2016`), arms, linearity, bad input."""
 
 import numpy as np
 import pytest
 import sympy as sp
 
+from mtaccuracy.compendium import guo2016
 from mtaccuracy.machines import build
-from mtaccuracy.machines import vertical_xyfz as guo
 
 M = build("vertical_xyfz")
 NAMES = M.error_names
@@ -64,8 +65,8 @@ def test_response_is_linear_for_small_errors():
 
 
 def test_numpy_product_equals_independent_sympy_product():
-    exprs = guo.symbolic_position_error()
-    sym_e, sym_p = guo.symbols()
+    exprs = guo2016.symbolic_position_error()
+    sym_e, sym_p = guo2016.symbols()
     f = sp.lambdify([list(sym_e.values()), list(sym_p.values())], exprs, "numpy")
     e = RNG.uniform(-1, 1, size=(6, 21)) * SCALE * 50  # large errors: every order matters
     num = M.pose_error(e, POSE)[:, :3]
@@ -74,64 +75,10 @@ def test_numpy_product_equals_independent_sympy_product():
     assert np.allclose(num, ref, rtol=1e-10, atol=1e-12)
 
 
-def test_second_order_expansion_has_third_order_remainder():
-    sym_e, sym_p = guo.symbols()
-    f2 = sp.lambdify([list(sym_e.values()), list(sym_p.values())], guo.second_order(), "numpy")
-    e = RNG.uniform(-1, 1, size=(4, 21)) * SCALE
-    gaps = []
-    for t in (10.0, 20.0):
-        full = M.pose_error(t * e, POSE)[:, :3]
-        gaps.append(np.abs(full - np.column_stack(f2((t * e).T, [POSE[k] for k in sym_p]))).max())
-    assert gaps[1] / gaps[0] == pytest.approx(8.0, rel=0.05)  # scales as t^3
-
-
 def test_exact_rotations_agree_to_first_order():
     e = RNG.uniform(-1, 1, size=(4, 21)) * SCALE
     a, b = M.pose_error(e, POSE), build("vertical_xyfz", exact=True).pose_error(e, POSE)
     assert 0 < np.abs(a - b).max() < 1e-6  # eps^2 * arm: (3.2e-5)^2 * 300 mm ~ 3e-7 mm
-
-
-def test_typo_list_finds_the_known_typos():
-    rows = {(r["equation"], r["term"]): r for r in guo.closed_form_typos()}
-    assert rows[("Eq. 11", "1")]["printed"] == "D1"  # spurious constant
-    assert rows[("Eq. 12", "1")]["printed"] == "D2"
-    assert rows[("Eq. 11", "dy(y)*ez(x)")]["printed"] == "-2"  # dy(y) written twice
-    assert rows[("Eq. 11", "dy(z)*ez(x)")]["kind"] == "missing"
-    assert rows[("Eq. 12", "dx(y)*dz(x)")]["kind"] == "spurious"  # dz(x) for ez(x)
-    assert rows[("Eq. 13", "ey(x)*ey(y)")]["printed"] == "-D3 + z"  # sign of z term
-    assert ("Eq. 8", "-ey(z)") in rows
-    # No first-order term is wrong except the spurious constants.
-    in_eqs = [r for r in rows.values() if r["equation"] != "Eq. 8" and r["kind"] != "bracket"]
-    assert {r["degree"] for r in in_eqs} == {0, 2}  # no first-order term is wrong
-    # Eq. 13: the missing z*S_xz*ey(x) and the bracket after y, never closed as printed
-    assert rows[("Eq. 13", "S_xz*ey(x)")]["derived"] == "z"
-    assert rows[("Eq. 13", "y*(S_xy*ey(x) + ex(x))")]["kind"] == "bracket"
-
-
-def test_the_bracket_reading_is_the_one_compared():
-    """The y terms of the transcribed Eq. 13 are exactly the declared reading of its unclosed
-    bracket, and that reading is also what the matrix product gives."""
-    e, p = guo.symbols()
-    pose = (p[k] for k in ("x", "y", "z", "D1", "D2", "D3"))
-    ez = sp.expand(guo.printed_closed_form(e, *pose)[2])
-    y_terms = sp.expand(sp.diff(ez, p["y"]) * p["y"])
-    (eq, comp, _, reading, degree), = guo.PRINTED_UNBALANCED
-    assert (eq, comp, degree) == ("Eq. 13", "Ez", 1)
-    expected = p["y"] * (e["S_xy"] * e["ey(x)"] + e["ex(x)"])
-    assert str(expected) == reading
-    assert sp.expand(y_terms - expected) == 0
-    derived_y = sp.expand(sp.diff(guo.second_order()[2], p["y"]) * p["y"])
-    assert sp.expand(derived_y - expected) == 0
-
-
-def test_printed_form_differs_from_product_only_by_its_typos():
-    e = RNG.uniform(0, 1, size=(50, 21)) * SCALE
-    named = {s: e[:, j] for j, s in enumerate(NAMES)}
-    printed = np.column_stack(guo.printed_closed_form(named, **POSE))
-    full = M.pose_error(e, POSE)[:, :3]
-    gap = printed - full - np.array([POSE["D1"], POSE["D2"], 0.0])
-    assert np.abs(gap).max() < 1e-4  # second-order size (the dz*dx typo is ~1e-5 mm)
-    assert np.abs(gap).max() > 1e-7  # but not zero: the typos are real
 
 
 @pytest.mark.parametrize("errors, pose, message", [

@@ -77,3 +77,24 @@ def test_the_settings_study_against_its_definition(counts):
     assert np.allclose(study.speedup_percent,
                        100 * (1 - study.improved_median / study.traditional_median))
     pd.testing.assert_frame_equal(study, yang2021.ga_settings_study(8, **kw))
+
+
+#: Notebook 05's default parameters that ``check_run`` reads.
+RUN = dict(probe_positions=[0, 14, 65, 116], n_samples=128, lowpass_harmonic=50,
+           exp_n_samples=128, interleave=2, worst_k=20, harmonic_k=20, k_sweep_max=80,
+           pop_size=50, unrelated="ignored")
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(probe_positions=[1, 14, 65, 116]), r"probe_positions must be 4 distinct .* 0\.\.127"),
+    (dict(probe_positions=[0, 14, 14, 116]), "probe_positions must be 4 distinct"),
+    (dict(lowpass_harmonic=65), "need lowpass_harmonic <= exp_n_samples / 2"),
+    (dict(interleave=3), "need .* and interleave dividing exp_n_samples"),
+    (dict(worst_k=64), "worst_k must stay below N/2 = 64"),
+    (dict(harmonic_k=81), "need harmonic_k <= k_sweep_max"),
+    (dict(pop_size=51), "need .* and an even pop_size"),
+])
+def test_check_run_names_the_parameters_that_contradict_each_other(change, words):
+    yang2021.check_run(RUN, "05_x")                    # the defaults pass
+    with pytest.raises(ValueError, match=r"^05_x: " + words):
+        yang2021.check_run({**RUN, **change}, "05_x")

@@ -56,6 +56,20 @@ def test_group_shares_count_the_groups_of_table1():
     assert np.allclose(d1.pige_mean, 1 / 11) and (d1.pdge_mean == 0).all()
 
 
+def test_diagonal_test_points_span_the_travel_box_through_its_centre():
+    tp = zheng2024.diagonal_test_points(5, "zero")
+    assert len(tp["x"]) == 20 and np.allclose(tp["x"][tp["fraction"] == 0.5], 0.0)
+    assert tp["x"].min() == -400 and tp["y"].max() == 425 and np.all(tp["A"] == 0)
+    # "sweep": A and C move with the same fraction of their travel as x, y, z
+    sweep = zheng2024.diagonal_test_points(3, "sweep")
+    assert np.allclose(sweep["A"], np.deg2rad(-130 + 260 * sweep["fraction"]))
+    assert np.allclose(sweep["C"], 2 * np.pi * sweep["fraction"])
+    with pytest.raises(ValueError, match="allowed: sweep, zero"):
+        zheng2024.diagonal_test_points(5, "random")
+    with pytest.raises(ValueError, match=r"n_per_diagonal must be an integer >= 2, got 1"):
+        zheng2024.diagonal_test_points(1)
+
+
 def test_only_angular_errors_move_the_tool_axis():
     """Section 3.2's attitude statement holds at every pose of a rigid-body model."""
     machine = build("ac_double_turntable")
@@ -64,7 +78,7 @@ def test_only_angular_errors_move_the_tool_axis():
              "z": rng.uniform(-275, 275, 4), "A": rng.uniform(-2.2, 2.2, 4),
              "C": rng.uniform(0, 6.2, 4)}
     sd = np.array([5e-3 if e.translational else 1.6e-5 for e in machine.catalogue])
-    s = linear_indices(machine.linear_jacobian(poses), sd)
+    s = linear_indices(machine.jacobian(poses), sd)
     for p in s:
         d = zheng2024.group_shares(p, machine.catalogue, COMP)
         assert (d.translational[3:] < 1e-12).all()

@@ -1,4 +1,4 @@
-"""A thermal-error dataset from the tests' own physical model (not ``thermal.synthetic``).
+"""A thermal-error dataset from the tests' own physical model (not the paper's reconstruction).
 
 A ball screw heated by its moving nut: one-dimensional conduction along the screw (explicit
 finite differences, 1 mm/s-stable steps), a bearing and a motor as first-order nodes, a bed that

@@ -18,6 +18,7 @@ Science (usable without this repository; none of it imports :mod:`mtaccuracy.com
 ``thermal``              thermal error modelling: data, clustering, estimators, validation
 ``optimise``             a genetic algorithm over real or binary encodings
 ``csvlines``             CSV records with the lines an editor shows (the readers' messages)
+``validate``             the argument checks every public function uses (one wording)
 =======================  ================================================================
 
 The compendium's machinery (runner, book, provenance, published values, paths, plotting,

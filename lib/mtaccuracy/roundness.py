@@ -1,6 +1,8 @@
-"""Roundness of a sampled profile: least-squares circle (limacon model, ``scipy.linalg.lstsq``)
-and minimum zone (a linear programme, ``scipy.optimize.linprog``), its Fourier coefficients,
-and a low-pass filter.  Reusable for any roundness measurement; lengths in any one unit.
+"""Roundness of a sampled profile: least-squares circle, minimum zone, harmonics, low-pass.
+
+Least-squares circle (limacon model, ``scipy.linalg.lstsq``) and minimum zone (a linear
+programme, ``scipy.optimize.linprog``), the profile's Fourier coefficients, and a low-pass
+filter.  Reusable for any roundness measurement; lengths in any one unit.
 """
 
 from __future__ import annotations
@@ -11,7 +13,12 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import linprog
 
+from . import validate
+
 TWO_PI = 2.0 * np.pi
+
+#: The fewest samples per revolution the library takes for a profile (and so separates).
+_MIN_SAMPLES = 8
 
 
 def harmonic_coefficients(signal, harmonics) -> tuple[np.ndarray, np.ndarray]:
@@ -58,10 +65,7 @@ def lowpass(signals, max_harmonic: int) -> np.ndarray:
     """
     x = np.asarray(signals, dtype=float)
     n = x.shape[-1]
-    if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
-            or not 1 <= max_harmonic <= n // 2:
-        raise ValueError(f"max_harmonic must be an integer in 1..N/2 = {n // 2}, "
-                         f"got {max_harmonic!r}")
+    max_harmonic = validate.integer(max_harmonic, "max_harmonic", low=1, high=n // 2)
     spec = np.fft.rfft(x, axis=-1)
     spec[..., max_harmonic + 1:] = 0
     return np.fft.irfft(spec, n=n, axis=-1)
@@ -69,8 +73,9 @@ def lowpass(signals, max_harmonic: int) -> np.ndarray:
 
 def _profile(profile):
     r = np.asarray(profile, dtype=float)
-    if r.ndim < 1 or r.shape[-1] < 8 or not np.all(np.isfinite(r)):
-        raise ValueError("profile must be finite with at least 8 samples on the last axis")
+    if r.ndim < 1 or r.shape[-1] < _MIN_SAMPLES or not np.all(np.isfinite(r)):
+        raise ValueError(f"profile must be finite with at least {_MIN_SAMPLES} samples on the "
+                         f"last axis")
     return r
 
 

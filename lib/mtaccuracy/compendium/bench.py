@@ -129,7 +129,7 @@ def task_zheng_mcs():
     def run():   # sampling included; streamed: the base rows and AB runs are never all held
         return S.sobol_indices(lambda z: m.pose_error(z, pose), design, chunk=250_000)
     t, (s1, st) = _min_time(run)
-    lin = S.linear_indices(m.linear_jacobian(pose), sd)[0]
+    lin = S.linear_indices(m.jacobian(pose), sd)[0]
     return dict(time=t, note=f"largest |ST - linear closed form| {np.abs(st.T - lin).max():.1e}")
 
 
@@ -145,7 +145,7 @@ def _sobol_memory(n: int) -> dict:
     from .. import sensitivity as S
 
     m, sd, pose = _zheng()
-    jac = m.linear_jacobian(pose).reshape(6, 41)
+    jac = m.jacobian(pose).reshape(6, 41)
     design = S.SobolDesign(n, 41, "mc", 2, to_inputs=lambda u: S.from_unit_normal(u, sd))
     t0 = time.perf_counter()
     s1, st = S.sobol_indices(lambda e: e @ jac.T, design, chunk=250_000)
@@ -170,8 +170,8 @@ def task_zheng_linear_pose():
                 out = fn()
             return out
         return run
-    t, s = _min_time(each(lambda: S.linear_indices(m.linear_jacobian(pose), sd)))
-    t_jac, jac = _min_time(each(lambda: m.linear_jacobian(pose)))
+    t, s = _min_time(each(lambda: S.linear_indices(m.jacobian(pose), sd)))
+    t_jac, jac = _min_time(each(lambda: m.jacobian(pose)))
     t_idx, _ = _min_time(each(lambda: S.linear_indices(jac, sd)))
     return dict(time=t / loop,
                 note=f"{t / loop * 1e3:.3f} ms per call (loop of {loop} timed); of it Jacobian "
@@ -187,8 +187,8 @@ def task_zheng_linear_atlas():
     rng = np.random.default_rng(0)
     poses = {k: rng.uniform(lo, hi, 10_000) for k, (lo, hi) in m.travels.items()}
     var = sd**2
-    t, s = _min_time(lambda: S.indices_at_poses(m.linear_jacobian(poses), var))
-    t_jac, jac = _min_time(lambda: m.linear_jacobian(poses))
+    t, s = _min_time(lambda: S.indices_at_poses(m.jacobian(poses), var))
+    t_jac, jac = _min_time(lambda: m.jacobian(poses))
     return dict(time=t, note=f"{len(s) / t / 1e3:.0f} k poses/s; of it Jacobian "
                              f"{t_jac * 1e3:.0f} ms; output {s.shape}")
 
@@ -325,7 +325,7 @@ def task_xu_split_limit():
 
     data = _thermal_limit_data()
     t0 = time.perf_counter()
-    thermal.evaluate_split(data, list(range(1, 10)), [10], n_clusters=3)
+    thermal.evaluate_split(data, train=list(range(1, 10)), test=[10], n_clusters=3)
     return dict(time=time.perf_counter() - t0, note="one run (not min of 3)")
 
 

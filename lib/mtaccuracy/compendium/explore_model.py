@@ -9,7 +9,7 @@ Machines (tab "Machine")
     (:func:`mtaccuracy.machines.chain.iso_machine`) with the pose ranges and the default error
     ranges the explorer offers (:class:`MachineSetup` says where each came from).
     :func:`indices_at_pose` gives the closed-form Sobol indices of the first-order model at one
-    pose (:func:`mtaccuracy.sensitivity.linear_indices` of ``machine.linear_jacobian``);
+    pose (:func:`mtaccuracy.sensitivity.linear_indices` of ``machine.jacobian``);
     :func:`dominant_map` the error with the largest index over a grid of two axes, batched
     (one Jacobian call on every grid pose, :func:`mtaccuracy.sensitivity.dominant_errors`);
     :func:`slider_update` is what one slider move computes (timed by ``make bench``).
@@ -364,7 +364,7 @@ def pose_of(setup: MachineSetup, values: Mapping[str, float] | None = None) -> d
     Returns
     -------
     dict of str to float or array
-        For ``machine.linear_jacobian``.
+        For ``machine.jacobian``.
     """
     values = dict(values or {})
     unknown = sorted(set(values) - {a.name for a in setup.axes})
@@ -410,7 +410,7 @@ def indices_at_pose(setup: MachineSetup, values: Mapping[str, float] | None = No
 
     ``S_ki = J_ki^2 sd_i^2 / sum_j J_kj^2 sd_j^2`` (:func:`mtaccuracy.sensitivity.
     linear_indices`) with ``J`` the machine's closed-form Jacobian
-    (``machine.linear_jacobian``) and ``sd_i = h_i / sqrt(3)`` (uniform on ``+- h_i``).
+    (``machine.jacobian``) and ``sd_i = h_i / sqrt(3)`` (uniform on ``+- h_i``).
 
     Parameters
     ----------
@@ -427,7 +427,7 @@ def indices_at_pose(setup: MachineSetup, values: Mapping[str, float] | None = No
     """
     sd = error_half_ranges(setup, position_um=position_um,
                            angular_arcsec=angular_arcsec) / np.sqrt(3.0)
-    jac = setup.machine.linear_jacobian(pose_of(setup, values))          # (1, q, d)
+    jac = setup.machine.jacobian(pose_of(setup, values))          # (1, q, d)
     idx = S.linear_indices(jac, sd)[0]                                   # (q, d)
     first = S.first_order_outputs(jac, sd**2)[0]
     idx[~first] = 0.0
@@ -511,7 +511,7 @@ def dominant_map(setup: MachineSetup, values: Mapping[str, float] | None = None,
                  angular_arcsec: float | None = None) -> DominantMap:
     """The dominant error over a ``steps x steps`` grid of two axes, the others fixed.
 
-    One batched ``machine.linear_jacobian`` call on all grid poses (a leading pose axis, no
+    One batched ``machine.jacobian`` call on all grid poses (a leading pose axis, no
     loop over them), then :func:`mtaccuracy.sensitivity.dominant_errors` (ties to the first in
     the catalogue; -1 for an output without a first-order term) and
     :func:`mtaccuracy.sensitivity.indices_at_poses` for the index shown.
@@ -547,7 +547,7 @@ def dominant_map(setup: MachineSetup, values: Mapping[str, float] | None = None,
         grid[a2] = vv.ravel()
     var = error_half_ranges(setup, position_um=position_um,
                             angular_arcsec=angular_arcsec) ** 2 / 3.0
-    jac = setup.machine.linear_jacobian(pose_of(setup, grid))            # (G, q, d)
+    jac = setup.machine.jacobian(pose_of(setup, grid))            # (G, q, d)
     dom = S.dominant_errors(jac, var)                                    # (G, q)
     idx = S.indices_at_poses(jac, var)                                   # (G, d, q)
     top = np.take_along_axis(idx, np.maximum(dom, 0)[:, None, :], axis=1)[:, 0, :]
@@ -887,7 +887,7 @@ def thermal_prediction(data, *, train: Sequence[int], test: int, inputs: str = "
         sensors = None
     else:
         raise ValueError(f"inputs must be 'published' or 'selected', got {inputs!r}")
-    res = thermal.evaluate_split(data, train, [test], kinds=(kind,), sensors=sensors,
+    res = thermal.evaluate_split(data, train=train, test=[test], kinds=(kind,), sensors=sensors,
                                  progress=progress, baselines=("uncompensated",))
     name = f"decoupled_{kind}"
     measured, predicted = res.measured, res.predictions[name]

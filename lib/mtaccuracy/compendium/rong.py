@@ -1,24 +1,36 @@
-"""The compendium's side of notebook 02 (Rong et al.): checks of the sweep parameters, the
-ranking precision of the 90 % rule, and the study of the key errors under two defensible
-range sets (the paper's Table 2 is lost)."""
+"""The compendium's side of notebook 02 (Rong et al.): the paper's study on the horizontal machine.
+
+The model of the Sobol' study (errors and tool-tip position as inputs), the exact Sobol indices
+of its linearised model (the reference the sampled estimates converge to), the tools of the
+tool-length study, checks of the sweep parameters, the ranking precision of the 90 % rule, and
+the study of the key errors under two defensible range sets (the paper's Table 2 is lost).  The
+machine itself is :class:`mtaccuracy.machines.horizontal_3axis.Horizontal3Axis`.
+"""
 
 from __future__ import annotations
 
-import numpy as np
+from collections.abc import Mapping
 
+import numpy as np
+import pandas as pd
+
+from .. import sensitivity as S
 from .parameters import ParameterError
 
-__all__ = ["check_sweeps", "ranked", "half_widths_from_ranges", "range_path_study"]
+__all__ = ["check_sweeps", "ranked", "half_widths_from_ranges", "range_path_study",
+           "linear_sobol_indices", "linear_sobol_indices_batch", "linear_indices_at_poses",
+           "errors_and_pose_model", "errors_at_poses_model", "tool_length_offsets"]
 
 #: Decimals at which the total indices are ranked by the 90 % rule and written to the tables.
 RANK_DECIMALS = 6
 
 
 def ranked(st, decimals: int = RANK_DECIMALS) -> np.ndarray:
-    """Total indices as the 90 % rule ranks them, and as the tables write them: near-equal
-    values merged (:func:`mtaccuracy.sensitivity.merge_ties`, rounding noise), then rounded to
-    ``decimals``.  Values equal as written tie, and the rule's stable sort takes them in
-    catalogue order, so a reader who sorts the saved table gets the rule's order.
+    """Total indices as the 90 % rule ranks them, and as the tables write them.
+
+    Near-equal values are merged (:func:`mtaccuracy.sensitivity.merge_ties`, rounding noise),
+    then rounded to ``decimals``.  Values equal as written tie, and the rule's stable sort takes
+    them in catalogue order, so a reader who sorts the saved table gets the rule's order.
 
     Errors that enter a component identically (the model's symmetry) have equal indices; a
     Sobol' estimate separates them by sampling noise only (about 1e-10 at a power-of-two
@@ -35,16 +47,15 @@ def ranked(st, decimals: int = RANK_DECIMALS) -> np.ndarray:
     -------
     array, the shape of ``st`` (``-0.0`` written as ``0``)
     """
-    from ..sensitivity import merge_ties
-
-    return np.round(merge_ties(np.asarray(st, dtype=float)), decimals) + 0.0
+    return np.round(S.merge_ties(np.asarray(st, dtype=float)), decimals) + 0.0
 
 
 def half_widths_from_ranges(catalogue, position_mm: float, angular_rad: float) -> np.ndarray:
-    """Half-widths (D,) of symmetric ranges of one size per kind: ``position_mm`` for the
-    translational errors (positioning, straightness), ``angular_rad`` for every angular one
-    (angular error motions and squareness), as Zheng et al. 2024 state theirs (+/-15 um,
-    +/-10 arcsec, Section 3.1).
+    """Half-widths (D,) of symmetric ranges of one size per kind of error (translational, angular).
+
+    ``position_mm`` for the translational errors (positioning, straightness), ``angular_rad``
+    for every angular one (angular error motions and squareness), as Zheng et al. 2024 state
+    theirs (+/-15 um, +/-10 arcsec, Section 3.1).
 
     Parameters
     ----------
@@ -64,19 +75,20 @@ def half_widths_from_ranges(catalogue, position_mm: float, angular_rad: float) -
 
 def range_path_study(machine, half_a, half_b, ts, *, unit_rows, workspace_mm, tool,
                      threshold: float, outputs=("Ex", "Ey", "Ez")):
-    """The 90 % rule and the reduced model for error ranges between two sets: half-widths
-    ``half_a**(1 - t) * half_b**t`` (geometric path; t = 0 is set a, t = 1 set b), errors
-    uniform on +/- those, the tool tip uniform over the workspace.
+    """The 90 % rule and the reduced model for error ranges between two sets of half-widths.
 
+    Half-widths ``half_a**(1 - t) * half_b**t`` (geometric path; t = 0 is set a, t = 1 set b),
+    errors uniform on +/- those, the tool tip uniform over the workspace.
     Per t: the key errors from the exact workspace-pooled indices of the linearised model
-    (:func:`mtaccuracy.machines.horizontal_3axis.linear_sobol_indices`, ranked by
-    :func:`ranked`) per output and their union, and the full and reduced model (non-key errors
-    zero) on the same unit-cube rows, mapped to the ranges of that t.  A common factor on all
-    ranges changes no count and no ratio; only the millimetres scale.
+    (:func:`linear_sobol_indices`, ranked by :func:`ranked`) per output and their union, and
+    the full and reduced model (non-key errors zero) on the same unit-cube rows, mapped to the
+    ranges of that t.  A common factor on all ranges changes no count and no ratio; only the
+    millimetres scale.
 
     Parameters
     ----------
     machine : Horizontal3Axis
+        The machine whose D errors are studied (its layout and tool convention).
     half_a, half_b : arrays (D,)
         Half-widths of the two sets (mm, rad), > 0.
     ts : array (T,)
@@ -98,11 +110,6 @@ def range_path_study(machine, half_a, half_b, ts, *, unit_rows, workspace_mm, to
         t, n_key per output, n_key (union), simplification_rate, full_maxabs_mm,
         residual_maxabs_mm, residual_relative (max |residual| / max |full|), key_errors.
     """
-    import pandas as pd
-
-    from .. import sensitivity as S
-    from ..machines import horizontal_3axis as h3
-
     names, d = list(machine.error_names), machine.n_errors
     ha, hb = (np.asarray(h, dtype=float) for h in (half_a, half_b))
     if ha.shape != (d,) or hb.shape != (d,) or np.any(ha <= 0) or np.any(hb <= 0):
@@ -111,11 +118,11 @@ def range_path_study(machine, half_a, half_b, ts, *, unit_rows, workspace_mm, to
         raise ValueError(f"unit_rows must be (n, {d + 3}): the errors, then x, y, z")
     box = dict(zip(("x", "y", "z"), ((0.0, float(v)) for v in workspace_mm), strict=True))
     pose_b = np.array([[0.0, 0.0, 0.0], [float(v) for v in workspace_mm]])
-    model = h3.errors_and_pose_model(machine, tool)
+    model = errors_and_pose_model(machine, tool)
     rows = []
     for t in np.asarray(ts, dtype=float):
         h = ha ** (1 - t) * hb ** t
-        _, st = h3.linear_sobol_indices(machine, np.vstack([-h, h]), pose=tool, pose_bounds=box)
+        _, st = linear_sobol_indices(machine, np.vstack([-h, h]), pose=tool, pose_bounds=box)
         sets = S.key_errors_by_output(ranked(st), names, list(outputs), threshold)
         union = S.union_key_set(sets, names)
         x = S.from_unit_uniform(np.asarray(unit_rows), np.hstack([np.vstack([-h, h]), pose_b]))
@@ -130,11 +137,30 @@ def range_path_study(machine, half_a, half_b, ts, *, unit_rows, workspace_mm, to
     return pd.DataFrame(rows)
 
 
-def check_sweeps(workspace_mm, tool_offset_mm, sweep_thresholds, tool_lengths_mm, n_plot: int,
+def check_sweeps(*, workspace_mm, tool_offset_mm, sweep_thresholds, tool_lengths_mm, n_plot: int,
                  n_base: int) -> int:
-    """Refuse sweep parameters the notebook cannot run (a clear message each); returns the
-    number of thresholds of the sweep.  Raises
-    :class:`~mtaccuracy.compendium.parameters.ParameterError`."""
+    """Refuse sweep parameters notebook 02 cannot run, with a clear message each.
+
+    Parameters
+    ----------
+    workspace_mm, tool_offset_mm : sequence of 3 floats
+        The notebook's parameters of those names (mm): three values each.
+    sweep_thresholds, tool_lengths_mm : sequence of 3 floats
+        ``[first, last, step]`` of the threshold sweep (0 < first <= last < 1) and of the tool
+        lengths (mm); at most 200 values each.
+    n_plot, n_base : int
+        Samples drawn as lines (at most ``n_base``) and the base sample size.
+
+    Returns
+    -------
+    int
+        The number of thresholds of the sweep.
+
+    Raises
+    ------
+    ~mtaccuracy.compendium.parameters.ParameterError
+        Naming the parameter and the rule it breaks.
+    """
     if len(workspace_mm) != 3 or len(tool_offset_mm) != 3:
         raise ParameterError("workspace_mm and tool_offset_mm need three values (x, y, z)")
     if len(sweep_thresholds) != 3 or not 0 < sweep_thresholds[0] <= sweep_thresholds[1] < 1 \
@@ -156,12 +182,41 @@ def check_sweeps(workspace_mm, tool_offset_mm, sweep_thresholds, tool_lengths_mm
     return n_sweep
 
 
-def tool_length_figure(t_len, tool_study, key_tool, names, outputs, no_effect, n_key_pub: int,
-                       threshold: float, published_colour):
-    """Key errors against the tool length: the counts per output and their union beside the
-    published count, the largest total index of the errors that need an arm (with the RMS
-    tool-tip error, dotted), and the key set at every length."""
-    import matplotlib.pyplot as plt
+def tool_length_figure(t_len, tool_study, key_tool, *, names, outputs, no_effect,
+                       n_key_pub: int, threshold: float, published_colour):
+    """The figure of the key errors against the tool length (notebook 02, Section 8).
+
+    Three panels: the counts per output and their union beside the published count, the
+    largest total index of the errors that need an arm (with the RMS tool-tip error, dotted),
+    and the key set at every length.
+
+    Parameters
+    ----------
+    t_len : array (T,)
+        Tool lengths (mm), evenly spaced.
+    tool_study : DataFrame (T, ...)
+        The notebook's table: ``n_key_<output>``, ``n_key``, ``rms_error_mm`` and
+        ``ST_max_<symbol>`` of every symbol of ``no_effect``.
+    key_tool : array (T, D)
+        1 where an error is key at that length (union), else 0.
+    names : list of str
+        The D error symbols.
+    outputs : list of str
+        The output names (``Ex Ey Ez``).
+    no_effect : list of str
+        The errors without an arm at length 0.
+    n_key_pub : int
+        The published number of key errors.
+    threshold : float
+        The share of the 90 % rule (titles).
+    published_colour : str
+        Colour of the published values.
+
+    Returns
+    -------
+    matplotlib Figure
+    """
+    import matplotlib.pyplot as plt  # the compendium extra, an optional heavy dependency
 
     step = t_len[1] - t_len[0] if len(t_len) > 1 else 1.0
     d = len(names)
@@ -196,3 +251,191 @@ def tool_length_figure(t_len, tool_study, key_tool, names, outputs, no_effect, n
                  "linearised indices)")
     fig.tight_layout()
     return fig
+
+
+def linear_sobol_indices(machine, bounds, *, pose: Mapping | None = None,
+                         pose_bounds: Mapping | None = None, components: int = 3
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Exact Sobol indices (S1, ST), each (21, components), of the *first-order* model.
+
+    Errors are independent uniforms on ``bounds`` (2, 21).  Either one ``pose`` (a mapping of
+    scalars; then S1 = ST), or ``pose_bounds`` mapping some pose names to ``(low, high)``: those
+    coordinates are uniform in the box (the others fixed by ``pose``) and independent of the
+    errors.  The first-order coefficients are affine in the pose, so the pose expectations of
+    their squares are exact with 2-point Gauss-Legendre quadrature per coordinate.  This is the
+    reference the Monte Carlo (Saltelli) estimates converge to, up to the second-order terms of
+    the full model (about 1e-4 of the error here).  Errors that enter identically (same
+    coefficients, same range) get bitwise-equal indices.  One case of
+    :func:`linear_sobol_indices_batch`.
+
+    Parameters
+    ----------
+    machine : Horizontal3Axis
+        The machine; its ``jacobian`` gives the coefficients.
+    bounds : array (2, 21)
+        Uniform error ranges (mm, rad).
+    pose : mapping, optional
+        Fixed pose coordinates (mm), scalars: axes not in ``pose_bounds`` and tool offsets.
+    pose_bounds : mapping, optional
+        Pose name -> (low, high) in mm: that coordinate uniform on the interval.
+    components : int
+        Output rows kept (3: the position error Ex, Ey, Ez; 6: with the orientation).
+
+    Returns
+    -------
+    s1, st : arrays (21, components)
+
+    Raises
+    ------
+    ValueError
+        If a value of ``pose`` is not a scalar (use :func:`linear_sobol_indices_batch`).
+    """
+    base = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in (pose or {}).items()}
+    if any(v.shape != (1,) for v in base.values()):
+        raise ValueError("linear_sobol_indices takes one pose (scalars); "
+                         "use linear_sobol_indices_batch for many")
+    s1, st, _ = linear_sobol_indices_batch(machine, bounds, poses=base, pose_bounds=pose_bounds,
+                                           components=components)
+    return s1[0], st[0]
+
+
+def linear_sobol_indices_batch(machine, bounds, *, poses: Mapping | None = None,
+                               pose_bounds: Mapping | None = None, components: int = 3
+                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`linear_sobol_indices` for T cases at once (e.g. T tool lengths), with the variance.
+
+    ``poses`` maps pose names to scalars or (T,) arrays, ``pose_bounds`` as there (the same box
+    for every case).  All from one batched Jacobian over the T x 2^k quadrature poses.
+
+    Parameters
+    ----------
+    machine : Horizontal3Axis
+        The machine; its ``jacobian`` gives the coefficients.
+    bounds : array (2, 21)
+        Uniform error ranges (mm, rad).
+    poses : mapping, optional
+        Pose name -> scalar or (T,) array (mm): axes not in ``pose_bounds`` and tool offsets.
+    pose_bounds : mapping, optional
+        Pose name -> (low, high) in mm: that coordinate uniform on the interval.
+    components : int
+        Output rows kept (3: the position error Ex, Ey, Ez; 6: with the orientation).
+
+    Returns
+    -------
+    s1, st : arrays (T, 21, components)
+    variance : array (T, components)
+        The output variance in mm^2, pooled over the box.
+    """
+    mean, var = S.uniform_moments(bounds, machine.n_errors)
+    return S.pose_box_indices(machine.jacobian, mean, var, poses=poses,
+                              pose_bounds=pose_bounds, components=components, nodes=2,
+                              names=machine.axes + machine.tool_offsets, required=machine.axes)
+
+
+def linear_indices_at_poses(machine, bounds, *, poses: Mapping, components: int = 3
+                            ) -> np.ndarray:
+    """Exact Sobol indices (S1 = ST) of the first-order model at each of P fixed poses.
+
+    The same numbers as :func:`linear_sobol_indices` with ``pose=`` one at a time, in one
+    batched call.  A component with no variance at a pose gets zeros.
+
+    Parameters
+    ----------
+    machine : Horizontal3Axis
+        The machine; its ``jacobian`` gives the coefficients.
+    bounds : array (2, 21)
+        Uniform error ranges (mm, rad).
+    poses : mapping
+        Pose name -> scalar or (P,) array (mm): the axes and, optionally, tool offsets.
+    components : int
+        Output rows kept (3: the position error Ex, Ey, Ez; 6: with the orientation).
+
+    Returns
+    -------
+    array (P, 21, components)
+    """
+    _, var = S.uniform_moments(bounds, machine.n_errors)
+    return S.indices_at_poses(machine.jacobian(poses)[:, :components], var)
+
+
+def tool_length_offsets(tool_lengths, base=(0.0, 0.0, 0.0)) -> dict[str, np.ndarray]:
+    """Tool offsets (``tool_x, tool_y, tool_z``, (T,) arrays, mm) of tools of the given lengths.
+
+    The notebook's tool-length study (its Section 8; the paper states no tool): on the
+    horizontal spindle the tip sits ``length`` mm from the carriages' reference point towards
+    the workpiece, i.e. along -z (ISO 841: +z points from the workpiece to the tool), on top of
+    the ``base`` offsets.
+
+    Parameters
+    ----------
+    tool_lengths : array (T,)
+        Tool lengths (mm, >= 0).
+    base : sequence of 3 floats
+        Offsets added (mm): the tool tip of a tool of length 0 (``tool_offset_mm``).
+
+    Returns
+    -------
+    dict of str to array (T,)
+        ``tool_x``, ``tool_y``, ``tool_z`` (mm), a pose mapping of
+        :class:`~mtaccuracy.machines.horizontal_3axis.Horizontal3Axis`.
+
+    Raises
+    ------
+    ValueError
+        If a length is negative or not finite, or ``tool_lengths`` is not one-dimensional.
+    """
+    lengths = np.atleast_1d(np.asarray(tool_lengths, dtype=float))
+    if lengths.ndim != 1 or np.any(lengths < 0) or not np.all(np.isfinite(lengths)):
+        raise ValueError(f"tool lengths must be finite and >= 0, got {tool_lengths!r}")
+    bx, by, bz = (float(v) for v in base)
+    return {"tool_x": np.full(lengths.shape, bx), "tool_y": np.full(lengths.shape, by),
+            "tool_z": bz - lengths}
+
+
+def errors_and_pose_model(machine, tool: Mapping):
+    """The model of Rong et al.'s Sobol' study: errors and tool-tip position as inputs.
+
+    Parameters
+    ----------
+    machine : Horizontal3Axis
+        The machine (D errors).
+    tool : mapping
+        Tool offsets ``{name: value}`` (mm), the same for every run.
+
+    Returns
+    -------
+    callable
+        ``model(X)``: ``X`` (m, D + 3), the D errors (mm, rad) then the pose x, y, z (mm), to
+        the tool-tip position error ``Ex, Ey, Ez`` (m, 3) in mm.
+    """
+    d = machine.n_errors
+
+    def model(x):
+        return machine.position_error(x[:, :d], dict(x=x[:, d], y=x[:, d + 1], z=x[:, d + 2],
+                                                     **tool))
+    return model
+
+
+def errors_at_poses_model(machine, poses_xyz, tool: Mapping):
+    """The model of the errors alone, each row at its own pose (the poses of a design kept).
+
+    Parameters
+    ----------
+    machine : Horizontal3Axis
+        The machine (D errors).
+    poses_xyz : array (m, 3)
+        The pose x, y, z (mm) of each row.
+    tool : mapping
+        Tool offsets (mm).
+
+    Returns
+    -------
+    callable
+        ``model(E)``: errors ``E`` (m, D) to ``Ex, Ey, Ez`` (m, 3) in mm.
+    """
+    full = errors_and_pose_model(machine, tool)
+    poses_xyz = np.asarray(poses_xyz, dtype=float)
+
+    def model(e):
+        return full(np.c_[e, poses_xyz])
+    return model

@@ -2,19 +2,25 @@
 
 The thermal science (:mod:`mtaccuracy.thermal`) takes arrays and tables and never reads
 ``data/papers/`` or knows the repository's folders; this module does that for the notebook:
-it reads the published tables the reconstruction is built from, decides where the
-reconstruction is written (never over a reader's own measurements), reads the measurements
-with provenance recorded, and declares how closely regenerated tables must agree.
+it reads the published tables the reconstruction is built from (the seeded generator is
+:mod:`mtaccuracy.compendium.xu2022_reconstruction`), decides where the reconstruction is
+written (never over a reader's own measurements), reads the measurements with provenance
+recorded, and declares how closely regenerated tables must agree.
 """
 
 from __future__ import annotations
 
+import itertools
+import math
+import time
 from pathlib import Path
 
-from .. import thermal
-from ..thermal import synthetic
-from . import paths, provenance, reproduction
+import numpy as np
+
+from .. import thermal, validate
+from . import paths, provenance, reproduction, xu2022_reconstruction
 from .parameters import ParameterError
+from .xu2022_reconstruction import DEFAULT_SEED
 
 __all__ = [
     "DEFAULT_DIR", "LSTSQ_TOLERANCE", "SVR_TOLERANCE", "published_targets", "published_models",
@@ -43,14 +49,14 @@ SVR_TOLERANCE = reproduction.Tolerance(
                   "held-out metrics by up to 3e-5 relative; 1e-3 bounds that with margin")
 
 
-def published_targets(folder=None) -> synthetic.Targets:
+def published_targets(folder=None) -> xu2022_reconstruction.Targets:
     """Table 5 (k, b) and Table 1 (feeds, ambient ranges) from ``data/papers``."""
     t5 = reproduction.published("xu2022_table5_slope_intercept",
                                 ["experiment", "measurement", "k_um_per_m", "b_um"], folder)
     t1 = reproduction.published("xu2022_table1_experiments",
                                 ["experiment", "feed_mm_per_min", "ambient_min_C",
                                  "ambient_max_C"], folder)
-    return synthetic.targets_from_tables(t5, t1)
+    return xu2022_reconstruction.targets_from_tables(t5, t1)
 
 
 def published_models(folder=None):
@@ -60,9 +66,11 @@ def published_models(folder=None):
 
 
 def published_inputs(folder=None) -> dict[str, list[str]]:
-    """The paper's sensitive points, read off the terms of its printed models
-    (``data/papers/xu2022_models.csv``): ``{"point": Eq. 8's sensors, "k": Eq. 9's for the
-    slope, "b": Eq. 9's for the intercept}``, each in the order the paper prints them."""
+    """The paper's sensitive points, read off the terms of its printed models.
+
+    From ``data/papers/xu2022_models.csv``: ``{"point": Eq. 8's sensors, "k": Eq. 9's for the
+    slope, "b": Eq. 9's for the intercept}``, each in the order the paper prints them.
+    """
     models = published_models(folder)
     terms = models[models.term != "intercept"]
 
@@ -73,14 +81,14 @@ def published_inputs(folder=None) -> dict[str, list[str]]:
             "b": of("decoupled_mlr", "b")}
 
 
-def reconstruct(seed: int = synthetic.DEFAULT_SEED, papers_folder=None) -> thermal.ThermalData:
-    """:func:`mtaccuracy.thermal.synthetic.reconstruct` on the published targets."""
-    return synthetic.reconstruct(published_targets(papers_folder), seed)
+def reconstruct(seed: int = DEFAULT_SEED, papers_folder=None) -> thermal.ThermalData:
+    """:func:`.xu2022_reconstruction.reconstruct` on the published targets."""
+    return xu2022_reconstruction.reconstruct(published_targets(papers_folder), seed)
 
 
-def noise_replicates(seed: int = synthetic.DEFAULT_SEED, n: int = 40, papers_folder=None):
-    """:func:`mtaccuracy.thermal.synthetic.noise_replicates` on the published targets."""
-    return synthetic.noise_replicates(published_targets(papers_folder), seed, n)
+def noise_replicates(seed: int = DEFAULT_SEED, n: int = 40, papers_folder=None):
+    """:func:`.xu2022_reconstruction.noise_replicates` on the published targets."""
+    return xu2022_reconstruction.noise_replicates(published_targets(papers_folder), seed, n)
 
 
 def published_metrics(folder=None):
@@ -90,14 +98,14 @@ def published_metrics(folder=None):
 
 
 def calibrate(papers_folder=None, **kwargs):
-    """:func:`mtaccuracy.thermal.synthetic.calibrate` on the published tables (about a minute)."""
-    return synthetic.calibrate(published_targets(papers_folder), published_models(papers_folder),
-                               published_metrics(papers_folder), **kwargs)
+    """:func:`.xu2022_reconstruction.calibrate` on the published tables (about a minute)."""
+    return xu2022_reconstruction.calibrate(
+        published_targets(papers_folder), published_models(papers_folder),
+        published_metrics(papers_folder), **kwargs)
 
 
 def read(folder) -> thermal.ThermalData:
-    """:func:`mtaccuracy.thermal.read_measurements` with every file read recorded in the run's
-    provenance."""
+    """:func:`mtaccuracy.thermal.read_measurements`, every file read recorded in the provenance."""
     return thermal.read_measurements(folder, on_read=provenance.track)
 
 
@@ -109,21 +117,25 @@ def is_default_dir(data_dir) -> bool:
 
 
 class EditedDataError(RuntimeError):
-    """A file of the reconstruction folder no longer holds the bytes the compendium last wrote
-    there (a user edited it): regenerating would overwrite the edit, so nothing is written."""
+    """A file of the reconstruction folder was edited since the compendium last wrote it.
+
+    It no longer holds the bytes the compendium wrote there: regenerating would overwrite the
+    edit, so nothing is written.
+    """
 
 
 def _shown(folder: Path, out=None):
-    """How a message names ``folder``: relative to the repository, ``<output_dir>/...``, or as
-    it is."""
+    """How a message names ``folder``: repository-relative, ``<output_dir>/...``, or as it is."""
     return (folder.relative_to(paths.ROOT).as_posix() if folder.is_relative_to(paths.ROOT)
             else f"<output_dir>/{folder.name}" if out is not None and folder.parent == Path(out)
             else folder)
 
 
 def _refuse_edited(folder: Path, files, out=None) -> None:
-    """Refuse (:class:`EditedDataError`) to overwrite any of ``files`` whose bytes are not the
-    ones the folder's ``provenance.json`` records for the compendium's last write.
+    """Refuse (:class:`EditedDataError`) to overwrite a file the compendium did not last write.
+
+    A file of ``files`` is refused when its bytes are not the ones the folder's
+    ``provenance.json`` records for the compendium's last write.
 
     The rule "a run never overwrites a file it did not write": a user who edits
     ``data/thermal/temperatures.csv`` in place and runs notebook 04 again with
@@ -150,8 +162,8 @@ def _refuse_edited(folder: Path, files, out=None) -> None:
         f"written: {how}")
 
 
-def prepare(data_dir: str = DEFAULT_DIR, regenerate: bool = True,
-            seed: int = synthetic.DEFAULT_SEED, out=None) -> tuple[Path, list[Path], str]:
+def prepare(data_dir: str = DEFAULT_DIR, *, regenerate: bool = True, seed: int = DEFAULT_SEED,
+            out=None) -> tuple[Path, list[Path], str]:
     """Decide where to read from and, for the reconstruction only, regenerate it first.
 
     * ``data_dir`` is the default ``data/thermal``, ``regenerate`` is true and ``seed`` is the
@@ -179,11 +191,11 @@ def prepare(data_dir: str = DEFAULT_DIR, regenerate: bool = True,
         return p, [], what
     if not regenerate:
         return paths.ROOT / DEFAULT_DIR, [], f"{DEFAULT_DIR}: committed reconstruction, as stored"
-    if seed == synthetic.DEFAULT_SEED:
+    if seed == DEFAULT_SEED:
         folder = paths.resolve_output(DEFAULT_DIR)
     elif out is None:
         raise ValueError(f"a reconstruction with seed {seed} (not the committed "
-                         f"{synthetic.DEFAULT_SEED}) is written into the run's output folder: "
+                         f"{DEFAULT_SEED}) is written into the run's output folder: "
                          f"pass out=")
     else:
         folder = Path(out) / "reconstruction"
@@ -227,10 +239,11 @@ DATA_FILES = ("temperatures.csv", "errors.csv")
 
 
 def _same_numbers(data, other) -> bool:
-    """Whether two datasets hold the same measurements to the resolution the reconstruction is
-    written with (temperatures 0.01 degC, errors 0.001 um: half a unit, plus rounding)."""
-    import numpy as np
+    """Whether two datasets hold the same measurements to the resolution of the files.
 
+    The reconstruction is written to 0.01 degC and 0.001 um: equal within half a unit, plus
+    rounding.
+    """
     return (data.sensors == other.sensors and data.index.shape == other.index.shape
             and np.array_equal(data.index.to_numpy(float), other.index.to_numpy(float))
             and np.array_equal(data.positions_mm, other.positions_mm)
@@ -263,25 +276,29 @@ def reconstruction_seed(folder, data, *, seeds=()) -> int | None:
     Returns
     -------
     int or None
-        :data:`synthetic.DEFAULT_SEED`, one of ``seeds``, or None for a reader's own data.
+        :data:`.xu2022_reconstruction.DEFAULT_SEED`, one of ``seeds``, or None for a reader's
+        own data.
     """
     folder = Path(folder)
     recorded = provenance.read(paths.ROOT / DEFAULT_DIR).get("files", {})
     names = [*DATA_FILES, *(["experiments.csv"] if (folder / "experiments.csv").is_file() else [])]
     if recorded and all((folder / n).is_file() and recorded.get(n, {}).get("sha256")
                         == provenance.sha256(folder / n) for n in names):
-        return synthetic.DEFAULT_SEED
-    for s in dict.fromkeys(int(s) for s in seeds if int(s) != synthetic.DEFAULT_SEED):
+        return DEFAULT_SEED
+    for s in dict.fromkeys(int(s) for s in seeds if int(s) != DEFAULT_SEED):
         if _same_numbers(data, reconstruct(s)):
             return s
     return None
 
 
-def resolve_split(stem: str, data, train, test) -> tuple[list[int], int]:
-    """The experiments of the notebook's split: ``test`` 0 is the last experiment, an empty
-    ``train`` every other one (on the reconstruction: train 1 2 3, test 4, as the paper).
-    Refuses (``ParameterError``) experiments the data lack, a test experiment also trained on,
-    and fewer than 2 training experiments (the SVR's cross-validation leaves one out)."""
+def resolve_split(stem: str, data, *, train, test) -> tuple[list[int], int]:
+    """The experiments of the notebook's split: ``(train, test)`` with the defaults resolved.
+
+    ``test`` 0 is the last experiment, an empty ``train`` every other one (on the
+    reconstruction: train 1 2 3, test 4, as the paper).  Refuses (``ParameterError``)
+    experiments the data lack, a test experiment also trained on, and fewer than 2 training
+    experiments (the SVR's cross-validation leaves one out).
+    """
     test = int(data.experiments[-1]) if test == 0 else int(test)
     train = [int(e) for e in train] or [int(e) for e in data.experiments if e != test]
     absent = sorted(set(train + [test]) - set(int(e) for e in data.experiments))
@@ -293,14 +310,19 @@ def resolve_split(stem: str, data, train, test) -> tuple[list[int], int]:
 
 
 def resolve_inputs(inputs: str, paper: bool) -> str:
-    """``auto``: the paper's sensitive points on its reconstruction, the ones the paper's
-    procedure selects on any other data; ``published`` and ``selected`` as they are."""
+    """The model inputs ``inputs`` stands for: ``auto`` resolved, the others as they are.
+
+    ``auto``: the paper's sensitive points on its reconstruction, the ones the paper's
+    procedure selects on any other data.
+    """
     return ("published" if paper else "selected") if inputs == "auto" else inputs
 
 
 def check_experiments(stem: str, train, test) -> None:
-    """Refuse a split whose test experiment is also trained on, or with < 2 training
-    experiments (the SVR's cross-validation leaves one out)."""
+    """Refuse a split whose test experiment is also trained on, or with < 2 training experiments.
+
+    The SVR's cross-validation leaves one training experiment out.
+    """
     if test in train:
         raise ParameterError(f"{stem}: test_experiment {test} is also a training experiment")
     if len(set(train)) < 2:
@@ -326,8 +348,10 @@ def check_data(stem: str, data, folder, train, test, n_clusters: int, inputs: st
 
 
 def reader_notes(data) -> str:
-    """What the reader set aside in the data (dropped dead sensors, ignored columns), one line
-    each, or a line saying nothing was."""
+    """What the reader set aside (dead sensors, ignored columns), one line each, or "nothing".
+
+    The line saying nothing was set aside is "the reader set nothing aside".
+    """
     notes = [f"sensor {name} dropped: {why}" for name, why in getattr(data, "dropped", {}).items()]
     notes += [f"column {name} ignored: {why}" for name, why in
               getattr(data, "ignored_columns", {}).items()]
@@ -335,19 +359,19 @@ def reader_notes(data) -> str:
 
 
 class Progress:
-    """Progress of a long fit as one line that updates in place in the notebook (an IPython
-    display handle), for ``progress=`` of :func:`thermal.evaluate_split` and
+    """Progress of a long fit as one line that updates in place in the notebook.
+
+    An IPython display handle, for ``progress=`` of :func:`thermal.evaluate_split` and
     :func:`thermal.leave_one_experiment_out`: each call shows the step and the seconds since
     the start; :meth:`done` leaves a final line without times, so that the stored notebook does
-    not change from run to run."""
+    not change from run to run.
+    """
 
     def __init__(self, what: str):
         self.what, self.handle, self.t0 = what, None, None
 
     def _show(self, text: str) -> None:
-        import time
-
-        from IPython.display import Pretty, display
+        from IPython.display import Pretty, display  # IPython: only where a notebook runs
 
         if self.handle is None:
             self.t0 = time.perf_counter()
@@ -356,8 +380,6 @@ class Progress:
             self.handle.update(Pretty(text))
 
     def __call__(self, text: str) -> None:
-        import time
-
         elapsed = 0.0 if self.t0 is None else time.perf_counter() - self.t0
         self._show(f"{self.what}: {text} ({elapsed:.0f} s)")
 
@@ -368,14 +390,19 @@ class Progress:
 
 
 def sampling_se(rep_se, *key):
-    """Sampling standard error of one of our numbers (notebook 04, Section 8): ``rep_se``
-    indexed by ``key``; None without replicates or for a number they do not cover."""
+    """Sampling standard error of one of our numbers (notebook 04, Section 8), or None.
+
+    ``rep_se`` indexed by ``key``; None without replicates or for a number they do not cover.
+    """
     return None if rep_se is None or key not in rep_se.index else float(rep_se[key])
 
 
 def stated(ours, method: str, col: str) -> tuple[str, bool]:
-    """The paper's conclusion about one error metric of ``method`` (Sections 3.1, 3.3) and
-    whether our metrics (``split.table`` indexed by method, target) keep it."""
+    """The paper's conclusion about one error metric of ``method``, and whether ours keep it.
+
+    The conclusions of Sections 3.1 and 3.3; ``ours`` is ``split.table`` indexed by method and
+    target.
+    """
     pbp, mlr, svr = (ours.loc[(m, ERROR), col] for m in
                      ("point_by_point_mlr", "decoupled_mlr", "decoupled_svr"))
     name = METRIC_NAMES[col]
@@ -390,17 +417,18 @@ def stated(ours, method: str, col: str) -> tuple[str, bool]:
 
 
 def beats(result) -> tuple[dict, object]:
-    """Whether each decoupled model's largest residual is below point-by-point's (Section 5),
-    and the largest residuals by (method, target)."""
+    """Whether each decoupled model's largest residual is below point-by-point's (Section 5).
+
+    Also returns the largest residuals by (method, target).
+    """
     t = result.table.set_index(["method", "target"]).max_residual
     pbp = t[("point_by_point_mlr", ERROR)]
     return {m: t[(m, ERROR)] < pbp for m in ("decoupled_mlr", "decoupled_svr")}, t
 
 
-def prediction_figure(positions_mm, index, measured, predicted, title: str):
+def prediction_figure(positions_mm, index, measured, predicted, *, title: str):
     """Measured (solid) and predicted (dashed) errors along the axis, and the residuals."""
-    import matplotlib.pyplot as plt
-    import numpy as np
+    import matplotlib.pyplot as plt  # heavy (a GUI backend): loaded only to draw
 
     resid = measured - predicted
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
@@ -421,11 +449,12 @@ def prediction_figure(positions_mm, index, measured, predicted, title: str):
     return fig
 
 
-def kb_figure(measurement, measured_kb, predicted_kb, title: str, colour):
-    """Slope k and intercept b of every test measurement: decoupled from the data and
-    predicted from the temperatures."""
-    import matplotlib.pyplot as plt
-    import numpy as np
+def kb_figure(measurement, measured_kb, predicted_kb, *, title: str, colour):
+    """Slope k and intercept b of every test measurement: decoupled and predicted.
+
+    k and b decoupled from the data, and predicted from the temperatures.
+    """
+    import matplotlib.pyplot as plt  # heavy (a GUI backend): loaded only to draw
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
     for ax, meas, pred, lab in ((axes[0], measured_kb[0], predicted_kb[0], "slope k (µm/m)"),
@@ -450,9 +479,9 @@ MAX_ASSIGNMENTS = 3 ** 14
 
 
 def partition_fits(rows, sensors, n_clusters: int = 3):
-    """Which printed sensor sets every assignment of ``sensors`` to ``n_clusters`` clusters
-    can produce under Section 1.1's rule (one sensor, the best graded, from every cluster).
+    """Which printed sensor sets each assignment of ``sensors`` to clusters can produce.
 
+    Section 1.1's rule: one sensor, the best graded, from every one of ``n_clusters`` clusters.
     Xu et al. 2022 cluster the *temperatures* (Eqs. 1-3: similarities between temperature
     sequences) and only then grade each cluster's sensors against the target (Eq. 4).  Table
     3's 14 positions share their temperatures, so they share one partition; whatever the
@@ -477,11 +506,8 @@ def partition_fits(rows, sensors, n_clusters: int = 3):
         ``a`` gives sensor ``s`` the label ``(a // n_clusters ** s) % n_clusters``.  Every
         partition into ``n_clusters`` non-empty clusters appears ``n_clusters!`` times.
     """
-    import numpy as np
-
     sensors = list(sensors)
-    if n_clusters < 1:
-        raise ValueError(f"n_clusters must be >= 1, got {n_clusters}")
+    n_clusters = validate.integer(n_clusters, "n_clusters", low=1)
     if n_clusters ** len(sensors) > MAX_ASSIGNMENTS:
         raise ValueError(f"{n_clusters}**{len(sensors)} assignments: more than the "
                          f"{MAX_ASSIGNMENTS} this exhaustive check enumerates")
@@ -501,8 +527,10 @@ def partition_fits(rows, sensors, n_clusters: int = 3):
 
 
 def table3_consistency(rows, sensors, n_clusters: int = 3) -> dict:
-    """How much of a per-position table of sensitive points (Table 3) one partition of the
-    sensors can produce (:func:`partition_fits`), and the smallest set of rows none can.
+    """How much of Table 3 one partition of the sensors can produce, and which rows none can.
+
+    Table 3 is a per-position table of sensitive points; :func:`partition_fits` enumerates the
+    partitions; the smallest set of rows that no partition produces is returned too.
 
     Parameters
     ----------
@@ -525,11 +553,6 @@ def table3_consistency(rows, sensors, n_clusters: int = 3) -> dict:
         order among the smallest; empty if every row set fits), ``fits`` (the array of
         :func:`partition_fits`).
     """
-    import itertools
-    import math
-
-    import numpy as np
-
     sensors = list(sensors)
     fits = partition_fits(rows, sensors, n_clusters)
     count = fits.sum(axis=1)
@@ -555,8 +578,9 @@ def table3_consistency(rows, sensors, n_clusters: int = 3) -> dict:
 
 
 def rows_fitted_by(rows, clusters) -> list[bool]:
-    """Whether each printed set takes exactly one sensor from every cluster of ``clusters``
-    (a sensor in no cluster fits nowhere).
+    """Whether each printed set takes exactly one sensor from every cluster of ``clusters``.
+
+    A sensor in no cluster fits nowhere.
 
     Parameters
     ----------

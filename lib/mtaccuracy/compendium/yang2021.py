@@ -1,15 +1,41 @@
-"""The compendium's side of notebook 05 (Yang et al. 2021): checks of its parameters."""
+"""The compendium's side of notebook 05 (Yang et al. 2021): checks of its parameters, figures."""
 
 from __future__ import annotations
 
 __all__ = ["check_run", "experiment_genes", "experiment_inputs", "ga_settings_study",
            "single_run_speedups"]
 
+import itertools
 
-def check_run(stem: str, probe_positions, n_samples: int, lowpass_harmonic: int,
-              exp_n_samples: int, interleave: int, worst_k: int, harmonic_k: int,
-              k_sweep_max: int, pop_size: int) -> None:
-    """Refuse parameters that contradict each other (each with a clear message)."""
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+from .. import spindle as sp
+from .reproduction import printed_half_unit as half_unit
+
+
+def check_run(params, stem: str) -> None:
+    """Refuse notebook 05's parameters that contradict each other (each with a clear message).
+
+    Parameters
+    ----------
+    params : mapping
+        The notebook's parameters by name (its ``globals()``): ``probe_positions``,
+        ``n_samples``, ``lowpass_harmonic``, ``exp_n_samples``, ``interleave``, ``worst_k``,
+        ``harmonic_k``, ``k_sweep_max``, ``pop_size``.
+    stem : str
+        The notebook's stem, which starts every message.
+
+    Raises
+    ------
+    ValueError
+        Naming the parameters that contradict each other.
+    """
+    probe_positions, n_samples = params["probe_positions"], params["n_samples"]
+    lowpass_harmonic, exp_n_samples = params["lowpass_harmonic"], params["exp_n_samples"]
+    interleave, worst_k, harmonic_k = params["interleave"], params["worst_k"], params["harmonic_k"]
+    k_sweep_max, pop_size = params["k_sweep_max"], params["pop_size"]
     if len(probe_positions) != 4 or probe_positions[0] != 0 \
             or max(probe_positions) >= n_samples or len(set(probe_positions)) != 4:
         raise ValueError(f"{stem}: probe_positions must be 4 distinct sample indices in "
@@ -27,16 +53,16 @@ def check_run(stem: str, probe_positions, n_samples: int, lowpass_harmonic: int,
                          f"{harmonic_k}, {k_sweep_max}, {pop_size}")
 
 
-def convergence_figure(result, h_ref: float, harmonic_k: int, generations: int,
+def convergence_figure(result, *, h_ref: float, harmonic_k: int, generations: int,
                        converge_tol: float, published_generation: float, title: str,
                        colours: tuple):
-    """Figs. 8-9 over many seeds: the best-so-far H of every run (percentile bands, the median
-    and three single runs) beside the histogram of convergence generations."""
-    import matplotlib.pyplot as plt
-    import numpy as np
+    """Figs. 8-9 over many seeds: every run's best-so-far H beside its convergence generations.
 
-    from ..spindle import convergence_generation
-
+    The runs as percentile bands, the median and three single runs; the histogram of the
+    generations at which they reach ``h_ref`` within ``converge_tol`` and plateau.  ``colours``:
+    (ours, published).
+    """
+    convergence_generation = sp.convergence_generation
     reproduced, published = colours
     gens = np.arange(generations + 1)
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 3.8), gridspec_kw=dict(width_ratios=[1.6, 1]))
@@ -73,16 +99,13 @@ def convergence_figure(result, h_ref: float, harmonic_k: int, generations: int,
 
 
 def table1_consistency(t1, sweep):
-    """Table 1 against Eqs. 15, 20 and our optimum: for every printed row, H and the weights of
-    every parameter set that rounds to the printed one (a 21^4 grid over half a unit of the last
-    printed digit), the weights-only bound of H, and our GA and best known optima at that k.
-    ``t1``: the published table (strings); ``sweep``: the optimum per harmonic order."""
-    import numpy as np
-    import pandas as pd
+    """Table 1 against Eqs. 15, 20 and our optimum, row by printed row.
 
-    from .. import spindle as sp
-    from .reproduction import printed_half_unit as half_unit
-
+    For every printed row, H and the weights of every parameter set that rounds to the printed
+    one (a 21^4 grid over half a unit of the last printed digit), the weights-only bound of H,
+    and our GA and best known optima at that k.  ``t1``: the published table (strings);
+    ``sweep``: the optimum per harmonic order.
+    """
     rows = []
     g = np.linspace(-1, 1, 21)
     grid = np.stack(np.meshgrid(g, g, g, g, indexing="ij"), -1).reshape(-1, 4)
@@ -122,17 +145,16 @@ def table1_consistency(t1, sweep):
     return table1
 
 
-def fig21_figure(theta, layouts, rotation_errors, profiles, true_profile, d600, true_mz_um: float,
-                 published: tuple, colours):
-    """Fig. 21 (simulated): one run's separated rotation error and profile for every layout at
-    600 r/min (polar), and the separated roundness of each layout beside the published values.
+def fig21_figure(theta, layouts, *, rotation_errors, profiles, true_profile, d600,
+                 true_mz_um: float, published: tuple, colours):
+    """Fig. 21 (simulated): each layout's separated curves and roundness beside the published.
 
-    ``rotation_errors``, ``profiles``: per layout, one run's curves (um, offsets added);
-    ``true_profile`` (um, offset added); ``d600``: the 600 r/min rows by layout;
-    ``published``: (optimised value, [random values]); ``colours``: (colormap, published)."""
-    import matplotlib.pyplot as plt
-    import numpy as np
-
+    One run's separated rotation error and profile for every layout at 600 r/min (polar), and the
+    separated roundness of each layout beside the published values.  ``rotation_errors``,
+    ``profiles``: per layout, one run's curves (um, offsets added); ``true_profile`` (um, offset
+    added); ``d600``: the 600 r/min rows by layout; ``published``: (optimised value, [random
+    values]); ``colours``: (colormap, published).
+    """
     cmap, published_colour = colours
     pub_opt, pub_rand = published
     closed = np.r_[theta, theta[:1]]
@@ -172,12 +194,12 @@ def fig21_figure(theta, layouts, rotation_errors, profiles, true_profile, d600, 
 
 
 def experiment_genes(facts):
-    """The layout of the paper's lathe experiment, as printed: genes ``(phi_1, phi_2, phi_3,
-    a_3)`` (rad, rad, rad, 1) from ``data/papers/yang2021_facts.csv`` (Table 1's k = 20 row, which
-    Section 3 says the experiment used); ``a_1, a_2`` are left to Eq. 15.  ``facts``: the
-    published facts indexed by quantity (strings)."""
-    import numpy as np
+    """The layout of the paper's lathe experiment, as printed: genes ``(phi_1, phi_2, phi_3, a_3)``.
 
+    In rad, rad, rad, 1, from ``data/papers/yang2021_facts.csv`` (Table 1's k = 20 row, which
+    Section 3 says the experiment used); ``a_1, a_2`` are left to Eq. 15.  ``facts``: the
+    published facts indexed by quantity (strings).
+    """
     phi = [float(v) for v in str(facts["experiment_angles"]).split()]
     if len(phi) != 3:
         raise ValueError(f"yang2021_facts.csv: experiment_angles needs 3 angles, got {phi}")
@@ -185,8 +207,7 @@ def experiment_genes(facts):
 
 
 def experiment_inputs(card, mandrel_roundness_um: float, calibration_um: float):
-    """Declare on ``card`` the inputs of the simulated lathe experiment (Section 3, simulated)
-    and return ``(mandrel, simulation, same_sync)``.
+    """Declare the simulated lathe experiment's inputs on ``card``; ``(mandrel, simulation, sync)``.
 
     The mandrel is ``constructed`` when its roundness is the paper's calibration value (the
     value Table 2's shape errors, Fig. 21 and the abstract's deviation are compared with: the
@@ -221,24 +242,19 @@ def experiment_inputs(card, mandrel_roundness_um: float, calibration_um: float):
 def ga_settings_study(k: int, *, bounds, generation_counts, pc_values, pm_values,
                       traditional_pc: float, traditional_pm: float, generations: int,
                       n_runs: int, pop_size: int, encoding: str, seed: int):
-    """How the GA comparison of Figs. 8-9 depends on settings the paper omits: the plateau
-    generation (:func:`~mtaccuracy.spindle.convergence_generation`, 0.1 % of the final best)
-    of the improved and the traditional GA at every count of ``generation_counts``, and the
-    speed-up of the improved GA (``generations``) over a traditional GA at every fixed
-    ``(pc, pm)`` of ``pc_values`` x ``pm_values``.  ``n_runs`` seeded runs per setting, each
-    setting its own seed (``seed + 100 + i`` in table order).
+    """How the GA comparison of Figs. 8-9 depends on settings the paper omits.
+
+    The plateau generation (:func:`~mtaccuracy.spindle.convergence_generation`, 0.1 % of the final
+    best) of the improved and the traditional GA at every count of ``generation_counts``, and the
+    speed-up of the improved GA (``generations``) over a traditional GA at every fixed ``(pc, pm)``
+    of ``pc_values`` x ``pm_values``.  ``n_runs`` seeded runs per setting, each setting its own seed
+    (``seed + 100 + i`` in table order).
 
     Returns a DataFrame, one row per setting: ``study`` ("generation count" or "fixed rates"),
     ``generations``, ``pc``, ``pm`` (the traditional GA's), ``runs``, the plateau medians of
     both GAs (``improved_median``, ``traditional_median``) and ``speedup_percent``
-    (:func:`~mtaccuracy.spindle.speedup`)."""
-    import itertools
-
-    import numpy as np
-    import pandas as pd
-
-    from .. import spindle as sp
-
+    (:func:`~mtaccuracy.spindle.speedup`).
+    """
     common = dict(bounds=bounds, n_runs=n_runs, pop_size=pop_size, encoding=encoding)
     seeds = itertools.count(seed + 100)
 
@@ -270,12 +286,12 @@ def ga_settings_study(k: int, *, bounds, generation_counts, pc_values, pm_values
 
 
 def single_run_speedups(improved, traditional):
-    """The speed-up (percent) that one run of each algorithm would show, as Figs. 8-9 do, over
-    every pair of runs: ``100 (1 - g_i / g_t)`` for every improved-GA convergence generation
-    ``g_i`` (runs,) and traditional-GA one ``g_t`` (runs,) with ``g_t > 0``; shape
-    ``(n_improved * n_traditional_positive,)``."""
-    import numpy as np
+    """The speed-up (percent) one run of each algorithm would show, as Figs. 8-9 do, every pair.
 
+    ``100 (1 - g_i / g_t)`` for every improved-GA convergence generation ``g_i`` (runs,) and
+    traditional-GA one ``g_t`` (runs,) with ``g_t > 0``; shape
+    ``(n_improved * n_traditional_positive,)``.
+    """
     gi = np.asarray(improved, float)[:, None]
     gt = np.asarray(traditional, float)
     gt = gt[gt > 0][None, :]

@@ -1,19 +1,481 @@
-"""The compendium's side of notebook 01 (Zheng et al. 2024): Table 2's fixed ratios, the
-sampled and PCE references at the fitted pose, and figures.
+"""Notebook 01's paper code (Zheng et al. 2024): the pose behind Table 2, its checks, figures.
 
-Everything here serves the reproduction of one paper; the methods themselves are in
-:mod:`mtaccuracy.sensitivity` and :mod:`mtaccuracy.machines.ac_double_turntable`.
+The paper prints Sobol' indices of the AC double turntable (Table 2, Figs. 5-6) computed at a
+pose it does not state: it shows test points on the four body diagonals of the workspace
+(Fig. 4) but not which point, or which aggregate, Table 2 reports, nor where the rotary axes
+stand at those points.  The pose is what the paper omits, so this module searches for it,
+written by hand for this paper:
+
+- the 32-element symmetry group of the normalised linear indices (:func:`pose_orbit`,
+  :func:`canonical_pose`) and the canonical ranking of an optimiser's minima
+  (:func:`rank_poses`), so that which pose is reported depends neither on the order of the
+  starts nor on rounding;
+- the least-squares search for the pose behind a table of published indices
+  (:func:`fit_pose_to_indices`) and for two poses whose mean indices give it
+  (:func:`fit_pose_average_to_indices`);
+- the necessary conditions every single pose meets: ratios of indices the model fixes at every
+  pose (:func:`index_invariants`), with the printed precision carried into a ratio
+  (:func:`ratio_interval`), and Table 2 against them (:func:`fixed_ratio_checks`);
+- the Fig. 4 test points (:func:`diagonal_test_points`), the sampled and PCE references at a
+  test point, Section 3.2's group shares and the figures.
+
+The methods are in :mod:`mtaccuracy.sensitivity` (:mod:`~mtaccuracy.sensitivity.posefit`: the
+pose search shared with notebook 03; :mod:`~mtaccuracy.sensitivity.linear`: the closed-form
+indices) and the machine in :mod:`mtaccuracy.machines.ac_double_turntable`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 import pandas as pd
 
-__all__ = ["tidy", "fmt", "normalise", "sobol_reference", "pce_indices", "group_label",
+from .. import sensitivity as S
+from ..machines.ac_double_turntable import AXES, TRAVELS, ACDoubleTurntable
+from ..validate import integer
+
+__all__ = ["POSE_SYMMETRIES", "pose_orbit", "canonical_pose", "rank_poses",
+           "fit_pose_to_indices", "fit_pose_average_to_indices", "index_invariants",
+           "ratio_interval", "diagonal_test_points",
+           "tidy", "fmt", "normalise", "sobol_reference", "pce_indices", "group_label",
            "fixed_ratio_checks", "group_head", "converged_at", "bars_figure",
            "fig04_figure", "group_shares", "relative_scatter"]
 
+
+# --------------------------------------------------------------------------------------
+# The test points of Fig. 4
+# --------------------------------------------------------------------------------------
+
+def diagonal_test_points(n_per_diagonal: int = 5, rotary: str = "sweep") -> dict[str, np.ndarray]:
+    """Test points equally spaced on the four body diagonals of the X-Y-Z workspace (Fig. 4).
+
+    Each diagonal runs from one corner of the travel box (``ac_double_turntable.TRAVELS``) to
+    the opposite one; ``n_per_diagonal`` points split it into equal parts, ends included, so
+    every diagonal passes through the centre.  The rotary axes are not given by Fig. 4:
+    ``rotary="sweep"`` moves A and C with the same fraction of their travel as the linear
+    axes, ``rotary="zero"`` keeps A = C = 0.
+
+    Parameters
+    ----------
+    n_per_diagonal : int
+        Points per diagonal, ends included (at least 2; the paper's Fig. 4 shows 5).
+    rotary : {"sweep", "zero"}
+        The rule for A and C, which Fig. 4 does not give.
+
+    Returns
+    -------
+    dict of str to array (4 n_per_diagonal,)
+        x, y, z (mm), A, C (rad), ``diagonal`` (0-3) and ``fraction`` (0..1 along it).
+    """
+    n_per_diagonal = integer(n_per_diagonal, "n_per_diagonal", low=2)
+    if rotary not in ("sweep", "zero"):
+        raise ValueError(f"unknown rotary rule {rotary!r}; allowed: sweep, zero")
+    f = np.linspace(0.0, 1.0, n_per_diagonal)
+    signs = [(1, 1, 1), (-1, 1, 1), (1, -1, 1), (1, 1, -1)]
+    out = {k: [] for k in ("x", "y", "z", "A", "C", "diagonal", "fraction")}
+    for k, s in enumerate(signs):
+        for fr in f:
+            for ax, sg in zip("xyz", s, strict=True):
+                lo, hi = TRAVELS[ax]
+                u = fr if sg > 0 else 1.0 - fr
+                out[ax].append(lo + u * (hi - lo))
+            for ax in "AC":
+                lo, hi = TRAVELS[ax]
+                out[ax].append(lo + fr * (hi - lo) if rotary == "sweep" else 0.0)
+            out["diagonal"].append(k)
+            out["fraction"].append(fr)
+    return {k: np.asarray(v) for k, v in out.items()}
+
+
+# --------------------------------------------------------------------------------------
+# Symmetries of the linear indices, and the search for the pose behind a table of indices
+# --------------------------------------------------------------------------------------
+
+#: Elements of the symmetry group of the normalised linear indices, as (sx, sy, sz, half-turn
+#: of the cradle, half-turn of the table); see :func:`pose_orbit`.
+POSE_SYMMETRIES = tuple((sx, sy, sz, ka, hc) for sx in (1, -1) for sy in (1, -1)
+                        for sz in (1, -1) for ka in (0, 1) for hc in (0, 1))
+
+
+def pose_orbit(pose: Mapping, fixed_position: bool = False) -> dict[str, np.ndarray]:
+    """Every pose with the same normalised linear indices as ``pose``, in symmetry order.
+
+    The indices ``J_ki^2 sd_i^2 / sum_j J_kj^2 sd_j^2`` depend on each error's effect only
+    through its square.  Every error is a translation along or a rotation about a coordinate
+    axis, so a reflection of the machine in a coordinate plane through the A/C intersection
+    maps each error's effect onto plus or minus itself: x -> -x with C -> -C, y -> -y with
+    A -> -A and C -> -C, z -> -z with A -> -A (and their products, e.g. the point inversion
+    of x, y, z with A and C unchanged).  Two half-turns do the same: of the table,
+    C -> C + 180 deg (x and y change sign in the workpiece frame), and of the cradle,
+    A -> A + 180 deg with C -> -C (the table's z axis upside down).  The group is (Z2)^5, 32
+    poses; ``fixed_position`` keeps the 4 that leave x, y, z alone.  A is wrapped to
+    (-180, 180] deg (members outside the A travel remain in the list), C to [0, 360) deg.
+    The reflections need the tool tip at the Z carriage's origin: a tool length ``L`` other
+    than 0 is refused.
+
+    Parameters
+    ----------
+    pose : mapping
+        x, y, z (mm), A, C (rad).
+    fixed_position : bool
+        Only the 4 symmetries that keep x, y, z.
+
+    Returns
+    -------
+    dict of str to array (32,) or (4,)
+        x, y, z (mm), A, C (rad) of the group's images, in the order of
+        :data:`POSE_SYMMETRIES`.
+    """
+    if np.any(np.asarray(pose.get("L", 0.0)) != 0):
+        raise ValueError("pose_orbit: the symmetries hold for tool length L = 0 only (the "
+                         "reflections would also have to reverse the tool)")
+    p = {k: np.asarray(pose[k], dtype=float) for k in AXES}
+    out = {k: [] for k in AXES}
+    for sx, sy, sz, ka, hc in POSE_SYMMETRIES:
+        if fixed_position and (sx, sy, sz) != (1, 1, 1):
+            continue
+        a = sy * sz * p["A"] + ka * np.pi
+        c = sx * sy * p["C"] * (-1 if ka else 1) + hc * np.pi
+        out["x"].append(sx * p["x"])
+        out["y"].append(sy * p["y"])
+        out["z"].append(sz * p["z"])
+        out["A"].append(np.pi - np.mod(np.pi - a, 2 * np.pi))          # (-pi, pi]
+        out["C"].append(np.mod(c, 2 * np.pi))
+    return {k: np.asarray(v) for k, v in out.items()}
+
+
+def _canonical_key(x, y, z, a, c):
+    """The criteria of the canonical member of an orbit, each to be maximised in turn.
+
+    x, y, z >= 0, then |A| <= 90 deg, C in [0, 180) deg (then the sign of A and C = 0 over
+    180 deg, which matter only on the boundaries)."""
+    return np.stack([x, y, z, np.cos(a), np.sin(c), np.cos(c), np.sin(a)], axis=-1)
+
+
+def canonical_pose(pose: Mapping, *, fixed_position: bool = False, pos_tol: float = 1e-2,
+                   ang_tol: float = 1e-4) -> dict[str, float]:
+    """The canonical member of the orbit of ``pose`` (:func:`pose_orbit`).
+
+    The member with the largest x, then y, then z, then cos A, sin C, cos C, sin A, where
+    values within ``pos_tol`` or ``ang_tol`` count as equal, so that a coordinate that is zero
+    up to rounding does not decide.  For a generic pose this is the member with x, y, z >= 0,
+    -90 < A <= 90 deg and 0 <= C < 180 deg, which always lies inside the travels (they are
+    symmetric in x, y, z and contain that A range).
+
+    Parameters
+    ----------
+    pose : mapping
+        x, y, z (mm), A, C (rad), scalars.
+    fixed_position : bool
+        Only the symmetries that keep x, y, z.
+    pos_tol : float
+        x, y, z closer than this (mm) count as equal.
+    ang_tol : float
+        Cosines and sines of A and C closer than this count as equal.
+
+    Returns
+    -------
+    dict of str to float
+        x, y, z (mm), A, C (rad).
+    """
+    orbit = pose_orbit(pose, fixed_position)
+    if orbit["x"].ndim != 1:
+        raise ValueError("canonical_pose takes one pose (scalar values)")
+    keys = _canonical_key(*(orbit[k] for k in AXES))
+    tol = np.array([pos_tol] * 3 + [ang_tol] * 4)
+    best = S.rank_with_ties(np.zeros(len(keys)), keys=-keys, key_tol=tol)[0]
+    return {k: float(orbit[k][best]) for k in AXES}
+
+
+def rank_poses(candidates, *, misfit: str = "misfit", rtol: float = 1e-6,
+               fixed_position: bool = False, pos_tol: float = 1e-2, ang_tol: float = 1e-4):
+    """The canonical ranking of the poses an optimiser returned (one row per start).
+
+    Each pose is mapped to its canonical member (:func:`canonical_pose`); candidates whose
+    canonical poses agree within ``pos_tol`` and ``ang_tol`` are one minimum (the one with the
+    smallest misfit stands for it; ``n_starts`` counts them); minima are ranked by misfit,
+    misfits within ``rtol`` of the best remaining one being ties, broken by the canonical pose
+    (largest x, y, z first, then smallest A, C; see
+    :func:`~mtaccuracy.sensitivity.rank_with_ties`): which pose comes first depends neither
+    on the order of the starts nor on rounding noise.
+
+    Parameters
+    ----------
+    candidates : DataFrame
+        x, y, z (mm), A, C (rad) and the misfit column, one row per start.
+    misfit : str
+        Name of the misfit column.
+    rtol : float
+        Misfits closer than this, relative to the best remaining one, are ties.
+    fixed_position : bool
+        Only the symmetries that keep x, y, z.
+    pos_tol : float
+        Canonical x, y, z closer than this (mm) are one minimum.
+    ang_tol : float
+        Canonical A and C closer than this (rad) are one minimum.
+
+    Returns
+    -------
+    DataFrame
+        One row per minimum, best first: x, y, z, A, C, the misfit column and ``n_starts``.
+    """
+    df = pd.DataFrame(candidates)
+    missing = [c for c in (*AXES, misfit) if c not in df.columns]
+    if missing:
+        raise ValueError(f"candidates lack column(s) {missing}")
+    if df.empty:
+        raise ValueError("no candidates to rank")
+    canon = pd.DataFrame([canonical_pose(r, fixed_position=fixed_position, pos_tol=pos_tol,
+                                         ang_tol=ang_tol)
+                          for r in df[list(AXES)].to_dict("records")])
+    canon[misfit] = df[misfit].to_numpy(dtype=float)
+    order = S.rank_with_ties(canon[misfit].to_numpy(), rtol=0.0)
+    reps, counts = [], []
+    for i in order:  # smallest misfit first: it stands for its minimum
+        r = canon.iloc[i]
+        for j, q in enumerate(reps):
+            if (max(abs(r.x - q.x), abs(r.y - q.y), abs(r.z - q.z)) <= pos_tol
+                    and abs(np.angle(np.exp(1j * (r.A - q.A)))) <= ang_tol
+                    and abs(np.angle(np.exp(1j * (r.C - q.C)))) <= ang_tol):
+                counts[j] += 1
+                break
+        else:
+            reps.append(r)
+            counts.append(1)
+    minima = pd.DataFrame(reps).reset_index(drop=True)
+    minima["n_starts"] = counts
+    keys = np.c_[-minima[["x", "y", "z"]].to_numpy(), minima[["A", "C"]].to_numpy()]
+    tol = [pos_tol] * 3 + [ang_tol] * 2
+    ranked = S.rank_with_ties(minima[misfit].to_numpy(), keys=keys, rtol=rtol, key_tol=tol)
+    return minima.iloc[ranked].reset_index(drop=True)
+
+
+def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, *, rows, cols, starts,
+                        free=AXES, fixed: Mapping | None = None, ftol: float = 1e-15,
+                        xtol: float = 1e-15, max_nfev: int = 500):
+    """Least-squares fits of the pose whose normalised linear indices best match ``target``.
+
+    The indices are :func:`~mtaccuracy.sensitivity.linear_indices` of
+    :meth:`ACDoubleTurntable.jacobian`, compared at the (component, error) pairs
+    ``rows``, ``cols``.  x, y, z and A stay within their travels, C is free (periodic).
+    scipy's ``least_squares`` (trust-region reflective, :func:`~mtaccuracy.sensitivity.
+    fit_pose`) with a central-difference Jacobian evaluated in one batched call, run until the
+    relative change of the cost falls below ``ftol`` or of the step below ``xtol``.  BLAS runs
+    single-threaded (small matrices: threads only cost time, and the result is then the same
+    for any thread count).
+
+    Parameters
+    ----------
+    machine : ACDoubleTurntable
+        The machine whose Jacobian gives the indices.
+    sd : array (41,)
+        Error standard deviations (mm, rad).
+    target : array (m,)
+        The published indices.
+    rows, cols : arrays of int (m,)
+        The (component, error) entries of ``target``.
+    starts : array (s, len(free))
+        Start values of the free axes (mm, rad), one row per start.
+    free : sequence of str
+        The axes fitted.
+    fixed : mapping, optional
+        Values of the axes not in ``free`` (mm, rad).
+    ftol, xtol : float
+        Relative changes of the cost and of the step below which a fit stops.
+    max_nfev : int
+        Evaluations per start.
+
+    Returns
+    -------
+    DataFrame (s, 7)
+        One row per start: x, y, z (mm), A, C (rad, C in [0, 2 pi)), ``misfit`` (RMS of the
+        residuals) and the optimiser's ``status``.
+    """
+    free = tuple(free)
+    fixed = dict(fixed or {})
+    if set(free) | set(fixed) != set(AXES) or set(free) & set(fixed):
+        raise ValueError(f"free {free} and fixed {tuple(fixed)} must split the axes {AXES}")
+    bounds = (np.array([TRAVELS[a][0] if a != "C" else -np.inf for a in free]),
+              np.array([TRAVELS[a][1] if a != "C" else np.inf for a in free]))
+    fits = S.fit_pose(lambda pose: S.linear_indices(machine.jacobian(pose), sd), target,
+                      (rows, cols), starts, free, fixed=fixed, bounds=bounds,
+                      scale=np.array([100.0 if a in "xyz" else 1.0 for a in free]),
+                      ftol=ftol, xtol=xtol, max_nfev=max_nfev)
+    for a in fixed:
+        fits[a] = float(fixed[a])
+    fits["C"] = np.mod(fits["C"].to_numpy(dtype=float), 2 * np.pi)
+    return fits[[*AXES, "misfit", "status"]]
+
+
+def fit_pose_average_to_indices(machine: ACDoubleTurntable, sd, target, *, rows, cols, starts,
+                                ftol: float = 1e-12, xtol: float = 1e-12,
+                                max_nfev: int = 300):
+    """Least-squares fits of several poses whose *mean* normalised linear indices match ``target``.
+
+    The hypothesis that a table reports indices averaged over several poses, equal weights.
+    As :func:`fit_pose_to_indices` otherwise (x, y, z, A within their travels, batched
+    central-difference Jacobian, single-threaded BLAS).  Each fitted pose is reported as its
+    canonical image (:func:`canonical_pose`), the poses of one fit ordered by decreasing A
+    (the mean does not depend on their order).
+
+    Parameters
+    ----------
+    machine : ACDoubleTurntable
+        The machine whose Jacobian gives the indices.
+    sd : array (41,)
+        Error standard deviations (mm, rad).
+    target : array (m,)
+        The published indices.
+    rows, cols : arrays of int (m,)
+        The (component, error) entries of ``target``.
+    starts : array (s, poses, 5)
+        x, y, z (mm), A, C (rad) of each pose, one block per start.
+    ftol, xtol : float
+        Relative changes of the cost and of the step below which a fit stops.
+    max_nfev : int
+        Evaluations per start.
+
+    Returns
+    -------
+    DataFrame
+        One row per start and pose: ``start``, ``pose`` (0..poses-1), x, y, z (mm), A, C
+        (rad), ``misfit`` (RMS over the entries) and the optimiser's ``status``.
+    """
+    starts = np.asarray(starts, dtype=float)
+    if starts.ndim != 3 or starts.shape[2] != 5:
+        raise ValueError(f"starts must be (starts, poses, 5), got {starts.shape}")
+    m = starts.shape[1]
+    target = np.asarray(target, dtype=float)
+    rows, cols = np.asarray(rows), np.asarray(cols)
+    scale = np.tile([100.0, 100.0, 100.0, 1.0, 1.0], m)
+    lo = np.tile([TRAVELS["x"][0], TRAVELS["y"][0], TRAVELS["z"][0], TRAVELS["A"][0], -np.inf], m)
+    hi = np.tile([TRAVELS["x"][1], TRAVELS["y"][1], TRAVELS["z"][1], TRAVELS["A"][1], np.inf], m)
+
+    def residuals(v):  # v: (B, 5 m) -> (B, entries)
+        p = v.reshape(-1, 5)
+        pose = {a: p[:, i] for i, a in enumerate(AXES)}
+        s = S.linear_indices(machine.jacobian(pose), sd)[:, rows, cols]
+        return s.reshape(v.shape[0], m, -1).mean(axis=1) - target
+
+    out = []
+    fits = S.least_squares_starts(residuals, starts.reshape(len(starts), -1), lo=lo, hi=hi,
+                                  scale=scale, ftol=ftol, xtol=xtol, max_nfev=max_nfev)
+    for k, (x, misfit, status) in enumerate(fits):
+        poses = [canonical_pose(dict(zip(AXES, p, strict=True))) for p in x.reshape(m, 5)]
+        poses.sort(key=lambda p: -p["A"])
+        out += [dict(start=k, pose=j, **p, misfit=misfit, status=status)
+                for j, p in enumerate(poses)]
+    return pd.DataFrame(out)
+
+
+# --------------------------------------------------------------------------------------
+# Necessary conditions on a table of indices: ratios the model fixes at every pose
+# --------------------------------------------------------------------------------------
+
+def index_invariants(machine: ACDoubleTurntable, sd, *, rows, cols, poses: Mapping,
+                     rtol: float = 1e-9):
+    """Ratios of normalised linear indices that the model fixes at every pose.
+
+    The normalised linear index is ``S_ki = J_ki^2 sd_i^2 / V_k``, so
+
+    - within a component, two errors whose Jacobian entries stay proportional at every pose
+      (the same structure: e.g. translations along one direction of one moving frame) have
+      ``S_ki / S_kj`` fixed by their variance ratio, whatever the pose: they form a *group*;
+    - across components, a ratio of two groups in component k and one in component l can be
+      the same function of the pose (e.g. ``sin^2 A`` in Vx and in Vy), so their quotient is
+      fixed too (``V_k``, ``V_l`` cancel).
+
+    A ratio counts as fixed when its largest relative spread over ``poses`` is below
+    ``rtol``; entries whose index is zero at some pose are left alone (no ratio).
+
+    Parameters
+    ----------
+    machine : ACDoubleTurntable
+        The machine whose Jacobian gives the indices.
+    sd : array (41,)
+        Error standard deviations (mm, rad).
+    rows, cols : arrays of int (m,)
+        The table's (component, error) entries (e.g. Table 2).
+    poses : mapping
+        Pose arrays (P,), P >= 3: many random poses, x, y, z (mm), A, C (rad).
+    rtol : float
+        Largest relative spread over the poses of a ratio that counts as fixed.
+
+    Returns
+    -------
+    groups : DataFrame
+        One row per entry: ``entry``, ``component``, ``error``, ``group`` (an integer, -1 for
+        an entry left alone; entries of one group share a component) and ``factor``, the fixed
+        ratio ``S_entry / S_head`` (head: the group's first entry).
+    cross : DataFrame
+        The groups ``num_k, den_k, num_l, den_l`` and ``value``, the fixed quotient
+        ``(S_num_k / S_den_k) / (S_num_l / S_den_l)`` of their heads.
+    """
+    rows, cols = np.asarray(rows), np.asarray(cols)
+    s = S.linear_indices(machine.jacobian(poses), sd)[:, rows, cols]   # (P, entries)
+    if s.shape[0] < 3:
+        raise ValueError("index_invariants needs at least 3 poses to tell a fixed ratio")
+    ok = (s > 0).all(axis=0)
+    logs = np.log(np.where(s > 0, s, 1.0))
+
+    def fixed(r):
+        return float(np.abs(np.expm1(r - r.mean())).max()) < rtol
+
+    group = -np.ones(len(rows), dtype=int)
+    factor = np.full(len(rows), np.nan)
+    heads = []
+    for a in range(len(rows)):
+        if group[a] >= 0 or not ok[a]:
+            continue
+        group[a], factor[a] = len(heads), 1.0
+        for b in range(a + 1, len(rows)):
+            if group[b] < 0 and ok[b] and rows[b] == rows[a] and fixed(logs[:, b] - logs[:, a]):
+                group[b], factor[b] = len(heads), float(np.exp((logs[:, b] - logs[:, a]).mean()))
+        heads.append(a)
+    pairs = [(g, h) for g in range(len(heads)) for h in range(g + 1, len(heads))
+             if rows[heads[g]] == rows[heads[h]]]
+    cross = []
+    for i, (g, h) in enumerate(pairs):
+        rk = logs[:, heads[g]] - logs[:, heads[h]]
+        for g2, h2 in pairs[i + 1:]:
+            if rows[heads[g2]] == rows[heads[g]]:
+                continue
+            for num, den in ((g2, h2), (h2, g2)):
+                q = rk - (logs[:, heads[num]] - logs[:, heads[den]])
+                if fixed(q):
+                    cross.append(dict(num_k=g, den_k=h, num_l=num, den_l=den,
+                                      value=float(np.exp(q.mean()))))
+    groups = pd.DataFrame({"entry": np.arange(len(rows)), "component": rows, "error": cols,
+                           "group": group, "factor": factor})
+    return groups, pd.DataFrame(cross, columns=["num_k", "den_k", "num_l", "den_l", "value"])
+
+
+def ratio_interval(num, den):
+    """The interval of ``num / den`` for two positive intervals (interval arithmetic).
+
+    How the printed precision of two published values propagates into their ratio.
+
+    Parameters
+    ----------
+    num, den : pair of float
+        ``(lo, hi)`` of the numerator and of the denominator; ``den`` strictly positive,
+        ``num`` not negative.
+
+    Returns
+    -------
+    lo, hi : float
+        ``num_lo / den_hi`` and ``num_hi / den_lo``.
+    """
+    (num_lo, num_hi), (den_lo, den_hi) = num, den
+    if np.any(np.asarray(den_lo) <= 0) or np.any(np.asarray(num_lo) < 0):
+        raise ValueError("ratio_interval needs positive intervals")
+    return np.asarray(num_lo) / np.asarray(den_hi), np.asarray(num_hi) / np.asarray(den_lo)
+
+
+# --------------------------------------------------------------------------------------
+# Table 2's checks, the references at a test point, and figures
+# --------------------------------------------------------------------------------------
 
 def tidy(df: pd.DataFrame) -> pd.DataFrame:
     """Floats rounded to 6 decimals, and a rounded -0 written as 0 (its sign is rounding noise)."""
@@ -26,19 +488,17 @@ def fmt(v: float) -> str:
 
 
 def normalise(st):
-    """Total indices clipped at 0 and divided by their sum over the errors (Table 2's
-    normalised total indices); ``st`` (..., d)."""
+    """Table 2's normalised total indices: ``st`` (..., d) clipped at 0, over their sum."""
     st = np.clip(st, 0, None)
     return st / st.sum(axis=-1, keepdims=True)
 
 
 def sobol_reference(machine, pose, sd, method: str, n: int, rng_seed: int, progress=False):
-    """Sampled Sobol' indices of the six pose-error components at ``pose``, errors normal with
-    standard deviations ``sd`` (41,): ``method`` "mc" or "lhs" designs of ``n`` base rows,
-    streamed (``sensitivity.sobol_indices`` on a ``SobolDesign``); returns (s1, st), each
-    (41, 6).  With ``progress`` a line per quarter of the runs."""
-    from .. import sensitivity as S
+    """Sampled Sobol' indices (s1, st), each (41, 6), of the six pose-error components at ``pose``.
 
+    Errors normal with standard deviations ``sd`` (41,): ``method`` "mc" or "lhs" designs of
+    ``n`` base rows, streamed (``sensitivity.sobol_indices`` on a ``SobolDesign``).  With
+    ``progress`` a line per quarter of the runs."""
     design = S.SobolDesign(n, 41, method, rng_seed, to_inputs=lambda u: S.from_unit_normal(u, sd))
     marks = set()
 
@@ -56,10 +516,10 @@ def sobol_reference(machine, pose, sd, method: str, n: int, rng_seed: int, progr
 
 def pce_indices(machine, pose, sd, n: int, degree: int, rng_seed: int, q_norm: float = 1.0,
                 comps=tuple(range(6))) -> dict:
-    """Sparse PCE fits (``sensitivity.fit_pce_outputs``) of the pose-error components ``comps``
-    on a Latin hypercube of ``n`` standard normals (errors = xi * sd); {component: fit}."""
-    from .. import sensitivity as S
+    """Sparse PCE fits of the pose-error components ``comps`` at ``pose``: {component: fit}.
 
+    ``sensitivity.fit_pce_outputs`` on a Latin hypercube of ``n`` standard normals (errors =
+    xi * sd)."""
     u = S.base_samples(n, 41, "lhs", rng_seed)[0]
     xi = S.from_unit_normal(u, np.ones(41))
     y = machine.pose_error(xi * sd, pose)
@@ -92,8 +552,6 @@ def fixed_ratio_checks(t2, half, groups, cross, any_sd, methods=("pce", "mcs", "
     paper's own scatter) and whether it holds the model's value; and the noise floor, the RMS
     of the published PCE values around the group means of the equalities, and the relative
     scatter of one published value around its group mean per method."""
-    from ..machines.ac_double_turntable import ratio_interval
-
     def group_interval(g, m):
         """(lo, hi) of a group's mean published value (divided by the fixed factors)."""
         e = groups[groups.group == g]
@@ -132,9 +590,7 @@ def fixed_ratio_checks(t2, half, groups, cross, any_sd, methods=("pce", "mcs", "
                    model=r.value, any_variances=(r.num_k, r.den_k, r.num_l, r.den_l) in any_sd)
         for m in methods:
             iv = [group_interval(g, m) for g in (r.num_k, r.den_k, r.num_l, r.den_l)]
-            k_lo, k_hi = ratio_interval(*iv[0], *iv[1])
-            l_lo, l_hi = ratio_interval(*iv[2], *iv[3])
-            lo, hi = ratio_interval(k_lo, k_hi, l_lo, l_hi)
+            lo, hi = ratio_interval(ratio_interval(iv[0], iv[1]), ratio_interval(iv[2], iv[3]))
             row[m] = 0.5 * (lo + hi)
             # widened by twice the paper's own scatter of a quotient of four group means
             s = scatter[m] * np.sqrt(sum(1 / size[g] for g in (r.num_k, r.den_k, r.num_l, r.den_l)))
@@ -150,9 +606,10 @@ def fixed_ratio_checks(t2, half, groups, cross, any_sd, methods=("pce", "mcs", "
 
 
 def converged_at(g, r_max: float = 3.0, assign: str = "larger"):
-    """The first sample size from which the fluctuation R (``g.R_percent``, Eq. 24, the
-    change from the previous size, so NaN at the first) stays at or below ``r_max`` percent
-    (``g.n`` ascending); NaN if never.
+    """The first sample size from which the fluctuation R (Eq. 24) stays small; NaN if never.
+
+    R is ``g.R_percent``, the change from the previous size (so NaN at the first); "small" is
+    at or below ``r_max`` percent; ``g.n`` ascending.
 
     Eq. 24, R = |S_(l+1) - S_l| / S_l, does not say to which of the two sizes R belongs:
     ``assign="larger"`` gives it to size l+1 (the reading under which the largest size of a
@@ -192,9 +649,10 @@ def group_shares(s, catalogue, comps) -> pd.DataFrame:
 
 
 def relative_scatter(estimate, exact, threshold: float = 0.05) -> float:
-    """RMS relative deviation of sampled indices ``estimate`` from the ``exact`` ones (same
-    shape) over the entries whose exact index exceeds ``threshold`` (the key errors): the
-    sampling scatter of one printed value, comparable with the paper's own scatter around
+    """RMS relative deviation of sampled indices ``estimate`` from the ``exact`` ones (key errors).
+
+    Over the entries (same shape) whose exact index exceeds ``threshold`` (the key errors):
+    the sampling scatter of one printed value, comparable with the paper's own scatter around
     the equalities its model fixes."""
     estimate, exact = np.asarray(estimate, dtype=float), np.asarray(exact, dtype=float)
     key = exact > threshold
@@ -205,10 +663,11 @@ def relative_scatter(estimate, exact, threshold: float = 0.05) -> float:
 
 def bars_figure(st, comps, all_comps, names, t2, key_threshold: float, title: str,
                 published_colour):
-    """Figs. 5-6: normalised total indices of every error by method (bars) for the
-    components ``comps``, beside Table 2's PCE values (diamonds) unless ``t2`` is None (the
-    bars drawn at a pose other than Table 2's)."""
-    import matplotlib.pyplot as plt
+    """Figs. 5-6: normalised total indices of every error by method (bars).
+
+    For the components ``comps``, beside Table 2's PCE values (diamonds) unless ``t2`` is
+    None (the bars drawn at a pose other than Table 2's)."""
+    import matplotlib.pyplot as plt  # local: heavy, needed only by the figures
 
     fig, axes = plt.subplots(len(comps), 1, figsize=(13, 3.2 * len(comps)), sharex=True)
     w = 0.27
@@ -231,14 +690,16 @@ def bars_figure(st, comps, all_comps, names, t2, key_threshold: float, title: st
 
 
 def fig04_figure(s_tp, comps, names, diagonal, vmax: float = 0.3):
-    """Fig. 4's test points: the linear total index of every error (rows, named) at every
-    test point (columns, numbered 1..N along the diagonals, which white lines separate), one
-    heat map per component, two rows of three; the first point of each diagonal and the last
-    point are numbered, and every point has a tick (up to 60 points).
+    """Fig. 4's test points: the linear total index of every error at every test point.
+
+    Errors are rows (named), test points columns (numbered 1..N along the diagonals, which
+    white lines separate), one heat map per component, two rows of three; the first point of
+    each diagonal and the last point are numbered, and every point has a tick (up to 60
+    points).
 
     ``s_tp`` (N, len(comps), 41): indices per point; ``names`` (41,): the error names;
     ``diagonal`` (N,): the diagonal (0-3) of each point, points of one diagonal consecutive."""
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # local: heavy, needed only by the figures
 
     n_pts = s_tp.shape[0]
     firsts = np.r_[0, np.flatnonzero(np.diff(diagonal)) + 1]   # first point of each diagonal

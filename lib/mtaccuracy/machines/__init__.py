@@ -18,7 +18,7 @@ from __future__ import annotations
 import importlib
 import importlib.util
 
-from ._base import POSE_COMPONENTS, Machine
+from .chain import ChainMachine
 
 #: machine name -> (module, class)
 _REGISTRY = {
@@ -43,7 +43,7 @@ def names() -> list[str]:
     return sorted(_available())
 
 
-def build(name: str, **options) -> Machine:
+def build(name: str, **options) -> ChainMachine:
     """Build the machine called ``name`` (see :func:`names`).
 
     Parameters
@@ -51,11 +51,12 @@ def build(name: str, **options) -> Machine:
     name : str
         One of :func:`names`.
     **options
-        Passed to the machine's constructor (e.g. ``layout`` of the horizontal machine).
+        Passed to the machine's constructor (e.g. ``layout`` of the horizontal machine: a
+        named layout or a topology).
 
     Returns
     -------
-    Machine
+    ChainMachine
         Its ``pose_error(errors, pose)`` maps ``(n, n_errors)`` errors (mm, rad) and a pose
         to the ``(n, 6)`` pose error (mm, rad).
 
@@ -87,4 +88,4 @@ def build(name: str, **options) -> Machine:
     return getattr(importlib.import_module(f"{__name__}.{module}"), cls)(**options)
 
 
-__all__ = ["Machine", "POSE_COMPONENTS", "build", "names"]
+__all__ = ["ChainMachine", "build", "names"]

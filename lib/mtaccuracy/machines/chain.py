@@ -50,7 +50,7 @@ Evaluation
 One batched path for every machine: the tool tip and the three tool-frame axes are carried as
 rows (structure of arrays) through the factors, innermost first, in chunks of samples, with
 every product written out in a fixed order (no BLAS call; the same rounding on every CPU).
-:meth:`ChainMachine.linear_jacobian` gives the exact first-order Jacobian at zero errors in
+:meth:`ChainMachine.jacobian` gives the exact first-order Jacobian at zero errors in
 closed form (each error is a small twist in its frame: ``R_A (w x p_B + v)``), batched over
 poses.
 
@@ -65,6 +65,7 @@ redundant location errors removed by a rank test (:func:`iso_catalogue`,
 
 from __future__ import annotations
 
+import os
 import re
 import warnings
 from collections import Counter
@@ -72,12 +73,12 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
 
-from .. import csvlines
+from .. import csvlines, validate
 from .. import errors as _errors
-from ..kinematics import matmul3
+from ..kinematics import homogeneous, matmul3
 from . import units as _units
-from ._base import Machine
 from .units import SuspectUnitWarning  # noqa: F401  (the readers' warning, here for readers)
 
 LINEAR = "XYZ"
@@ -252,10 +253,12 @@ def parse_topology(text: str) -> Topology:
 
 @dataclass(frozen=True)
 class Placement:
-    """Where one error column enters: ``axis``, ``slot`` (``motion``: the axis' error-motion
-    block; ``pre``/``post``: its location block before/after the motion; ``tilt``: a rotation
-    of its direction of motion), ``component`` (0-2 translation along x, y, z; 3-5 rotation
-    about x, y, z) and ``sign`` (+1, or -1 where a paper defines the error the other way).
+    """Where one error column enters the chain: an axis, a slot, a component and a sign.
+
+    ``axis``, ``slot`` (``motion``: the axis' error-motion block; ``pre``/``post``: its location
+    block before/after the motion; ``tilt``: a rotation of its direction of motion),
+    ``component`` (0-2 translation along x, y, z; 3-5 rotation about x, y, z) and ``sign`` (+1,
+    or -1 where a paper defines the error the other way).
 
     Attributes
     ----------
@@ -433,8 +436,13 @@ def _cross_axis1(u, v):
 # The machine
 # ------------------------------------------------------------------------------------------
 
-class ChainMachine(Machine):
+class ChainMachine:
     """A machine built from a topology and an error placement (see the module docstring).
+
+    Every machine of the library is one (the papers' machines are subclasses that only fix
+    the description).  Its ``pose_error(errors, pose)`` maps ``(n, n_errors)`` errors and a pose
+    to the ``(n, 6)`` pose error; ``error_names``, ``catalogue``, ``axes`` and ``tool_offsets``
+    name the columns and the pose.
 
     Parameters
     ----------
@@ -522,7 +530,7 @@ class ChainMachine(Machine):
         if unknown:
             raise ValueError(f"travels given for {unknown}, not pose names of the axes "
                              f"({', '.join(self.axes)})")
-        self.chunk = int(chunk)
+        self.chunk = validate.integer(chunk, "chunk", low=1)
         self._blocks = {(a, s): _Block() for a in self.topology.axes for s in SLOTS}
         for j, p in enumerate(self.placements):
             b = self._blocks[(p.axis, p.slot)]
@@ -545,6 +553,88 @@ class ChainMachine(Machine):
             ``"<name>: <chain> (<n_errors> errors)"``.
         """
         return f"{self.name}: {self.topology.describe()} ({self.n_errors} errors)"
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r}: {self.n_errors} errors, axes {self.axes}>"
+
+    @property
+    def error_names(self) -> list[str]:
+        """list of str: the error symbols in catalogue order (the columns of an error array)."""
+        return _errors.symbols(self.catalogue)
+
+    @property
+    def n_errors(self) -> int:
+        """int: the number of errors of the catalogue."""
+        return len(self.catalogue)
+
+    def check_errors(self, errors) -> np.ndarray:
+        """Validate an error array against the catalogue.
+
+        Parameters
+        ----------
+        errors : (n, n_errors) array_like
+            Error values in mm and rad, columns in catalogue order (:attr:`error_names`).
+
+        Returns
+        -------
+        (n, n_errors) ndarray of float
+            ``errors`` as a float array.
+
+        Raises
+        ------
+        ValueError
+            If ``errors`` is not two-dimensional with ``n_errors`` columns.
+        """
+        e = np.asarray(errors, dtype=float)
+        if e.ndim != 2 or e.shape[1] != self.n_errors:
+            raise ValueError(
+                f"errors for {self.name} must have shape (n, {self.n_errors}) "
+                f"(columns: {', '.join(self.error_names)}), got {e.shape}"
+            )
+        return e
+
+    def check_pose(self, pose: Mapping, n: int) -> dict[str, np.ndarray]:
+        """Validate a pose mapping; axes are required, tool offsets default to 0.
+
+        Parameters
+        ----------
+        pose : mapping of str to float or (n,) array
+            Axis positions (linear axes mm, rotary axes rad) by pose name (:attr:`axes`)
+            and, optionally, tool offsets (mm, :attr:`tool_offsets`).
+        n : int
+            The number of samples every value is broadcast to.
+
+        Returns
+        -------
+        dict of str to (n,) ndarray
+            Every axis and tool offset name, each broadcast to ``(n,)`` (read-only views).
+
+        Raises
+        ------
+        TypeError
+            If ``pose`` is not a mapping.
+        ValueError
+            If a name is unknown, an axis is missing or a value is neither a scalar nor of
+            shape ``(n,)`` (or ``(1,)``).
+        """
+        if not isinstance(pose, Mapping):
+            raise TypeError(f"pose must be a mapping of {self.axes + self.tool_offsets}")
+        allowed = self.axes + self.tool_offsets
+        unknown = [k for k in pose if k not in allowed]
+        if unknown:
+            raise ValueError(f"unknown pose name(s) {unknown} for {self.name}; "
+                             f"allowed: {', '.join(allowed)}")
+        missing = [a for a in self.axes if a not in pose]
+        if missing:
+            raise ValueError(f"pose for {self.name} lacks axis value(s) {missing}")
+        out = {}
+        for k in allowed:
+            v = np.asarray(pose.get(k, 0.0), dtype=float)
+            if v.ndim > 1 or (v.ndim == 1 and v.shape[0] not in (1, n)):
+                raise ValueError(f"pose[{k!r}] must be a scalar or have shape ({n},), "
+                                 f"got {v.shape}")
+            out[k] = np.broadcast_to(v, (n,))
+        return out
 
     def factors(self) -> list[tuple[int, str, str]]:
         """The chain's factors in output order.
@@ -806,14 +896,40 @@ class ChainMachine(Machine):
         actual, ideal : (n, 4, 4) ndarray
             Homogeneous transforms of :meth:`relative` with and without the errors (mm).
         """
-        from ..kinematics import homogeneous
-
         return (homogeneous(*self.relative(errors, pose)),
                 homogeneous(*self.relative(errors, pose, with_errors=False)))
 
+    def _difference_jacobian(self, pose: Mapping, step: float) -> np.ndarray:
+        """d(pose error)/d(errors) at zero errors by central differences (``jacobian(step=)``).
+
+        Parameters
+        ----------
+        pose : mapping of str to float or (P,) array
+            Axis positions (mm, rad) and tool offsets (mm) of P poses.
+        step : float
+            Central-difference step, mm or rad; the model is smooth, so the result is exact
+            to about ``step**2``.
+
+        Returns
+        -------
+        (P, 6, n_errors) ndarray
+            Row ``[p, i, j]`` is d(pose error component i)/d(error j) at pose p
+            (``(1, 6, n_errors)`` for a scalar pose); translational errors give
+            dimensionless coefficients, angular errors mm per rad.
+        """
+        vals = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
+        n_poses = max(v.shape[0] for v in vals.values())
+        d = self.n_errors
+        eye = np.eye(d) * step
+        e = np.concatenate([eye, -eye])                                   # (2d, d)
+        rows = np.tile(e, (n_poses, 1))
+        rep = {k: np.repeat(np.broadcast_to(v, (n_poses,)), 2 * d) for k, v in vals.items()}
+        pe = self.pose_error(rows, rep).reshape(n_poses, 2, d, 6)
+        return np.swapaxes((pe[:, 0] - pe[:, 1]) / (2 * step), 1, 2)
+
     # -- first order ------------------------------------------------------------------------
     def _build_plan(self):
-        """Per error, for :meth:`linear_jacobian`: the position of its factor in
+        """Per error, for :meth:`jacobian`: the position of its factor in
         :meth:`factors`, its kind (0 translation, 1 rotation, 2 tilt), the unit vector of its
         component, the direction of its axis (tilts), sign x side, and the axis (tilts)."""
         seq = self.factors()
@@ -838,20 +954,25 @@ class ChainMachine(Machine):
                 kind[j] = 0 if pl.component < 3 else 1
         return pos, kind, unit, ek, scale, tilt_axis
 
-    def linear_jacobian(self, pose: Mapping) -> np.ndarray:
-        """The exact first-order Jacobian d(pose error)/d(errors) at zero errors, (P, 6, n)
-        for pose arrays of length P, in closed form: an error block is a small twist
-        ``(v, w)`` in its frame; with ``R_A`` the rotation of the factors before it (output
-        order) and ``p_B``, ``a_B`` the tool tip and tool axis carried through the factors
-        after it, it moves the tip by ``R_A (w x p_B + v)`` and turns the tool by ``R_A w``
-        (the tool axis by ``R_A (w x a_B)``), with the opposite sign on the workpiece side
-        (the inverse of I + xi is I - xi to first order).  A tilt ``w`` of a linear axis moved
-        by ``s q`` is the translation ``s q (w x e_k)``.  All forms agree to first order.
+    def jacobian(self, pose: Mapping, *, step: float | None = None) -> np.ndarray:
+        """The Jacobian d(pose error)/d(errors) at zero errors: exact, in closed form.
+
+        (P, 6, n) for pose arrays of length P.  An error block is a small twist ``(v, w)`` in its
+        frame; with ``R_A`` the rotation of the factors before it (output order) and ``p_B``,
+        ``a_B`` the tool tip and tool axis carried through the factors after it, it moves the
+        tip by ``R_A (w x p_B + v)`` and turns the tool by ``R_A w`` (the tool axis by
+        ``R_A (w x a_B)``), with the opposite sign on the workpiece side (the inverse of I + xi
+        is I - xi to first order).  A tilt ``w`` of a linear axis moved by ``s q`` is the
+        translation ``s q (w x e_k)``.  All forms agree to first order.
 
         Parameters
         ----------
         pose : mapping of str to float or (P,) array
             Axis positions (mm, rad) and tool offsets (mm) of P poses.
+        step : float, optional
+            None (default): the closed form.  A step (mm or rad) gives central differences of
+            :meth:`pose_error` instead, an independent check of the closed form (exact to about
+            ``step**2``; tests and notebook 01 compare the two).
 
         Returns
         -------
@@ -859,6 +980,8 @@ class ChainMachine(Machine):
             d(pose error component)/d(error) at zero errors, per pose: dimensionless for
             translational errors, mm per rad for angular ones (position rows).
         """
+        if step is not None:
+            return self._difference_jacobian(pose, step)
         vals = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in pose.items()}
         n = max((v.shape[0] for v in vals.values()), default=1)
         p = self.check_pose(vals, n)
@@ -931,13 +1054,14 @@ def _motion_specs(axis: str) -> list[tuple[_errors.ErrorSpec, Placement]]:
 
 
 def iso_catalogue(topology: str):
-    """The ISO 230-1 / 230-7 errors of a topology, before redundancy is removed: per axis K
-    its six error motions EXK, EYK, EZK, EAK, EBK, ECK (block after the motion); for the
-    linear axes the squareness errors with the first of X, Y, Z present as reference (the
-    second tilted about the normal of their plane, e.g. EC0Y; the third about both others,
-    e.g. EA0Z, EB0Z); per rotary axis K its four location errors (ISO 230-7): the two
-    positions and two orientations of its axis line perpendicular to k (e.g. for C: EX0C,
-    EY0C, EA0C, EB0C), as a block before its motion.  Returns ``(catalogue, placements)``.
+    """The ISO 230-1 / 230-7 errors of a topology, before redundancy is removed.
+
+    Per axis K its six error motions EXK, EYK, EZK, EAK, EBK, ECK (block after the motion); for
+    the linear axes the squareness errors with the first of X, Y, Z present as reference (the
+    second tilted about the normal of their plane, e.g. EC0Y; the third about both others, e.g.
+    EA0Z, EB0Z); per rotary axis K its four location errors (ISO 230-7): the two positions and
+    two orientations of its axis line perpendicular to k (e.g. for C: EX0C, EY0C, EA0C, EB0C),
+    as a block before its motion.  Returns ``(catalogue, placements)``.
 
     Parameters
     ----------
@@ -979,15 +1103,17 @@ def iso_catalogue(topology: str):
     return tuple(s for s, _ in specs), {s.symbol: p for s, p in specs}
 
 
-def redundant_location_errors(machine: ChainMachine, n_poses: int = 64, seed=0,
+def redundant_location_errors(machine: ChainMachine, *, n_poses: int = 64, seed=0,
                               rtol: float = 1e-9) -> list[tuple[str, str]]:
-    """Location errors whose effect on the pose error, over random poses, is a combination of
-    the effects of the axes' zero positions (the columns of their own-direction error
-    motions, EXX, ..., ECC), of the workpiece and tool set-up (a constant
-    rigid shift of the workpiece, a constant offset of the tool) and of the location errors
-    before them: they cannot be told apart from those and are not separate errors.  Returns
-    (symbol, reason) pairs, in catalogue order.  The test is a rank test of the stacked
-    Jacobian columns (least-squares residual of the unit column below ``rtol``).
+    """Location errors that cannot be told apart from other errors (a rank test).
+
+    Those whose effect on the pose error, over random poses, is a combination of the effects of
+    the axes' zero positions (the columns of their own-direction error motions, EXX, ..., ECC),
+    of the workpiece and tool set-up (a constant rigid shift of the workpiece, a constant offset
+    of the tool) and of the location errors before them: they cannot be told apart from those
+    and are not separate errors.  Returns (symbol, reason) pairs, in catalogue order.  The test is
+    a rank test of the stacked Jacobian columns (least-squares residual of the unit column below
+    ``rtol``).
 
     Parameters
     ----------
@@ -1020,7 +1146,8 @@ def redundant_location_errors(machine: ChainMachine, n_poses: int = 64, seed=0,
     the rank test of columns mixing such entries with ordinary ones is not meaningful; the
     scaling only keeps the arithmetic finite.
     """
-    rng = np.random.default_rng(seed)
+    n_poses = validate.integer(n_poses, "n_poses", low=1)
+    rng = validate.rng(seed)
     pose = {}
     for a, name in machine._axis_pose.items():
         lo, hi = machine.travels.get(name, (-300.0, 300.0) if a in LINEAR else (-np.pi, np.pi))
@@ -1030,7 +1157,7 @@ def redundant_location_errors(machine: ChainMachine, n_poses: int = 64, seed=0,
         pose[name] = rng.uniform(lo, hi, n_poses)
     for t in machine.tool_offsets:
         pose[t] = rng.uniform(50.0, 150.0, n_poses)
-    jac = machine.linear_jacobian(pose)                      # (P, 6, n)
+    jac = machine.jacobian(pose)                      # (P, 6, n)
     zero = np.zeros((n_poses, machine.n_errors))
     rt, tt = machine.relative(zero, pose, with_errors=False)
     if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(tt))):
@@ -1242,8 +1369,6 @@ def _read_csv(path, columns, what, max_rows=None) -> _Table:
     Refused before parsing: more than :data:`MAX_TABLE_BYTES` bytes or ``10 * max_rows``
     lines; while parsing: more than ``max_rows`` data rows (default
     :data:`MAX_TABLE_ROWS`)."""
-    import os
-
     path = str(path)
     max_rows = MAX_TABLE_ROWS if max_rows is None else max_rows
     try:
@@ -1596,9 +1721,11 @@ _SLOT_TEXT = {"motion": "error motion (after the motion)", "pre": "location (bef
 
 
 def catalogue_table(machine: ChainMachine, bounds=None):
-    """A machine's errors as a table: symbol, kind, the axis it belongs to, where it enters the
-    chain and its component (``X Y Z`` translations, ``A B C`` rotations), with the ``bounds``
-    (2, n) of uniform ranges in um and urad when given.  A pandas DataFrame.
+    """A machine's errors as a table (a pandas DataFrame), with their ranges when given.
+
+    Symbol, kind, the axis it belongs to, where it enters the chain and its component (``X Y Z``
+    translations, ``A B C`` rotations), with the ``bounds`` (2, n) of uniform ranges in um and
+    urad when given.
 
     Parameters
     ----------
@@ -1613,8 +1740,6 @@ def catalogue_table(machine: ChainMachine, bounds=None):
         symbol, kind, axis, enters (where in the chain), component and, with ``bounds``, low,
         high and unit (um, urad).
     """
-    import pandas as pd
-
     table = pd.DataFrame({
         "symbol": machine.error_names, "kind": [e.kind for e in machine.catalogue],
         "axis": [p.axis for p in machine.placements],

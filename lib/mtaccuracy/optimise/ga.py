@@ -22,12 +22,15 @@ run is a function of its random numbers only.
 
 from __future__ import annotations
 
-__all__ = ["GAResult", "RealEncoding", "BinaryEncoding", "adaptive_rates", "run_ga"]
+__all__ = ["GAResult", "RealEncoding", "BinaryEncoding", "adaptive_rates", "reciprocal_fitness",
+           "run_ga"]
 
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
+from .. import validate
 
 
 @dataclass
@@ -83,7 +86,7 @@ class RealEncoding:
     Parameters
     ----------
     lo, hi : arrays (d,)
-        The box.
+        Lower and upper bound of each gene (low < high, finite).
     mutation_scale : float
         Standard deviation of a mutation step, as a share of the gene's range.
     """
@@ -106,9 +109,9 @@ class RealEncoding:
         Parameters
         ----------
         rng : numpy.random.Generator
-            The random stream.
+            The stream the population is drawn from.
         runs, pop : int
-            Independent runs and population size.
+            Independent runs, and individuals per run.
 
         Returns
         -------
@@ -132,7 +135,7 @@ class RealEncoding:
         """
         return geno
 
-    def crossover(self, a, b, cross, rng):
+    def crossover(self, a, b, cross, *, rng):
         """Cross paired parents where ``cross`` holds: arithmetic crossover per gene.
 
         Parameters
@@ -142,7 +145,7 @@ class RealEncoding:
         cross : (runs, pop // 2, 1) array of bool
             Which pairs cross; the others are copied.
         rng : numpy.random.Generator
-            The random stream.
+            The stream the crossover weights or cut points are drawn from.
 
         Returns
         -------
@@ -163,7 +166,7 @@ class RealEncoding:
         pm : (runs, pop) array
             Mutation probability per individual.
         rng : numpy.random.Generator
-            The random stream.
+            The stream the mutations are drawn from.
 
         Returns
         -------
@@ -176,25 +179,24 @@ class RealEncoding:
 
 
 class BinaryEncoding:
-    """Each gene a ``bits``-bit integer over its range (the classic GA of the toolboxes), the d
-    genes one string of ``d * bits`` bits, most significant first.  Crossover: single point on
-    the string.  Mutation: each bit flipped with probability ``Pm``.  Genes are stored as the
-    integers (runs, pop, d); random bits are drawn as the string and packed exactly (sums of
-    powers of two below 2**53).
+    """Each gene a ``bits``-bit integer over its range (the classic GA of the toolboxes).
+
+    The d genes form one string of ``d * bits`` bits, most significant first.  Crossover: single
+    point on the string.  Mutation: each bit flipped with probability ``Pm``.  Genes are stored
+    as the integers (runs, pop, d); random bits are drawn as the string and packed exactly (sums
+    of powers of two below 2**53).
 
     Parameters
     ----------
     lo, hi : arrays (d,)
-        The box.
+        Lower and upper bound of each gene (low < high, finite).
     bits : int
-        Bits per gene.
+        Bits per gene, 2 to 30 (the resolution is ``(hi - lo) / (2**bits - 1)``).
     """
 
     def __init__(self, lo, hi, bits: int = 16):
         self.lo, self.hi = _box(lo, hi)
-        if isinstance(bits, bool) or not isinstance(bits, int | np.integer) or not 2 <= bits <= 30:
-            raise ValueError(f"bits must be an integer from 2 to 30, got {bits!r}")
-        self.bits = int(bits)
+        self.bits = validate.integer(bits, "bits", low=2, high=30)
         self._pow2 = 2.0 ** np.arange(self.bits - 1, -1, -1)
         self.name = "binary"
 
@@ -214,9 +216,9 @@ class BinaryEncoding:
         Parameters
         ----------
         rng : numpy.random.Generator
-            The random stream.
+            The stream the population is drawn from.
         runs, pop : int
-            Independent runs and population size.
+            Independent runs, and individuals per run.
 
         Returns
         -------
@@ -240,7 +242,7 @@ class BinaryEncoding:
         """
         return self.lo + (self.hi - self.lo) * geno / (2.0 ** self.bits - 1)
 
-    def crossover(self, a, b, cross, rng):
+    def crossover(self, a, b, cross, *, rng):
         """Cross paired parents where ``cross`` holds: single point on the bit string.
 
         Parameters
@@ -250,7 +252,7 @@ class BinaryEncoding:
         cross : (runs, pop // 2, 1) array of bool
             Which pairs cross; the others are copied.
         rng : numpy.random.Generator
-            The random stream.
+            The stream the crossover weights or cut points are drawn from.
 
         Returns
         -------
@@ -275,7 +277,7 @@ class BinaryEncoding:
         pm : (runs, pop) array
             Mutation probability per individual.
         rng : numpy.random.Generator
-            The random stream.
+            The stream the mutations are drawn from.
 
         Returns
         -------
@@ -286,16 +288,17 @@ class BinaryEncoding:
         return child ^ self._pack(flips)
 
 
-def adaptive_rates(f, f_mean, generation, max_generation, *, pc_max, pc_min, pm_max, pm_min,
+def adaptive_rates(f, f_mean, *, generation, max_generation, pc_max, pc_min, pm_max, pm_min,
                    eq23: str = "corrected"):
     """Adaptive crossover and mutation probabilities (Yang et al. 2021, Eqs. 22-23).
 
     ``Pc = Pc_max`` if ``F < F_mean``, else ``Pc_max - (Pc_max - Pc_min) alpha / alpha_max``;
     ``Pm = Pm_min`` if ``F < F_mean``, else, as printed (``eq23="printed"``),
-    ``Pm_min - (Pm_max - Pm_min) alpha / alpha_max`` (falling, and negative late in a run), or
-    corrected (default) ``Pm_min + (Pm_max - Pm_min) alpha / alpha_max``, rising as the paper's
-    text describes.  ``alpha`` = ``generation``, ``alpha_max`` = ``max_generation``.  Returns the
-    raw values (:func:`run_ga` clips ``Pm`` to [0, 1]).
+    ``Pm_min - (Pm_max - Pm_min) alpha / alpha_max``, which falls from ``Pm_min`` and is negative
+    once ``alpha / alpha_max > Pm_min / (Pm_max - Pm_min)`` (after 6 % of the run with the paper's
+    bounds, ``mtaccuracy.spindle.PC_MAX`` ... ``PM_MIN``); or corrected (default),
+    ``Pm_min + (Pm_max - Pm_min) alpha / alpha_max``, rising as the paper's text describes.
+    Returns the raw values (:func:`run_ga` clips ``Pm`` to [0, 1]).
 
     Parameters
     ----------
@@ -303,25 +306,42 @@ def adaptive_rates(f, f_mean, generation, max_generation, *, pc_max, pc_min, pm_
         Fitness of each individual (any shape).
     f_mean : array
         Mean fitness of its population, broadcasting against ``f``.
-    generation, max_generation : int
-        alpha and alpha_max.
+    generation : int or array of int
+        The generation alpha, 0..max_generation; an array broadcasts against ``f``.
+    max_generation : int
+        The run's last generation alpha_max (>= 1).
     pc_max, pc_min, pm_max, pm_min : float
-        The probability bounds.
+        Bounds of the crossover probability (per pair) and of the mutation probability (per
+        gene or bit), ``0 <= min <= max <= 1``.
     eq23 : {"corrected", "printed"}
         Which Eq. 23.
 
     Returns
     -------
-    pc, pm : arrays, the broadcast shape of ``f`` and ``f_mean``
+    pc, pm : arrays, the broadcast shape of ``f``, ``f_mean`` and ``generation``
         Crossover and mutation probabilities.
+
+    Examples
+    --------
+    >>> pc, pm = adaptive_rates([1.0, 2.0], 1.5, generation=100, max_generation=200,
+    ...                         pc_max=0.99, pc_min=0.4, pm_max=0.09, pm_min=0.005)
+    >>> pc.round(4).tolist(), pm.round(4).tolist()
+    ([0.99, 0.695], [0.005, 0.0475])
     """
     if eq23 not in ("corrected", "printed"):
         raise ValueError(f"eq23 must be 'corrected' or 'printed', got {eq23!r}")
-    if not 0 <= generation <= max_generation or max_generation < 1:
-        raise ValueError(f"need 0 <= generation <= max_generation (>= 1), got {generation!r}, "
-                         f"{max_generation!r}")
-    if not (0 <= pc_min <= pc_max <= 1 and 0 <= pm_min <= pm_max <= 1):
-        raise ValueError("need 0 <= pc_min <= pc_max <= 1 and 0 <= pm_min <= pm_max <= 1")
+    max_generation = validate.integer(max_generation, "max_generation", low=1)
+    alpha = np.asarray(generation)
+    if alpha.dtype.kind not in "iu" and not (alpha.dtype.kind == "f"
+                                             and np.all(alpha == np.round(alpha))) \
+            or np.any(alpha < 0) or np.any(alpha > max_generation):
+        raise ValueError(f"generation must be an integer in [0, max_generation = "
+                         f"{max_generation}], got {generation!r}")
+    pc_max, pc_min, pm_max, pm_min = (validate.probability(v, n) for v, n in (
+        (pc_max, "pc_max"), (pc_min, "pc_min"), (pm_max, "pm_max"), (pm_min, "pm_min")))
+    if not (pc_min <= pc_max and pm_min <= pm_max):
+        raise ValueError(f"need pc_min <= pc_max and pm_min <= pm_max, got pc {pc_min}, {pc_max}; "
+                         f"pm {pm_min}, {pm_max}")
     f = np.asarray(f, dtype=float)
     above = f >= np.asarray(f_mean, dtype=float)
     frac = generation / max_generation
@@ -329,6 +349,26 @@ def adaptive_rates(f, f_mean, generation, max_generation, *, pc_max, pc_min, pm_
     sign = 1.0 if eq23 == "corrected" else -1.0
     pm = np.where(above, pm_min + sign * (pm_max - pm_min) * frac, pm_min)
     return pc, pm
+
+
+def reciprocal_fitness(h) -> np.ndarray:
+    """Selection weights ``F = 1/h`` of values to minimise; 0 where ``h`` is not finite and > 0.
+
+    The default of :func:`run_ga`; for a layout's ``H`` it is Yang et al. 2021, Eq. 21.
+
+    Parameters
+    ----------
+    h : array
+        Objective values (any shape); smaller is better.
+
+    Returns
+    -------
+    array
+        F, the shape of ``h``.
+    """
+    h = np.asarray(h, dtype=float)
+    with np.errstate(divide="ignore"):
+        return np.where(np.isfinite(h) & (h > 0), 1.0 / h, 0.0)
 
 
 def _roulette(f, rng, rows):
@@ -363,14 +403,16 @@ def run_ga(objective: Callable[[np.ndarray], np.ndarray], encoding, *, n_runs: i
         Decoded genes ``(runs, pop, d)`` to the values to minimise ``(runs, pop)``.
     encoding : RealEncoding or BinaryEncoding
         Or any object with ``initial(rng, runs, pop)``, ``decode(geno)``,
-        ``crossover(a, b, cross, rng)`` and ``mutate(child, pm, rng)``.
+        ``crossover(a, b, cross, *, rng)`` and ``mutate(child, pm, rng)``.
     n_runs, pop_size, generations : int
-        Independent runs, individuals per run (even: parents are paired), generations.
-    seed : int or numpy.random.Generator
-        Seeds one generator for everything.
+        Independent runs (>= 1), individuals per run (even, >= 4: parents are paired),
+        generations (>= 1).
+    seed : None, int, SeedSequence or numpy.random.Generator
+        Seeds one generator for everything (:func:`mtaccuracy.validate.rng`; a Generator is used
+        as it is).
     fitness : callable, optional
-        Selection weights from the values (default ``1 / value`` where finite and positive,
-        else 0).
+        Selection weights from the values (default :func:`reciprocal_fitness`, ``1 / value``
+        where finite and positive, else 0).
     adaptive : dict, optional
         None for the fixed rates ``pc``, ``pm``; else the keyword arguments of
         :func:`adaptive_rates` (``pc_max, pc_min, pm_max, pm_min, eq23``): ``Pc`` per pair from
@@ -378,7 +420,7 @@ def run_ga(objective: Callable[[np.ndarray], np.ndarray], encoding, *, n_runs: i
     pc, pm : float
         The fixed crossover probability per pair and mutation probability per gene or bit.
     label : str
-        Stored in the result.
+        The result's name in tables and legends.
 
     Returns
     -------
@@ -386,22 +428,17 @@ def run_ga(objective: Callable[[np.ndarray], np.ndarray], encoding, *, n_runs: i
         The best decoded genes ``(runs, d)`` and values ``(runs,)``, the best-so-far history
         ``(generations + 1, runs)`` and the mean rates used per generation.
     """
-    for name, v, low in (("n_runs", n_runs, 1), ("pop_size", pop_size, 4),
-                         ("generations", generations, 1)):
-        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
-            raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
+    n_runs = validate.integer(n_runs, "n_runs", low=1)
+    pop_size = validate.integer(pop_size, "pop_size", low=4)
+    generations = validate.integer(generations, "generations", low=1)
     if pop_size % 2:
         raise ValueError(f"pop_size must be even (parents are paired), got {pop_size}")
-    if not (0 <= pc <= 1 and 0 <= pm <= 1):
-        raise ValueError(f"pc and pm must be probabilities in [0, 1], got {pc!r}, {pm!r}")
+    pc, pm = validate.probability(pc, "pc"), validate.probability(pm, "pm")
     if adaptive is not None:
-        adaptive_rates(1.0, 1.0, 0, 1, **adaptive)          # validates once
+        adaptive_rates(1.0, 1.0, generation=0, max_generation=1, **adaptive)   # validates once
     if fitness is None:
-        def fitness(h):
-            h = np.asarray(h, dtype=float)
-            with np.errstate(divide="ignore"):
-                return np.where(np.isfinite(h) & (h > 0), 1.0 / h, 0.0)
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+        fitness = reciprocal_fitness
+    rng = validate.rng(seed)
     s, p = n_runs, pop_size
     geno = encoding.initial(rng, s, p)
     h = objective(encoding.decode(geno))
@@ -420,15 +457,15 @@ def run_ga(objective: Callable[[np.ndarray], np.ndarray], encoding, *, n_runs: i
         fa, fb = fpar[:, 0::2], fpar[:, 1::2]
         if adaptive is not None:
             fmean = f.mean(axis=1, keepdims=True)
-            pc_pair, _ = adaptive_rates(np.maximum(fa, fb), fmean, g, generations, **adaptive)
-            _, pm_ind = adaptive_rates(np.concatenate([fa, fb], 1), fmean, g, generations,
-                                       **adaptive)
+            at = dict(generation=g, max_generation=generations, **adaptive)
+            pc_pair, _ = adaptive_rates(np.maximum(fa, fb), fmean, **at)
+            _, pm_ind = adaptive_rates(np.concatenate([fa, fb], 1), fmean, **at)
             pm_ind = np.clip(pm_ind, 0.0, 1.0)
         else:
             pc_pair = np.full((s, p // 2), pc)
             pm_ind = np.full((s, p), pm)
         cross = (rng.random((s, p // 2)) < pc_pair)[..., None]
-        c1, c2 = encoding.crossover(a, b, cross, rng)
+        c1, c2 = encoding.crossover(a, b, cross, rng=rng)
         geno = encoding.mutate(np.concatenate([c1, c2], axis=1), pm_ind, rng)
         h = objective(encoding.decode(geno))
         # elitism: the best so far replaces the worst child; ties go to the lowest index

@@ -1,9 +1,9 @@
 """Closed-form Sobol indices of the first-order (linear) error model, for any machine.
 
 Geometric errors are small, so a machine's pose error is ``y = J(pose) e`` to first order,
-with ``J`` the (q, d) Jacobian at zero errors (``linear_jacobian`` or
-``first_order_jacobian`` of a machine).  For independent inputs ``e_i`` (any distributions)
-with means ``m_i`` and variances ``var_i`` the Sobol indices of that model need no sampling:
+with ``J`` the (q, d) Jacobian at zero errors (a machine's ``jacobian``).  For independent
+inputs ``e_i`` (any distributions) with means ``m_i`` and variances ``var_i`` the Sobol
+indices of that model need no sampling:
 
 * at a fixed pose, ``S1 = ST = J_ki^2 var_i / sum_j J_kj^2 var_j`` (output k, input i);
 * with the pose random too, independent of the errors,
@@ -48,7 +48,7 @@ def linear_indices(jacobian: np.ndarray, sd: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     jacobian : array (..., q, d)
-        Output sensitivities (e.g. ``machine.linear_jacobian(pose)``: mm or rad per error unit).
+        Output sensitivities (e.g. ``machine.jacobian(pose)``: mm or rad per error unit).
     sd : array (d,)
         Standard deviations of the inputs (mm, rad).
 
@@ -153,7 +153,7 @@ def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
     """Exact Sobol indices of the first-order model with part of the pose uniform in a box.
 
     ``jacobian_fn(flat_poses)``: the (M, q_all, d) Jacobians at M poses given as a mapping of
-    names to (M,) arrays (e.g. ``machine.linear_jacobian``).  ``mean``, ``var`` (d,): the
+    names to (M,) arrays (e.g. ``machine.jacobian``).  ``mean``, ``var`` (d,): the
     inputs' means and variances (:func:`uniform_moments` for uniforms; any independent laws).
     ``poses`` maps pose names to scalars or (T,) arrays: T cases (e.g. T tool lengths).
     ``pose_bounds`` maps some pose names to ``(low, high)``: those coordinates are independent
@@ -257,7 +257,7 @@ def indices_at_poses(jacobian: np.ndarray, var) -> np.ndarray:
     Parameters
     ----------
     jacobian : (P, q, d) array
-        d(outputs)/d(inputs) at zero inputs, per pose (e.g. ``machine.linear_jacobian``).
+        d(outputs)/d(inputs) at zero inputs, per pose (e.g. ``machine.jacobian``).
     var : (d,) array
         The variances of the independent inputs (any laws).
 

@@ -15,9 +15,9 @@ mark the rows that use it ``fitted``.  The search is the same whatever the stati
   Powell's method for a piecewise-constant one (rank statistics), whose strict comparisons in
   a fixed order resolve exactly equal misfits the same way on every machine.
 
-Canonical choices among symmetric or tied optima belong to the machine (its symmetry group):
-``machines.ac_double_turntable.rank_poses`` for the AC turntable; ties by misfit within a
-relative tolerance are broken by :func:`~mtaccuracy.sensitivity.rank_with_ties`.
+Canonical choices among symmetric or tied optima depend on the machine's symmetry group and
+are the caller's (``compendium.zheng2024.rank_poses`` for notebook 01's AC turntable); ties by
+misfit within a relative tolerance are broken by :func:`~mtaccuracy.sensitivity.rank_with_ties`.
 """
 
 from __future__ import annotations

@@ -244,8 +244,8 @@ def spearman_over_poses(machine, samples: np.ndarray, poses: dict, outputs=posit
 
     Parameters
     ----------
-    machine : Machine
-        Has ``pose_error(errors, pose)``.
+    machine : ChainMachine
+        Any object with ``pose_error(errors, pose)`` (errors (N, d) -> (N, q)).
     samples : array (n, d)
         One error design (mm, rad).
     poses : dict

@@ -1,6 +1,8 @@
-"""Designing the probe layout (Yang et al. 2021, Section 2): the objective ``H = q_k^2`` (Eqs.
-19-20) of the genes ``x = (phi_1, phi_2, phi_3, a_3)``, its bounds, the best ``a_3`` in closed
-form, and the canonical member of the 48 gene vectors that describe one layout.
+"""Designing the probe layout (Yang et al. 2021, Section 2).
+
+The objective ``H = q_k^2`` (Eqs. 19-20) of the genes ``x = (phi_1, phi_2, phi_3, a_3)``, its
+bounds, the best ``a_3`` in closed form, and the canonical member of the 48 gene vectors that
+describe one layout.
 
 ``H >= 1/4`` for four probes at every harmonic (Cauchy-Schwarz), reached for even ``k``;
 :func:`optimal_a3` gives the best ``a_3`` for given angles in closed form.  ``H`` belongs to the
@@ -12,13 +14,14 @@ within a relative tolerance) broken by the canonical member of the class (:func:
 
 from __future__ import annotations
 
-__all__ = ["PAPER_BOX", "FULL_BOX", "objective_H", "objective_worst", "fitness", "optimal_a3",
+__all__ = ["PAPER_BOX", "FULL_BOX", "objective_H", "objective_worst", "optimal_a3",
            "genes_to_layout", "lower_bound_H", "weights_bound_H", "bound_layout",
            "worst_case_bound", "equivalent_genes", "canonical_genes", "select_best",
            "grid_layout"]
 
 import numpy as np
 
+from .. import validate
 from .separation import (
     _DEGENERATE,
     TWO_PI,
@@ -46,20 +49,19 @@ def _genes(x):
 
 
 def genes_to_layout(x):
-    """Genes ``(phi_1, phi_2, phi_3, a_3)`` -> angles ``(..., 4)`` with phi_0 = 0 and weights
-    ``(..., 4)`` with a0 = 1 (a1, a2 from Eq. 15; inf for degenerate layouts).
+    """Genes ``(phi_1, phi_2, phi_3, a_3)`` to the four probes' angles and weights (Eq. 15).
 
     Parameters
     ----------
     x : array (..., 4)
-        Genes.
+        Genes ``(phi_1, phi_2, phi_3, a_3)``, angles in rad.
 
     Returns
     -------
     phi : array (..., 4)
         Angles (rad), phi_0 = 0.
     w : array (..., 4)
-        Weights, a0 = 1.
+        Weights, a0 = 1, a1 and a2 from Eq. 15 (inf for a degenerate layout).
     """
     x = _genes(x)
     a1, a2 = _raw_weights(x[..., :3], x[..., 3])
@@ -69,19 +71,19 @@ def genes_to_layout(x):
 
 
 def objective_H(x, k) -> np.ndarray:
-    """``H = q_k^2`` (Eq. 20) of genes ``x = (..., 4)`` at harmonic ``k`` (broadcast against
-    ``x[..., 0]``); ``inf`` for degenerate or cancelling layouts.
+    """``H = q_k^2`` (Eq. 20) of genes ``x`` at harmonic ``k``; inf for a degenerate layout.
 
     Parameters
     ----------
     x : array (..., 4)
-        Genes.
+        Genes ``(phi_1, phi_2, phi_3, a_3)``, angles in rad.
     k : int or array
-        Harmonic order(s), broadcast against ``x[..., 0]``.
+        Harmonic order(s) >= 2, broadcast against ``x[..., 0]``.
 
     Returns
     -------
     array (...)
+        H (dimensionless, >= 1/4), inf where the layout is degenerate or cancels ``k``.
     """
     x = _genes(x)
     k = np.asarray(k, dtype=float)
@@ -99,19 +101,19 @@ def objective_H(x, k) -> np.ndarray:
 
 
 def objective_worst(x, harmonics) -> np.ndarray:
-    """Worst case over harmonics: ``max_k q_k^2`` for every ``k`` in ``harmonics`` (beyond the
-    paper, which protects one harmonic at a time).
+    """Worst case ``max_k q_k^2`` over ``harmonics`` (beyond the paper: it protects one ``k``).
 
     Parameters
     ----------
     x : array (..., 4)
-        Genes.
+        Genes ``(phi_1, phi_2, phi_3, a_3)``, angles in rad.
     harmonics : sequence of int
-        The orders protected.
+        The orders protected (each >= 2).
 
     Returns
     -------
     array (...)
+        The largest H over ``harmonics``.
     """
     x = _genes(x)
     ks = np.asarray(harmonics)
@@ -121,42 +123,25 @@ def objective_worst(x, harmonics) -> np.ndarray:
     return h.max(axis=-1)
 
 
-def fitness(h) -> np.ndarray:
-    """``F = 1/H`` (Eq. 21); 0 where ``H`` is infinite.
-
-    Parameters
-    ----------
-    h : array
-        Objective values H.
-
-    Returns
-    -------
-    array
-    """
-    h = np.asarray(h, dtype=float)
-    with np.errstate(divide="ignore"):
-        return np.where(np.isfinite(h) & (h > 0), 1.0 / h, 0.0)
-
-
 def optimal_a3(phi, k, a3_bounds=(-np.inf, np.inf)):
     """The ``a_3`` minimising ``H`` for given angles, in closed form, and that ``H``.
 
     ``a1, a2`` are affine in ``a3``, so ``H(a3)`` is a ratio of two quadratics; its stationary
     points solve a quadratic, and the minimum over an interval is at one of them or an end.
-    ``phi``: (..., 3) angles phi_1..phi_3; returns ``(a3, H)`` of shape (...).
 
     Parameters
     ----------
     phi : array (..., 3)
         Angles phi_1..phi_3 (rad).
-    k : int
-        Harmonic order.
+    k : int or array
+        Harmonic order, broadcast against ``phi[..., 0]``.
     a3_bounds : (float, float)
-        The interval searched.
+        The interval of ``a_3`` searched.
 
     Returns
     -------
     a3, H : arrays (...)
+        The best ``a_3`` and its H (inf where the angles are degenerate).
     """
     phi3 = _split_phi(phi)
     lo, hi = a3_bounds
@@ -205,20 +190,18 @@ def lower_bound_H(n_probes: int = 4) -> float:
     Parameters
     ----------
     n_probes : int
-        n.
+        Number of probes n (>= 3).
 
     Returns
     -------
     float
+        1 / n.
     """
-    if isinstance(n_probes, bool) or not isinstance(n_probes, int) or n_probes < 3:
-        raise ValueError(f"n_probes must be an integer >= 3, got {n_probes!r}")
-    return 1.0 / n_probes
+    return 1.0 / validate.integer(n_probes, "n_probes", low=3)
 
 
 def weights_bound_H(w, half_units=None) -> np.ndarray:
-    """Lower bound of ``H = q_k^2`` that depends on the weights only: valid for every choice of
-    probe angles and every harmonic ``k``.
+    """Lower bound of ``H = q_k^2`` from the weights alone, for every probe angle and harmonic.
 
     ``w``: weights ``a1..a3`` (last axis 3, ``a0 = 1`` exact) or ``a0..a3`` (last axis 4),
     batched over leading axes.  ``half_units`` (same shape, optional): half-widths of the
@@ -243,13 +226,14 @@ def weights_bound_H(w, half_units=None) -> np.ndarray:
     Parameters
     ----------
     w : array (..., 3) or (..., 4)
-        Weights.
+        Weights a1..a3 (a0 = 1) or a0..a3.
     half_units : array, optional
         Half-widths of the intervals the weights are known to lie in.
 
     Returns
     -------
     array (...)
+        The bound B (dimensionless).
     """
     w = np.asarray(w, dtype=float)
     if w.ndim == 0 or w.shape[-1] not in (3, 4):
@@ -270,7 +254,8 @@ def weights_bound_H(w, half_units=None) -> np.ndarray:
 
 
 def bound_layout(k: int, m: int = 1) -> np.ndarray:
-    """Genes of a layout reaching ``H = 1/4`` at even ``k``: two diametral pairs,
+    """Genes of a layout reaching ``H = 1/4`` at even ``k``: two diametral pairs of probes.
+
     ``phi = (0, 2 pi m / k, pi, pi + 2 pi m / k)``, ``a = (1, 1, 1, 1)`` (for k = 2:
     ``(0, pi/2, pi, 3 pi/2)``, ``a = (1, -1, 1, -1)``).  It also cancels every odd harmonic:
     ``Lambda_j = (1 + e^{i j pi})(1 + e^{i j phi_1})``.
@@ -278,22 +263,23 @@ def bound_layout(k: int, m: int = 1) -> np.ndarray:
     Parameters
     ----------
     k : int
-        An even harmonic order.
+        An even harmonic order (>= 2).
     m : int
-        Which of the layouts (the second pair turned by ``2 pi m / k``).
+        Which of the layouts: the second pair turned by ``2 pi m / k``, ``0 < 2 m < k``
+        (ignored for k = 2).
 
     Returns
     -------
     array (4,)
         Genes ``(phi_1, phi_2, phi_3, a_3)``.
     """
-    if not isinstance(k, int | np.integer) or k < 2 or k % 2:
+    k = validate.integer(k, "k", low=2)
+    if k % 2:
         raise ValueError(f"H = 1/4 is reachable only at even k >= 2 (got {k!r}); for odd k the "
                          "infimum is larger, see reference_optimum")
     if k == 2:   # phi_1 = 2 pi m / k would fall on probe 2; use a1 = a3 = -1 at pi/2, 3pi/2
         return np.array([np.pi / 2, np.pi, 1.5 * np.pi, -1.0])
-    if not 0 < 2 * m < k:
-        raise ValueError(f"m must satisfy 0 < 2m < k, got m={m!r}")
+    m = validate.integer(m, "m", low=1, high=(k - 1) // 2)      # 0 < 2 m < k
     f1 = TWO_PI * m / k
     return np.array([f1, np.pi, np.pi + f1, 1.0])
 
@@ -308,11 +294,12 @@ def worst_case_bound(n_samples: int) -> float:
     Parameters
     ----------
     n_samples : int
-        N.
+        Samples per revolution N (>= 8).
 
     Returns
     -------
     float
+        ``(N - 3) / N``.
     """
     n = _check_n(n_samples)
     return (n - 3) / n
@@ -347,6 +334,7 @@ def equivalent_genes(x) -> np.ndarray:
     Returns
     -------
     array (..., 48, 4)
+        The members; NaN rows where a relabelling is degenerate.
     """
     x = _genes(x)
     phi, w = genes_to_layout(x)                                 # (..., 4) each
@@ -382,21 +370,23 @@ def _lexicographic_first(keys, valid):
 
 
 def canonical_genes(x, bounds=None) -> np.ndarray:
-    """The canonical member of the symmetry class of ``x`` (:func:`equivalent_genes`): the
-    lexicographically smallest ``(phi_1, phi_2, phi_3, a_3)`` among the members inside
+    """The canonical member of the symmetry class of ``x`` (:func:`equivalent_genes`).
+
+    The lexicographically smallest ``(phi_1, phi_2, phi_3, a_3)`` among the members inside
     ``bounds`` (``x`` itself counts as inside; angles within 1e-12 of a bound are put on it, and
     an angle 0 counts as 2 pi where only that is inside).  ``bounds=None``: all members.
 
     Parameters
     ----------
     x : array (..., 4)
-        Genes.
+        Genes ``(phi_1, phi_2, phi_3, a_3)``, angles in rad.
     bounds : sequence of 4 (low, high), optional
         The box the canonical member must lie in.
 
     Returns
     -------
     array (..., 4)
+        The canonical genes.
     """
     x = _genes(x)
     members = equivalent_genes(x)
@@ -415,7 +405,7 @@ def canonical_genes(x, bounds=None) -> np.ndarray:
     return np.take_along_axis(members, first[..., None, None], axis=-2)[..., 0, :]
 
 
-def select_best(h, x, bounds=None, rel_tol: float = 1e-9):
+def select_best(h, x, *, bounds=None, rel_tol: float = 1e-9):
     """The best of several candidate layouts, with canonical tie-breaking.
 
     ``h`` (..., M) objective values (smaller is better), ``x`` (..., M, 4) their genes.  The
@@ -427,7 +417,7 @@ def select_best(h, x, bounds=None, rel_tol: float = 1e-9):
     Parameters
     ----------
     h : array (..., M)
-        Objective values.
+        Objective values of M candidates (smaller is better).
     x : array (..., M, 4)
         Their genes.
     bounds : sequence of 4 (low, high), optional
@@ -438,6 +428,7 @@ def select_best(h, x, bounds=None, rel_tol: float = 1e-9):
     Returns
     -------
     index : array of int (...)
+        The winner among the M candidates.
     genes : array (..., 4)
         Canonical genes of the winner.
     """
@@ -455,24 +446,27 @@ def select_best(h, x, bounds=None, rel_tol: float = 1e-9):
 
 
 def grid_layout(x, n_samples: int):
-    """The layout of genes ``x = (phi_1, phi_2, phi_3, a_3)`` on a sampling grid of ``n_samples``
-    per revolution (the matrix method shifts by whole samples): the probe positions ``p``
-    (4,) with ``p_0 = 0`` and each angle rounded to the nearest sample, their angles
-    ``2 pi p / N`` and the weights ``a_0..a_3`` of Eq. 15 for those angles and ``a_3``.
+    """The layout of genes ``x`` on a sampling grid of ``n_samples`` per revolution.
+
+    The matrix method shifts by whole samples: the probe positions ``p`` (4,) with ``p_0 = 0``
+    and each angle rounded to the nearest sample, their angles ``2 pi p / N`` and the weights
+    ``a_0..a_3`` of Eq. 15 for those angles and ``a_3``.
 
     Parameters
     ----------
     x : array (4,)
-        Genes.
+        Genes ``(phi_1, phi_2, phi_3, a_3)``, angles in rad.
     n_samples : int
-        Samples per revolution N.
+        Samples per revolution N (>= 8).
 
     Returns
     -------
     positions : array of int (4,)
+        Probe positions p (sample indices), p_0 = 0.
     phi : array (4,)
-        rad.
+        Their angles ``2 pi p / N`` (rad).
     w : array (4,)
+        Weights a0..a3.
     """
     x = _genes(x)
     if x.ndim != 1:

@@ -1,5 +1,6 @@
-"""Radial error motion of an axis of rotation in the terms of ISO 230-7, from the motion
-``(x(theta), y(theta))`` of every revolution that a multi-probe separation gives
+"""Radial error motion of an axis of rotation in the terms of ISO 230-7.
+
+From the motion ``(x(theta), y(theta))`` of every revolution that a multi-probe separation gives
 (:func:`~mtaccuracy.spindle.probes.separate_probes`).
 
 ISO 230-7:2015 (Geometric accuracy of axes of rotation), Clause 3, in brief:
@@ -49,20 +50,17 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import linprog
 
-from ..roundness import lsc_roundness, mz_roundness
+from ..roundness import TWO_PI, lsc_roundness, mz_roundness
 
 __all__ = ["CENTRES", "ErrorMotion", "sensitive_component", "radial_error_motion",
            "error_motion_table"]
-
-TWO_PI = 2.0 * np.pi
 
 #: The polar-plot centres offered (ISO 230-7): LSC (the default) and MRS.
 CENTRES = ("LSC", "MRS")
 
 
 def sensitive_component(dx, dy, theta, *, direction, rotating: bool = False) -> np.ndarray:
-    """The radial error motion along a sensitive direction (ISO 230-7, Clause 3: fixed or
-    rotating sensitive direction).
+    """The radial error motion along a fixed or rotating sensitive direction (ISO 230-7, Cl. 3).
 
     Fixed: ``u = x cos(alpha) + y sin(alpha)``.  Rotating (the direction turns with the spindle,
     pointing at ``alpha`` when ``theta = 0``; module docstring for the sense):
@@ -102,8 +100,9 @@ def sensitive_component(dx, dy, theta, *, direction, rotating: bool = False) -> 
 
 @dataclass
 class ErrorMotion:
-    """Radial error motion along one sensitive direction, evaluated as ISO 230-7 does
-    (:func:`radial_error_motion`).
+    """Radial error motion along one sensitive direction, as ISO 230-7 evaluates it.
+
+    The result of :func:`radial_error_motion`.
 
     Attributes
     ----------
@@ -163,9 +162,10 @@ def _band_zone(upper, lower):
 
 
 def radial_error_motion(u, *, centre: str = "LSC") -> ErrorMotion:
-    """Synchronous, asynchronous and total radial error motion values of ``R`` revolutions along
-    one sensitive direction (ISO 230-7:2015, Clause 3: error motion polar plots, polar plot
-    centres, error motion values).
+    """Synchronous, asynchronous and total radial error motion values (ISO 230-7:2015, Cl. 3).
+
+    Of ``R`` revolutions along one sensitive direction (Clause 3: error motion polar plots,
+    polar plot centres, error motion values).
 
     The synchronous polar plot is the average of the revolutions at each angle.  The centre
     (LSC by default, as ISO 230-7 when none is stated; or MRS) is fitted to the synchronous plot
@@ -227,8 +227,7 @@ def radial_error_motion(u, *, centre: str = "LSC") -> ErrorMotion:
 
 def error_motion_table(dx, dy, theta, *, fixed_directions, rotating_direction,
                        centre: str = "LSC"):
-    """ISO 230-7 radial error motion values along several fixed sensitive directions and one
-    rotating one, as a table.
+    """ISO 230-7 radial error motion values along fixed sensitive directions and a rotating one.
 
     Parameters
     ----------

@@ -1,8 +1,11 @@
-"""The optimisers of Yang et al. 2021, Section 2.2: a genetic algorithm (binary or real coded)
-with fixed rates, the same algorithm with the adaptive rates of Eqs. 22-23, and differential
-evolution as the baseline, all batched over independent runs and population (arrays of shape
-``(runs, population, 4)``; the only Python loop is over generations); the optimisers' own ties
-(equal ``H`` in a population) go to the lowest index.
+"""The optimisers of Yang et al. 2021, Section 2.2, on the probe layout.
+
+A genetic algorithm (binary or real coded) with fixed rates, the same algorithm with the adaptive
+rates of Eqs. 22-23 (:func:`mtaccuracy.optimise.ga.adaptive_rates`, with the paper's bounds
+:data:`PC_MAX`, :data:`PC_MIN`, :data:`PM_MAX`, :data:`PM_MIN`), and differential evolution as
+the baseline, all batched over independent runs and population (arrays of shape ``(runs,
+population, 4)``; the only Python loop is over generations); the optimisers' own ties (equal
+``H`` in a population) go to the lowest index.
 
 The baseline differential evolution follows the scheme of ``scipy.optimize.differential_evolution``
 but is written out batched over runs (:func:`_differential_evolution`): scipy runs one
@@ -11,17 +14,18 @@ optimisation at a time, looping over the population in Python, and hundreds of r
 
 from __future__ import annotations
 
-__all__ = ["PC_MAX", "PC_MIN", "PM_MAX", "PM_MIN", "GAResult", "adaptive_probabilities", "run_ga",
-           "run_de", "convergence_generation", "convergence_statistics", "speedup",
-           "bootstrap_se", "reference_optimum",
-           "reference_optima"]
+__all__ = ["PC_MAX", "PC_MIN", "PM_MAX", "PM_MIN", "GAResult", "run_ga", "run_de",
+           "convergence_generation", "convergence_statistics", "speedup", "bootstrap_se",
+           "reference_optimum", "reference_optima"]
 
 import numpy as np
 from scipy.optimize import minimize
+from scipy.stats import bootstrap
 
-from ..optimise.ga import BinaryEncoding, GAResult, RealEncoding, adaptive_rates
+from .. import validate
+from ..optimise.ga import BinaryEncoding, GAResult, RealEncoding
 from ..optimise.ga import run_ga as generic_ga
-from .design import PAPER_BOX, _box, fitness, objective_H, objective_worst, optimal_a3, select_best
+from .design import PAPER_BOX, _box, objective_H, objective_worst, optimal_a3, select_best
 
 #: Probabilities of the improved GA (Section 2.2): crossover Pc max/min, mutation Pm max/min.
 PC_MAX, PC_MIN, PM_MAX, PM_MIN = 0.99, 0.4, 0.09, 0.005
@@ -30,38 +34,6 @@ PC_MAX, PC_MIN, PM_MAX, PM_MIN = 0.99, 0.4, 0.09, 0.005
 #: The reference optimum (:func:`reference_optima`) excludes layouts with |sin(phi_2 - phi_1)|
 #: below this (weights above 1e4, closed-form H inaccurate).
 _NEAR_DEGENERATE = 1e-4
-
-
-def adaptive_probabilities(f, f_mean, generation, max_generation, *, pc_max=PC_MAX,
-                           pc_min=PC_MIN, pm_max=PM_MAX, pm_min=PM_MIN,
-                           eq23: str = "corrected"):
-    """Crossover and mutation probabilities of the improved GA (Eqs. 22-23) with the paper's
-    bounds as defaults: :func:`mtaccuracy.optimise.ga.adaptive_rates`.
-
-    ``Pc = Pc_max`` if ``F < F_mean``, else ``Pc_max - (Pc_max - Pc_min) alpha / alpha_max``;
-    ``Pm = Pm_min`` if ``F < F_mean``, else, as printed (``eq23="printed"``),
-    ``Pm_min - (Pm_max - Pm_min) alpha / alpha_max``, which falls from ``Pm_min`` and is negative
-    once ``alpha / alpha_max > Pm_min / (Pm_max - Pm_min)`` (after 6 % of the run with the paper's
-    values); corrected (default), ``Pm_min + (Pm_max - Pm_min) alpha / alpha_max``, rising from
-    0.005 to 0.09 as the text describes.  Returns the raw values (not clipped).
-
-    Parameters
-    ----------
-    f, f_mean : arrays
-        Fitness and the population's mean fitness (broadcasting).
-    generation, max_generation : int
-        alpha and alpha_max.
-    pc_max, pc_min, pm_max, pm_min : float
-        The probability bounds (the paper's by default).
-    eq23 : {"corrected", "printed"}
-        Which Eq. 23.
-
-    Returns
-    -------
-    pc, pm : arrays
-    """
-    return adaptive_rates(f, f_mean, generation, max_generation, pc_max=pc_max, pc_min=pc_min,
-                          pm_max=pm_max, pm_min=pm_min, eq23=eq23)
 
 
 def _make_objective(k, harmonics, n_runs):
@@ -85,21 +57,21 @@ def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_si
            pm: float = 0.05, eq23: str = "corrected", encoding: str = "real",
            mutation_scale: float = 0.1, bits: int = 16,
            pc_max=PC_MAX, pc_min=PC_MIN, pm_max=PM_MAX, pm_min=PM_MIN) -> GAResult:
-    """Genetic algorithm minimising ``H`` (fitness ``1/H``, Eq. 21), ``n_runs`` runs at once:
-    the generic :func:`mtaccuracy.optimise.ga.run_ga` on the layout objective.
+    """Genetic algorithm minimising the layout's ``H`` (fitness ``F = 1/H``, Eq. 21), runs batched.
 
-    The paper gives neither the encoding nor the operators; ours, stated there: genes
-    ``(phi_1, phi_2, phi_3, a_3)`` in ``bounds``; uniform initial population; roulette-wheel
-    selection; consecutive parents paired and crossed with probability ``Pc``; elitism.
-    ``encoding="real"`` (:class:`~mtaccuracy.optimise.ga.RealEncoding`: arithmetic crossover,
-    Gaussian mutation of ``mutation_scale`` x the range, reflected) or ``"binary"``
+    The generic :func:`mtaccuracy.optimise.ga.run_ga` on the layout objective.  The paper gives
+    neither the encoding nor the operators; ours, stated there: genes ``(phi_1, phi_2, phi_3, a_3)``
+    in ``bounds``; uniform initial population; roulette-wheel selection; consecutive parents paired
+    and crossed with probability ``Pc``; elitism. ``encoding="real"``
+    (:class:`~mtaccuracy.optimise.ga.RealEncoding`: arithmetic crossover, Gaussian mutation of
+    ``mutation_scale`` x the range, reflected) or ``"binary"``
     (:class:`~mtaccuracy.optimise.ga.BinaryEncoding`: ``bits`` bits per gene, single-point
     crossover, bit flips).
 
     ``adaptive=False``: the traditional GA, fixed ``pc`` and ``pm``.  ``adaptive=True``: Eq. 22
     for ``Pc`` with ``F`` the fitness of the fitter parent of the pair, Eq. 23 for ``Pm`` with
     ``F`` the fitness of the child's own parent; ``eq23`` picks the printed or the corrected sign
-    (:func:`adaptive_probabilities`).
+    (:func:`mtaccuracy.optimise.ga.adaptive_rates`).
 
     ``k`` (scalar, or one per run) optimises Eq. 20 at that harmonic; ``harmonics`` optimises the
     worst case over them.  ``seed`` seeds one ``numpy.random.Generator`` (or pass a Generator).
@@ -113,8 +85,9 @@ def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_si
     bounds : sequence of 4 (low, high)
         Box of ``phi_1, phi_2, phi_3`` (rad) and ``a_3``.
     n_runs, pop_size, generations : int
-        Runs at once, population, generations.
-    seed : int or Generator
+        Runs at once, individuals per run (even), generations.
+    seed : None, int or numpy.random.Generator
+        Seeds one generator for all runs (a Generator is used as it is).
     adaptive : bool
         The improved GA (Eqs. 22-23) or the traditional one.
     pc, pm : float
@@ -133,9 +106,12 @@ def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_si
     Returns
     -------
     GAResult
+        Per run the best genes ``(n_runs, 4)`` and ``H`` ``(n_runs,)``, the best-so-far history
+        ``(generations + 1, n_runs)`` and the mean rates used per generation.
     """
     if encoding not in ("real", "binary"):
         raise ValueError(f"encoding must be 'real' or 'binary', got {encoding!r}")
+    n_runs = validate.integer(n_runs, "n_runs", low=1)       # before k is broadcast to it
     lo, hi = _box(bounds)
     objective = _make_objective(k, harmonics, n_runs)
     enc = (RealEncoding(lo, hi, mutation_scale) if encoding == "real"
@@ -145,7 +121,7 @@ def run_ga(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, pop_si
     label = ("improved GA (Eqs. 22-23" + (", printed Eq. 23)" if eq23 == "printed" else ")")
              if adaptive else f"traditional GA (Pc={pc:g}, Pm={pm:g})")
     return generic_ga(objective, enc, n_runs=n_runs, pop_size=pop_size,
-                      generations=generations, seed=seed, fitness=fitness, adaptive=rates,
+                      generations=generations, seed=seed, adaptive=rates,
                       pc=pc, pm=pm, label=f"{label}, {encoding}")
 
 
@@ -236,12 +212,12 @@ def _polish(fun, x0, lo, hi):
 
 def run_de(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, popsize: int = 13,
            generations: int = 200, seed: int = 0, polish: bool = False) -> GAResult:
-    """Baseline: differential evolution (scipy's default scheme, :func:`_differential_evolution`)
-    on the same genes and objective, ``n_runs`` runs at once.
+    """Baseline: differential evolution on the GA's genes and objective, ``n_runs`` runs at once.
 
-    ``popsize * 4`` members, no early stop, so every run lasts ``generations``; ``polish``
-    refines each run's best with L-BFGS-B as scipy's ``polish=True`` does.  ``seed`` seeds one
-    ``numpy.random.Generator`` for all runs (or pass a Generator).
+    scipy's default scheme (:func:`_differential_evolution`), ``popsize * 4`` members, no early
+    stop, so every run lasts ``generations``; ``polish`` refines each run's best with L-BFGS-B as
+    scipy's ``polish=True`` does.  ``seed`` seeds one ``numpy.random.Generator`` for all runs (or
+    pass a Generator).
 
     Parameters
     ----------
@@ -252,24 +228,26 @@ def run_de(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, popsiz
     bounds : sequence of 4 (low, high)
         The box of the genes.
     n_runs, popsize, generations : int
-        Runs at once, population factor, generations.
-    seed : int or Generator
+        Runs at once (>= 1), members per gene (>= 1; ``4 popsize`` members), generations
+        (>= 1).
+    seed : None, int or numpy.random.Generator
+        Seeds one generator for all runs (a Generator is used as it is).
     polish : bool
         Refine each run's best with L-BFGS-B.
 
     Returns
     -------
     GAResult
+        As :func:`run_ga`; the rates ``pc``, ``pm`` are NaN.
     """
-    for name, v, low in (("n_runs", n_runs, 1), ("popsize", popsize, 1),
-                         ("generations", generations, 1)):
-        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
-            raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
+    n_runs = validate.integer(n_runs, "n_runs", low=1)
+    popsize = validate.integer(popsize, "popsize", low=1)
+    generations = validate.integer(generations, "generations", low=1)
     if k is not None and np.ndim(k) != 0:
         raise ValueError("run_de takes one harmonic order k")
     lo, hi = _box(bounds)
     objective = _make_objective(k, harmonics, n_runs)
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    rng = validate.rng(seed)
     pop, e, hist, _ = _differential_evolution(lambda x, runs: objective(x, runs), lo, hi,
                                               n_runs, popsize * 4, generations, rng)
     ib = np.argmin(e, axis=1)
@@ -289,8 +267,7 @@ def run_de(k=None, *, harmonics=None, bounds=PAPER_BOX, n_runs: int = 32, popsiz
 
 
 def convergence_generation(history, target, rel_tol: float = 0.01) -> np.ndarray:
-    """First generation at which the best-so-far objective is within ``rel_tol`` of ``target``
-    (``history``: (generations + 1, runs); ``target``: scalar or per run).  ``-1`` if never.
+    """First generation whose best-so-far objective is within ``rel_tol`` of ``target``; -1 never.
 
     Parameters
     ----------
@@ -304,6 +281,7 @@ def convergence_generation(history, target, rel_tol: float = 0.01) -> np.ndarray
     Returns
     -------
     array of int (runs,)
+        The generation (row of ``history``) per run, ``-1`` for a run that never reaches it.
     """
     hist = np.asarray(history, dtype=float)
     if hist.ndim != 2:
@@ -314,10 +292,12 @@ def convergence_generation(history, target, rel_tol: float = 0.01) -> np.ndarray
     return np.where(ok.any(axis=0), ok.argmax(axis=0), -1)
 
 
-def reference_optima(ks, bounds=PAPER_BOX, n_starts: int = 2, seed: int = 0,
+def reference_optima(ks, *, bounds=PAPER_BOX, n_starts: int = 2, seed: int = 0,
                      maxiter: int = 400, popsize: int = 30, rel_tol: float = 1e-9):
-    """Best known ``H`` at every harmonic of ``ks`` within ``bounds``: differential evolution
-    over the three angles with the optimal ``a_3`` in closed form (:func:`optimal_a3`),
+    """Best known ``H`` at every harmonic of ``ks`` within ``bounds`` (a numerical reference).
+
+    Differential evolution over the three angles with the optimal ``a_3`` in closed form
+    (:func:`optimal_a3`),
     ``n_starts`` runs per harmonic (all harmonics and starts in one batch, each run stopping
     when its population's energies agree to ``1e-12``), each polished with L-BFGS-B; the
     result's ``H`` is Eq. 20 evaluated at the genes found.  Layouts with
@@ -333,28 +313,33 @@ def reference_optima(ks, bounds=PAPER_BOX, n_starts: int = 2, seed: int = 0,
     Parameters
     ----------
     ks : sequence of int (K,)
-        Harmonic orders.
+        Harmonic orders (>= 2).
     bounds : sequence of 4 (low, high)
         The box (only the angles are searched; ``a_3`` is closed form).
     n_starts : int
-        Runs per harmonic.
-    seed : int
+        Runs per harmonic (>= 1).
+    seed : None, int or numpy.random.Generator
+        Seeds the runs.
     maxiter, popsize : int
-        Differential evolution's budget.
+        Differential evolution's budget: generations (>= 1) and members per angle (>= 2, as
+        the scheme needs four members at least).
     rel_tol : float
         Starts whose H agree within it are ties.
 
     Returns
     -------
     H : array (K,)
+        Best known H per harmonic.
     genes : array (K, 4)
+        Its canonical genes ``(phi_1, phi_2, phi_3, a_3)``.
     """
     ks = np.atleast_1d(np.asarray(ks))
     if ks.ndim != 1 or ks.size == 0:
         raise ValueError("ks must be a non-empty list of harmonic orders")
     objective_H(np.array([0.3, 2.0, 5.0, 1.0]), ks)  # validates the orders
-    if isinstance(n_starts, bool) or not isinstance(n_starts, int | np.integer) or n_starts < 1:
-        raise ValueError(f"n_starts must be an integer >= 1, got {n_starts!r}")
+    n_starts = validate.integer(n_starts, "n_starts", low=1)
+    maxiter = validate.integer(maxiter, "maxiter", low=1)
+    popsize = validate.integer(popsize, "popsize", low=2)
     lo, hi = _box(bounds)
     a3b = (lo[3], hi[3])
     k_run = np.repeat(ks.astype(float), n_starts)
@@ -363,7 +348,7 @@ def reference_optima(ks, bounds=PAPER_BOX, n_starts: int = 2, seed: int = 0,
         h = optimal_a3(x3, k_run[runs, None], a3b)[1]
         return np.where(np.abs(np.sin(x3[..., 1] - x3[..., 0])) < _NEAR_DEGENERATE, np.inf, h)
 
-    rng = np.random.default_rng(seed)
+    rng = validate.rng(seed)
     pop, e, _, _ = _differential_evolution(objective, lo[:3], hi[:3], k_run.size, popsize * 3,
                                            maxiter, rng, tol=1e-12)
     n = k_run.size
@@ -380,46 +365,48 @@ def reference_optima(ks, bounds=PAPER_BOX, n_starts: int = 2, seed: int = 0,
                  objective_H(genes, k_run))                     # Eq. 20 itself, as the GAs
     genes = genes.reshape(ks.size, n_starts, 4)
     h = h.reshape(ks.size, n_starts)
-    best, genes_best = select_best(h, genes, bounds, rel_tol=rel_tol)
+    best, genes_best = select_best(h, genes, bounds=bounds, rel_tol=rel_tol)
     return h[np.arange(ks.size), best], genes_best
 
 
-def reference_optimum(k: int, bounds=PAPER_BOX, n_starts: int = 4, seed: int = 0,
+def reference_optimum(k: int, *, bounds=PAPER_BOX, n_starts: int = 4, seed: int = 0,
                       maxiter: int = 400):
-    """Best known ``H`` at harmonic ``k`` in ``bounds`` (:func:`reference_optima` for one
-    harmonic).  Returns ``(H, genes)``, the genes canonical (:func:`canonical_genes`).
+    """Best known ``H`` at harmonic ``k`` in ``bounds``: :func:`reference_optima` for one ``k``.
 
     Parameters
     ----------
     k : int
-        Harmonic order.
+        Harmonic order (>= 2).
     bounds : sequence of 4 (low, high)
-        The box.
+        Box of ``phi_1, phi_2, phi_3`` (rad) and ``a_3``.
     n_starts : int
-        Runs.
-    seed : int
+        Differential evolution runs (>= 1).
+    seed : None, int or numpy.random.Generator
+        Seeds the runs.
     maxiter : int
-        Differential evolution's budget.
+        Generations per run (>= 1).
 
     Returns
     -------
     H : float
+        Best known H.
     genes : array (4,)
+        Its canonical genes (:func:`canonical_genes`).
     """
-    h, g = reference_optima([k], bounds, n_starts=n_starts, seed=seed, maxiter=maxiter)
+    h, g = reference_optima([k], bounds=bounds, n_starts=n_starts, seed=seed, maxiter=maxiter)
     return float(h[0]), g[0]
 
 
-def convergence_statistics(name: str, result, h_ref: float, rel_tol: float) -> dict:
+def convergence_statistics(result, *, name: str, h_ref: float, rel_tol: float) -> dict:
     """How a set of GA (or DE) runs converged (Yang et al. 2021, Figs. 8-9, over many seeds).
 
     Parameters
     ----------
-    name : str
-        The algorithm's name in the table.
     result : GAResult
         ``history`` (generations + 1, runs) of best-so-far H, ``best_h`` (runs,), ``label``,
         ``evaluations_per_generation``.
+    name : str
+        The algorithm's name in the table.
     h_ref : float
         The best known H (:func:`reference_optimum`).
     rel_tol : float
@@ -449,8 +436,7 @@ def convergence_statistics(name: str, result, h_ref: float, rel_tol: float) -> d
 
 
 def speedup(improved, traditional, axis=-1):
-    """Speed-up of one algorithm over another, in percent: ``1 - median(improved) /
-    median(traditional)`` of their convergence generations.
+    """Speed-up in percent, ``100 (1 - median(improved) / median(traditional))`` of generations.
 
     Parameters
     ----------
@@ -486,7 +472,5 @@ def bootstrap_se(statistic, *samples, rng, n_resamples: int = 2000) -> float:
     float
         The standard deviation of the statistic over the resamples (percentile bootstrap).
     """
-    from scipy.stats import bootstrap
-
     return bootstrap(samples, statistic, n_resamples=n_resamples, vectorized=True,
                      method="percentile", rng=rng).standard_error

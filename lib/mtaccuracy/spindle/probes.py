@@ -1,5 +1,7 @@
-"""A reader's own multi-probe roundness / spindle measurement: the probe file, its checks, and the
-separation of the artefact's profile from the spindle's radial error motion at any probe angles.
+"""A reader's own multi-probe roundness / spindle measurement, separated at any probe angles.
+
+The probe file, its checks, and the separation of the artefact's profile from the spindle's
+radial error motion at any probe angles.
 
 **The file** (``data/spindle/README.md``): a CSV with the columns ``revolution``, ``angle_deg``
 (the spindle's angle of each sample, equally spaced over a revolution, the same samples every
@@ -59,9 +61,15 @@ import scipy.optimize
 import scipy.special
 import scipy.stats
 
-from .. import csvlines
+from .. import csvlines, validate
 from ..roundness import lsc_roundness
-from .separation import TWO_PI, CancelledHarmonicsWarning, _harmonic_list, _ls_design
+from .separation import (
+    _MIN_SAMPLES,
+    TWO_PI,
+    CancelledHarmonicsWarning,
+    _harmonic_list,
+    _ls_design,
+)
 
 __all__ = [
     "ProbeFileError", "ProbeData", "ProbeSeparation", "read_probe_file", "write_probe_file",
@@ -84,7 +92,7 @@ MIN_PROBES = 3
 MAX_PROBES = 16
 #: Samples per revolution: 8 (the library's least) to 16384 (harmonics up to 8191; a roundness
 #: instrument takes 3600 points a turn at most, a spindle analyser 4096).
-MIN_SAMPLES = 8
+MIN_SAMPLES = _MIN_SAMPLES
 MAX_SAMPLES = 16384
 #: Data rows (revolutions x samples): 500 000 rows (e.g. 122 revolutions of 4096 samples) keep a
 #: run of notebook 07 within 0.6 GB of memory and about 20 s (measured with 16 probes); a larger
@@ -130,7 +138,7 @@ class ProbeFileError(ValueError):
     Parameters
     ----------
     path : str
-        The file.
+        The probe file at fault.
     line : int or None
         The physical line at fault (1-based, as an editor shows it), None for the whole file.
     problem : str
@@ -216,8 +224,7 @@ class ProbeData:
 
 
 def resolvable_harmonic(n_samples: int) -> int:
-    """The highest harmonic a separation of ``n_samples`` per revolution recovers at any probe
-    angles: ``(N - 1) // 2``.
+    """The highest harmonic ``(N - 1) // 2`` that N samples a turn resolve at any probe angles.
 
     Harmonic ``N / 2`` (N even) is a cosine only on the sampling grid: its shift by a probe
     angle off the grid cannot be represented, so it is left out (it goes to the motion).
@@ -230,12 +237,9 @@ def resolvable_harmonic(n_samples: int) -> int:
     Returns
     -------
     int
+        ``(N - 1) // 2``.
     """
-    if isinstance(n_samples, bool) or not isinstance(n_samples, int | np.integer) \
-            or n_samples < MIN_SAMPLES:
-        raise ValueError(f"samples per revolution must be an integer >= {MIN_SAMPLES}, "
-                         f"got {n_samples!r}")
-    return (int(n_samples) - 1) // 2
+    return (validate.integer(n_samples, "n_samples", low=MIN_SAMPLES) - 1) // 2
 
 
 def _check_phi(phi) -> np.ndarray:
@@ -257,11 +261,11 @@ def _check_band(max_harmonic, n: int) -> int:
     top = resolvable_harmonic(n)
     if max_harmonic is None:
         return top
-    if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
-            or not 2 <= max_harmonic <= top:
-        raise ValueError(f"max_harmonic must be an integer in 2..(N - 1) // 2 = {top} "
-                         f"(N = {n} samples per revolution), got {max_harmonic!r}")
-    return int(max_harmonic)
+    try:
+        return validate.integer(max_harmonic, "max_harmonic", low=2, high=top)
+    except ValueError as exc:
+        raise ValueError(f"{exc} (the top is (N - 1) // 2 for N = {n} samples per "
+                         f"revolution)") from None
 
 
 def _ls_variance(phi, harmonics):
@@ -299,12 +303,10 @@ def layout_cancelled(phi, max_harmonic: int, *, rcond: float = RCOND) -> list[in
     Returns
     -------
     list of int
+        The cancelled harmonics, ascending.
     """
     phi = _check_phi(phi)
-    if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
-            or max_harmonic < 2:
-        raise ValueError(f"max_harmonic must be an integer >= 2, got {max_harmonic!r}")
-    ks = np.arange(2, int(max_harmonic) + 1)
+    ks = np.arange(2, validate.integer(max_harmonic, "max_harmonic", low=2) + 1)
     _, rel = _ls_variance(phi, ks)
     return [int(k) for k in ks[rel <= rcond]]
 
@@ -348,7 +350,7 @@ def noise_amplification(phi, harmonics, *, weights=None) -> np.ndarray:
     return np.where(np.abs(lam) <= RCOND * np.abs(a).sum(), np.inf, np.sqrt(q2))
 
 
-def profile_noise_rms(amplification, n_samples: int, noise_sd: float,
+def profile_noise_rms(amplification, *, n_samples: int, noise_sd: float,
                       n_revolutions: int = 1) -> float:
     """The rms error that white probe noise leaves in the separated profile (harmonics 2 up).
 
@@ -363,17 +365,19 @@ def profile_noise_rms(amplification, n_samples: int, noise_sd: float,
         ``q_k`` of the harmonics kept (:func:`noise_amplification`); inf entries (cancelled
         harmonics, not estimated) are left out.
     n_samples : int
-        Samples per revolution N.
+        Samples per revolution N (>= 8).
     noise_sd : float
         Probe noise standard deviation sigma (any length unit).
     n_revolutions : int
-        Revolutions averaged R.
+        Revolutions averaged R (>= 1).
 
     Returns
     -------
     float
         In the unit of ``noise_sd``.
     """
+    n_samples = validate.integer(n_samples, "n_samples", low=MIN_SAMPLES)
+    n_revolutions = validate.integer(n_revolutions, "n_revolutions", low=1)
     q = np.asarray(amplification, dtype=float)
     q = q[np.isfinite(q)]
     return float(noise_sd * np.sqrt(2 * (q ** 2).sum() / (n_samples * n_revolutions)))
@@ -406,8 +410,9 @@ def _canonical(a):
 
 
 def layout_weights(phi, harmonics) -> np.ndarray:
-    """Weights of the weighted multi-point method for probes at any angles: they cancel the
-    motion and minimise the worst error transfer function over ``harmonics``.
+    """Weights of the weighted multi-point method for probes at any angles (minimax ``q_k^2``).
+
+    They cancel the motion and minimise the worst error transfer function over ``harmonics``.
 
     The weights ``a`` must satisfy ``sum a_l cos(phi_l) = sum a_l sin(phi_l) = 0`` (Yang et
     al. 2021, Eq. 5 = Eq. 15 for four probes): they lie in the ``L - 2``-dimensional null space
@@ -484,8 +489,7 @@ def layout_weights(phi, harmonics) -> np.ndarray:
 
 @dataclass
 class ProbeSeparation:
-    """The artefact's profile and the spindle's radial error motion separated from probe
-    readings (:func:`separate_probes`).
+    """The artefact's profile and the spindle's radial error motion (:func:`separate_probes`).
 
     Attributes
     ----------
@@ -544,8 +548,7 @@ _CANCELLED_HINT = ("; move a probe by a few degrees so that the angles between p
 def separate_probes(signals, phi, *, method: str = "least_squares", weights=None,
                     max_harmonic: int | None = None, rcond: float = RCOND,
                     allow_cancelled: bool = False) -> ProbeSeparation:
-    """Separate the artefact's profile and the spindle's radial error motion from the readings
-    of L >= 3 probes at any angles, over R revolutions.
+    """Separate profile and radial error motion from L >= 3 probes at any angles, R revolutions.
 
     Steps (module docstring): remove each probe's mean (its unknown zero); average the
     revolutions (the profile is the same every revolution; the asynchronous motion does not
@@ -664,8 +667,10 @@ def separate_probes(signals, phi, *, method: str = "least_squares", weights=None
 
 
 def separate_probe_data(data: ProbeData, *, method: str = "least_squares") -> ProbeSeparation:
-    """:func:`separate_probes` on a checked probe file, with its ``max_harmonic`` and the
-    harmonics its reader set aside (the reader already refused or warned about them).
+    """:func:`separate_probes` on a checked probe file, with its ``max_harmonic``.
+
+    The harmonics its reader set aside stay aside (the reader already refused or warned about
+    them).
 
     Parameters
     ----------
@@ -701,23 +706,23 @@ def probe_noise_estimate(separation: ProbeSeparation, n_probes: int) -> float:
     separation : ProbeSeparation
         From :func:`separate_probes` (one measurement: ``residual_rms`` of shape (R,)).
     n_probes : int
-        L >= 3.
+        The number of probes L (>= 3).
 
     Returns
     -------
     float
         In the unit of the signals.
     """
-    if n_probes < MIN_PROBES:
-        raise ValueError(f"n_probes must be >= {MIN_PROBES}, got {n_probes!r}")
+    n_probes = validate.integer(n_probes, "n_probes", low=MIN_PROBES)
     ms = float(np.mean(np.asarray(separation.residual_rms) ** 2))
     return float(np.sqrt(ms * n_probes / (n_probes - 2)))
 
 
 def about_lsc(profile) -> np.ndarray:
-    """A profile's deviations from its least-squares circle (ISO 12181-1's LSC reference, in the
-    limacon model of :func:`~mtaccuracy.roundness.lsc_roundness`): the profile without its mean
-    and first harmonic, i.e. without the centring.
+    """A profile's deviations from its least-squares circle (ISO 12181-1's LSC reference).
+
+    In the limacon model of :func:`~mtaccuracy.roundness.lsc_roundness`: the profile without its
+    mean and first harmonic, i.e. without the centring.
 
     Parameters
     ----------
@@ -736,8 +741,9 @@ def about_lsc(profile) -> np.ndarray:
 
 
 def fixed_directions(data: ProbeData, report_probes) -> np.ndarray:
-    """The fixed sensitive directions along the axes of the probes named by their mounting
-    angles (deg), all probes when none is named; refuses an angle that is no probe's.
+    """Fixed sensitive directions along the named probes' axes (all probes when none is named).
+
+    The probes are named by their mounting angles (deg); an angle that is no probe's is refused.
 
     Parameters
     ----------
@@ -769,8 +775,7 @@ def fixed_directions(data: ProbeData, report_probes) -> np.ndarray:
 
 
 def probe_column(angle_deg: float) -> str:
-    """The column name of a probe at ``angle_deg``: ``probe_<angle>_um`` with the angle in
-    plain decimals (``probe_38.5_um``).
+    """The column name ``probe_<angle>_um`` of a probe at ``angle_deg``, in plain decimals.
 
     Parameters
     ----------
@@ -780,6 +785,7 @@ def probe_column(angle_deg: float) -> str:
     Returns
     -------
     str
+        E.g. ``probe_38.5_um``.
     """
     return f"probe_{np.format_float_positional(float(angle_deg), trim='-')}_um"
 
@@ -1216,10 +1222,6 @@ def write_probe_file(path, signals_um, angles_deg, sample_deg, *, revolutions=No
         Revolution numbers; default 1..R.
     decimals : int
         Decimals of the readings (um); the angles are written with up to 10.
-
-    Returns
-    -------
-    None
     """
     y = np.asarray(signals_um, dtype=float)
     r, n_probes, n = y.shape
@@ -1325,8 +1327,10 @@ def example_measurement(setup: dict | None = None):
 
 
 def write_example(folder) -> dict:
-    """Write the shipped example (``example_probes.csv``, ``example_truth.csv``) and its record
-    (``provenance.json``: the setup, the generator and each file's SHA-256) into ``folder``.
+    """Write the shipped example and its record into ``folder``.
+
+    The files ``example_probes.csv``, ``example_truth.csv`` and ``provenance.json`` (the setup,
+    the generator and each file's SHA-256).
 
     Parameters
     ----------
@@ -1358,8 +1362,9 @@ def write_example(folder) -> dict:
 
 
 def match_example(path, folder):
-    """The truth of the shipped simulated example when the file at ``path`` has its content
-    (by SHA-256, whatever its name or place), else None.
+    """The shipped example's truth when the file at ``path`` has its content (SHA-256), else None.
+
+    Whatever the file's name or place.
 
     Parameters
     ----------

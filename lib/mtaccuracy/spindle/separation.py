@@ -1,10 +1,16 @@
-"""Four-probe separation of a spindle's radial error motion from the workpiece profile (Yang et al.
-2021, Section 1), and the least-squares multi-probe estimator beside it.
+"""Four-probe separation of a spindle's radial error motion from the workpiece profile.
+
+Yang et al. 2021, Section 1, and the least-squares multi-probe estimator beside it.
 
 The model (Yang et al. 2021, Eqs. 7 and 11): probe ``l`` at angle ``phi_l`` (``phi_0 = 0``)
 reads, at sample ``n`` of ``N`` per revolution (``theta_n = 2 pi n / N``),
 
-so ``Lambda_1 = Lambda_{N-1} = 0`` *by design*: ``rank(A) <= N - 2``, not ``N`` as printed.  The
+    y_l(n) = r(theta_n + phi_l) + dx(n) cos(phi_l) + dy(n) sin(phi_l),
+
+and the weighted sum ``Y = sum_l a_l y_l`` with weights that cancel the motion (``sum_l a_l
+cos(phi_l) = sum_l a_l sin(phi_l) = 0``, Eq. 15) is ``Y = A r`` (Eq. 6), ``A`` circulant with
+the eigenvalues ``Lambda_k = sum_l a_l exp(i k phi_l)`` (Eq. 14); the same two conditions make
+``Lambda_1 = Lambda_{N-1} = 0`` *by design*: ``rank(A) <= N - 2``, not ``N`` as printed.  The
 system has a solution for every profile but not a unique one (any first harmonic can be added);
 :func:`separate` solves it with the pseudo-inverse, i.e. harmonic by harmonic
 ``R_k = Y_k / Lambda_k`` with every harmonic whose ``|Lambda_k|`` vanishes (the first, and any other
@@ -41,8 +47,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-TWO_PI = 2.0 * np.pi
-
+from .. import validate
+from ..roundness import _MIN_SAMPLES, TWO_PI
 
 _DEGENERATE = 1e-12
 
@@ -55,12 +61,12 @@ def probe_angles(positions, n_samples: int) -> np.ndarray:
     positions : sequence of int
         Sample indices of the probes.
     n_samples : int
-        Samples per turn N.
+        Samples per turn N (>= 8).
 
     Returns
     -------
     array
-        rad.
+        The angles (rad), the shape of ``positions``.
     """
     p = np.asarray(positions, dtype=float)
     n_samples = _check_n(n_samples)
@@ -69,10 +75,9 @@ def probe_angles(positions, n_samples: int) -> np.ndarray:
     return TWO_PI * p / n_samples
 
 
-def _check_n(n) -> int:
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 8:
-        raise ValueError(f"samples per revolution must be an integer >= 8, got {n!r}")
-    return int(n)
+def _check_n(n, name: str = "n_samples") -> int:
+    """Samples per revolution, checked: an integer >= 8."""
+    return validate.integer(n, name, low=_MIN_SAMPLES)
 
 
 def _split_phi(phi) -> np.ndarray:
@@ -114,11 +119,12 @@ def weights(phi, a3):
     phi : array (..., 3) or (..., 4)
         Probe angles (rad).
     a3 : float or array (...)
-        The free weight.
+        The free weight of probe 3.
 
     Returns
     -------
     a1, a2 : arrays (...)
+        The weights of probes 1 and 2 (a0 = 1).
     """
     phi3 = _split_phi(phi)
     a3 = np.asarray(a3, dtype=float)
@@ -139,11 +145,12 @@ def full_weights(phi, a3) -> np.ndarray:
     phi : array (..., 3) or (..., 4)
         Probe angles (rad).
     a3 : float or array (...)
-        The free weight.
+        The free weight of probe 3.
 
     Returns
     -------
     array (..., 4)
+        a0..a3.
     """
     a1, a2 = weights(phi, a3)
     a3 = np.broadcast_to(np.asarray(a3, dtype=float), np.shape(a1))
@@ -171,13 +178,14 @@ def eigenvalues(phi, w, harmonics) -> np.ndarray:
     phi : array (..., 3) or (..., 4)
         Probe angles (rad).
     w : array (..., 3) or (..., 4)
-        Weights.
+        Weights a1..a3 (a0 = 1) or a0..a3.
     harmonics : array of int (K,)
         Harmonic orders k.
 
     Returns
     -------
     array of complex (..., K)
+        ``Lambda_k``.
     """
     phi4, w = _full(phi, w)
     k = np.asarray(harmonics, dtype=float)
@@ -200,14 +208,14 @@ def transfer(phi, w, harmonics) -> np.ndarray:
     phi : array (..., 3) or (..., 4)
         Probe angles (rad).
     w : array (..., 3) or (..., 4)
-        Weights.
+        Weights a1..a3 (a0 = 1) or a0..a3.
     harmonics : array of int (K,)
         Harmonic orders k.
 
     Returns
     -------
     array (..., K)
-        q_k^2.
+        q_k^2 (dimensionless), inf where the layout cancels the harmonic.
     """
     phi4, w = _full(phi, w)
     lam = eigenvalues(phi4, w, harmonics)
@@ -220,11 +228,11 @@ def transfer(phi, w, harmonics) -> np.ndarray:
 
 
 def circulant_matrix(positions, w, n_samples: int) -> np.ndarray:
-    """The matrix ``A`` of Eq. 6: ``(A r)(n) = sum_l a_l r(n + p_l)``, built with
-    ``scipy.linalg.circulant``; its eigenvalues are ``Lambda_k`` of :func:`eigenvalues`.
+    """The matrix ``A`` of Eq. 6, ``(A r)(n) = sum_l a_l r(n + p_l)`` (``scipy.linalg.circulant``).
 
-    (The printed definition, ``eps_{p, q + p_l} = 1`` when ``p = q``, would make ``A`` diagonal;
-    the intended one is ``A[p, q] = sum_l a_l [q = p + p_l mod N]``.)
+    Its eigenvalues are ``Lambda_k`` of :func:`eigenvalues`.  (The printed definition, ``eps_{p, q +
+    p_l} = 1`` when ``p = q``, would make ``A`` diagonal; the intended one is ``A[p, q] = sum_l a_l
+    [q = p + p_l mod N]``.)
 
     Parameters
     ----------
@@ -233,11 +241,12 @@ def circulant_matrix(positions, w, n_samples: int) -> np.ndarray:
     w : array (4,)
         Weights a0..a3.
     n_samples : int
-        N.
+        Samples per revolution N (>= 8).
 
     Returns
     -------
     array (N, N)
+        A.
     """
     n_samples = _check_n(n_samples)
     p = np.asarray(positions)
@@ -265,6 +274,7 @@ def probe_signals(profile, dx, dy, positions) -> np.ndarray:
     Returns
     -------
     array (..., 4, N)
+        The probes' readings, in the unit of ``profile``.
     """
     r = np.asarray(profile, dtype=float)
     n = r.shape[-1]
@@ -281,8 +291,7 @@ def probe_signals(profile, dx, dy, positions) -> np.ndarray:
 
 @dataclass
 class Separation:
-    """Everything :func:`separate_details` finds; ``(profile, dx, dy)`` is what :func:`separate`
-    returns.
+    """Everything :func:`separate_details` finds; :func:`separate` returns ``profile, dx, dy``.
 
     Attributes
     ----------
@@ -322,7 +331,7 @@ def _check_signals(signals, phi, w, check):
     y = np.asarray(signals, dtype=float)
     if y.ndim < 2 or y.shape[-2] != 4:
         raise ValueError(f"signals must have shape (..., 4, N), got {y.shape}")
-    n = _check_n(y.shape[-1])
+    n = _check_n(y.shape[-1], "samples per revolution (the signals' last axis)")
     if not np.all(np.isfinite(y)):
         raise ValueError("signals contain NaN or inf")
     phi4, w = _full(phi, w)
@@ -345,8 +354,11 @@ def _check_signals(signals, phi, w, check):
 
 
 class CancelledHarmonicsWarning(UserWarning):
-    """:func:`separate` was told (``allow_cancelled=True``) to proceed on a layout whose weights
-    cancel harmonics besides the first; the separated profile lacks them."""
+    """A separation told ``allow_cancelled=True`` went on without harmonics the layout cancels.
+
+    The separated profile lacks them (:func:`separate`, :func:`separate_least_squares`,
+    :func:`~mtaccuracy.spindle.probes.separate_probes`).
+    """
 
 
 def _harmonic_list(ks, limit: int = 12) -> str:
@@ -370,11 +382,7 @@ def _check_max_harmonic(max_harmonic, n: int) -> int:
     """``max_harmonic`` (default N/2) checked to be an integer in 1..N/2."""
     if max_harmonic is None:
         return n // 2
-    if isinstance(max_harmonic, bool) or not isinstance(max_harmonic, int | np.integer) \
-            or not 1 <= max_harmonic <= n // 2:
-        raise ValueError(f"max_harmonic must be an integer in 1..N/2 = {n // 2}, "
-                         f"got {max_harmonic!r}")
-    return int(max_harmonic)
+    return validate.integer(max_harmonic, "max_harmonic", low=1, high=n // 2)
 
 
 def _set_aside(keep, n, max_harmonic, allow_cancelled, describe, hint, stacklevel):
@@ -415,13 +423,13 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
     Parameters
     ----------
     signals : array (..., 4, N)
-        Probe readings.
+        Probe readings ``y_0..y_3`` (Eq. 7), any one length unit.
     phi : array (3,) or (4,)
         Probe angles (rad), on the sampling grid.
     w : array (3,) or (4,)
-        Weights.
+        Weights a1..a3 (a0 = 1) or a0..a3.
     first_harmonic : {"eccentricity", "radial"}
-        Convention of the first harmonic.
+        Convention of the first harmonic (module docstring).
     rcond : float
         Harmonics with ``|Lambda_k| <= rcond max|Lambda|`` are set aside.
     check : bool
@@ -429,11 +437,13 @@ def separate_details(signals, phi, w, *, first_harmonic: str = "eccentricity",
     allow_cancelled : bool
         Proceed (with a warning) when other harmonics are cancelled.
     max_harmonic : int, optional
-        Highest harmonic the signals can contain.
+        Highest harmonic the signals can contain, 1..N/2 (default N/2).
 
     Returns
     -------
     Separation
+        ``profile``, ``dx``, ``dy`` (..., N) in the unit of ``signals``, and the intermediate
+        results.
     """
     _check_options(first_harmonic, rcond)
     y, n, phi4, w, p = _check_signals(signals, phi, w, check)
@@ -585,7 +595,7 @@ def separate_least_squares(signals, phi, *, first_harmonic: str = "eccentricity"
     y = np.asarray(signals, dtype=float)
     if y.ndim < 2 or y.shape[-2] < 3:
         raise ValueError(f"signals must have shape (..., L, N) with L >= 3 probes, got {y.shape}")
-    n = _check_n(y.shape[-1])
+    n = _check_n(y.shape[-1], "samples per revolution (the signals' last axis)")
     if not np.all(np.isfinite(y)):
         raise ValueError("signals contain NaN or inf")
     phi = np.asarray(phi, dtype=float)
@@ -625,29 +635,74 @@ def separate_least_squares(signals, phi, *, first_harmonic: str = "eccentricity"
 
 def separate(signals, phi, w, *, first_harmonic: str = "eccentricity", rcond: float = 1e-9,
              check: bool = True, allow_cancelled: bool = False, max_harmonic: int | None = None):
-    """Separate the profile and the radial error motion from four probe signals.
+    """Separate the profile and the radial error motion from four probe signals (Eqs. 3-10).
+
+    The four-point matrix method of Yang et al. 2021, Section 1: the weighted sum of the probes
+    cancels the motion, its spectrum divided by ``Lambda_k`` (Eq. 14) gives the profile, and the
+    motion follows from the probes by least squares (:func:`separate_details` gives the steps).
 
     Parameters
     ----------
-    signals : (..., 4, N) probe readings ``y_0..y_3`` (Eq. 7), batched over leading axes.
-    phi : probe angles phi_1..phi_3 (or phi_0..phi_3 with phi_0 = 0), on the sampling grid
-        ``2 pi p / N`` (the matrix method shifts by whole samples; other angles are refused).
-    w : weights a1..a3 (a0 = 1) or a0..a3; they must cancel the first harmonic (Eq. 15) unless
-        ``check=False`` (used to show what non-cancelling weights do).
-    check : whether to refuse weights that do not cancel the first harmonic.
-    first_harmonic : ``"eccentricity"`` or ``"radial"``, the convention that splits the profile's
-        first harmonic from the motion (module docstring).
-    rcond : harmonics with ``|Lambda_k| <= rcond * max|Lambda|`` are set aside (not recoverable).
-    allow_cancelled : a layout that cancels a harmonic other than the first is refused
-        (``ValueError`` naming them) unless this is True; then it proceeds without them and
-        warns with :class:`CancelledHarmonicsWarning`, naming them.
-    max_harmonic : the highest harmonic the signals can contain (default N/2); cancelled
+    signals : array (..., 4, N)
+        Probe readings ``y_0..y_3`` (Eq. 7) in any one length unit, batched over leading axes;
+        N >= 8 samples per revolution.
+    phi : array (3,) or (4,)
+        Probe angles phi_1..phi_3 (or phi_0..phi_3 with phi_0 = 0), rad, on the sampling grid
+        ``2 pi p / N`` (the matrix method shifts by whole samples).
+    w : array (3,) or (4,)
+        Weights a1..a3 (a0 = 1) or a0..a3; they must cancel the first harmonic (Eq. 15,
+        :func:`weights`) unless ``check=False``.
+    first_harmonic : {"eccentricity", "radial"}
+        The convention that splits the profile's first harmonic from the motion (module
+        docstring).
+    rcond : float
+        Harmonics with ``|Lambda_k| <= rcond * max|Lambda|`` are set aside, in (0, 1).
+    check : bool
+        Refuse weights that do not cancel the first harmonic (False shows what such weights
+        do).
+    allow_cancelled : bool
+        Proceed without the harmonics other than the first that the layout cancels, with a
+        :class:`CancelledHarmonicsWarning` naming them, instead of refusing the layout.
+    max_harmonic : int, optional
+        The highest harmonic the signals can contain, 1..N/2 (default N/2); cancelled
         harmonics above it are set aside silently, as they carry nothing.
 
     Returns
     -------
-    profile, dx, dy : arrays (..., N).  :func:`separate_details` returns the intermediate results
-    (the pseudo-inverse profile, ``C, D``, the cancelled harmonics, the matrix rank).
+    profile : array (..., N)
+        The profile, its first harmonic by the ``first_harmonic`` convention.
+    dx, dy : arrays (..., N)
+        The error motion along x (the direction of probe 0) and y, in the unit of ``signals``.
+
+    Raises
+    ------
+    ValueError
+        Signals not (..., 4, N) or not finite; angles off the sampling grid; weights that do
+        not cancel the first harmonic (with ``check``); a layout that cancels another harmonic
+        up to ``max_harmonic`` (unless ``allow_cancelled``), the message naming them.
+
+    See Also
+    --------
+    separate_details : the same, with the intermediate results (``C, D``, the rank, the
+        cancelled harmonics).
+    separate_least_squares : least squares over all probes, no weights needed.
+
+    Examples
+    --------
+    A profile of harmonics 2 and 5 and a motion of harmonic 3, on the layout of the paper's
+    Table 1 (k = 20) rounded to 128 samples:
+
+    >>> import numpy as np
+    >>> n = 128
+    >>> t = 2 * np.pi * np.arange(n) / n
+    >>> r = np.cos(2 * t) + 0.3 * np.sin(5 * t)
+    >>> dx, dy = 0.2 * np.cos(3 * t), 0.1 * np.sin(3 * t)
+    >>> pos = [0, 14, 65, 116]
+    >>> phi = probe_angles(pos[1:], n)
+    >>> y = probe_signals(r, dx, dy, pos)
+    >>> profile, ex, ey = separate(y, phi, full_weights(phi, 1.953))
+    >>> bool(np.allclose(profile, r) and np.allclose(ex, dx) and np.allclose(ey, dy))
+    True
     """
     s = separate_details(signals, phi, w, first_harmonic=first_harmonic, rcond=rcond,
                          check=check, allow_cancelled=allow_cancelled,
@@ -656,19 +711,19 @@ def separate(signals, phi, w, *, first_harmonic: str = "eccentricity", rcond: fl
 
 
 def rotation_error(dx, dy, theta=None) -> np.ndarray:
-    """Scalar radial error ``delta = dx cos(theta) + dy sin(theta)`` of Eq. 9 (rotating
-    direction).
+    """Scalar radial error ``delta = dx cos(theta) + dy sin(theta)`` (Eq. 9, rotating direction).
 
     Parameters
     ----------
     dx, dy : arrays (..., N)
-        Error motion.
+        Error motion (any one length unit).
     theta : array (N,), optional
         Angles (rad); default the uniform grid.
 
     Returns
     -------
     array (..., N)
+        delta, in the unit of ``dx``.
     """
     dx, dy = np.asarray(dx, dtype=float), np.asarray(dy, dtype=float)
     if theta is None:
@@ -687,13 +742,12 @@ MAPPINGS = {
 
 
 def motion_from_scalar(delta, mapping: str = "radial", theta=None):
-    """``(dx, dy)`` from a scalar rotation error under one of :data:`MAPPINGS`; also returns the
-    inverse map as a function ``(dx, dy) -> delta``.
+    """``(dx, dy)`` from a scalar rotation error under one of :data:`MAPPINGS`, and the inverse.
 
     Parameters
     ----------
     delta : array (N,)
-        Scalar rotation error.
+        Scalar rotation error (any one length unit).
     mapping : str
         One of :data:`MAPPINGS`.
     theta : array (N,), optional
@@ -702,6 +756,7 @@ def motion_from_scalar(delta, mapping: str = "radial", theta=None):
     Returns
     -------
     dx, dy : arrays (N,)
+        The error motion, in the unit of ``delta``.
     inverse : callable
         ``(dx, dy) -> delta``.
     """
@@ -718,31 +773,34 @@ def motion_from_scalar(delta, mapping: str = "radial", theta=None):
     raise ValueError(f"unknown mapping {mapping!r}; known: {', '.join(MAPPINGS)}")
 
 
-def cancelled_harmonics(phi, w, n_samples: int, rcond: float = 1e-9) -> list[int]:
-    """The harmonics 2..N/2 a layout's weights cancel: ``|Lambda_k| <= rcond * max|Lambda|``,
-    the test of :func:`separate_details` (which refuses such a layout unless told).
+def cancelled_harmonics(phi, w, *, n_samples: int, rcond: float = 1e-9) -> list[int]:
+    """The harmonics 2..N/2 a layout's weights cancel, as :func:`separate_details` tests them.
+
+    ``|Lambda_k| <= rcond * max|Lambda|``; :func:`separate_details` refuses such a layout unless
+    told.
 
     Parameters
     ----------
     phi : array (3,) or (4,)
         Probe angles (rad).
     w : array (3,) or (4,)
-        Weights.
+        Weights a1..a3 (a0 = 1) or a0..a3.
     n_samples : int
-        N.
+        Samples per revolution N (>= 8).
     rcond : float
         Relative threshold on ``|Lambda_k|``.
 
     Returns
     -------
     list of int
+        The cancelled harmonics, ascending (empty for a good layout).
     """
     n = _check_n(n_samples)
     lam = np.abs(eigenvalues(phi, w, np.arange(n)))
     return [k for k in range(2, n // 2 + 1) if lam[k] <= rcond * lam.max()]
 
 
-def rank_check(positions, phi, w, test_profile, rtol: float, roundoff: float):
+def rank_check(positions, phi, w, test_profile, *, rtol: float, roundoff: float):
     """The rank of Eq. 6's matrix for one layout, and the separation checked against it.
 
     Builds the circulant matrix of the layout (:func:`circulant_matrix`), counts its singular

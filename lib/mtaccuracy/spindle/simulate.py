@@ -1,6 +1,8 @@
-"""Simulated four-probe measurements (Yang et al. 2021, Section 3 simulated): random profiles,
-probe signals with asynchronous error motion and noise sampled over several revolutions
-(multi-turn coincidence sampling, Eqs. 1-2), and the coincidence ratio of repeated curves.
+"""Simulated four-probe measurements (Yang et al. 2021, Section 3 simulated).
+
+Random profiles, probe signals with asynchronous error motion and noise sampled over several
+revolutions (multi-turn coincidence sampling, Eqs. 1-2), and the coincidence ratio of repeated
+curves.
 """
 
 from __future__ import annotations
@@ -10,35 +12,40 @@ __all__ = ["random_profile", "simulate_measurements", "coincidence_ratio", "meas
 
 import numpy as np
 
+from .. import validate
 from ..roundness import _profile, lowpass, lsc_roundness, mz_roundness
 from .separation import TWO_PI, _check_n, probe_angles, probe_signals, separate_details
 
 
-def random_profile(n_samples: int, harmonics, rng, decay: float = 1.0,
+def random_profile(n_samples: int, harmonics, *, rng, decay: float = 1.0,
                    roundness: float | None = None) -> np.ndarray:
-    """A random profile with the given harmonics, amplitudes ``~ k^-decay`` and random phases;
-    scaled so that its minimum-zone roundness equals ``roundness`` when given.
+    """A random profile of the given harmonics, amplitudes ``~ k^-decay``, random phases.
+
+    Scaled so that its minimum-zone roundness equals ``roundness`` when given.
 
     Parameters
     ----------
     n_samples : int
-        Samples over one turn.
+        Samples over one turn (>= 8).
     harmonics : sequence of int
-        Harmonic orders present.
-    rng : numpy.random.Generator
+        Harmonic orders present, each in 0..N/2-1.
+    rng : None, int or numpy.random.Generator
+        The stream the amplitudes and phases are drawn from (a Generator is used as it is).
     decay : float
-        Amplitudes ~ k^-decay.
+        Exponent of the amplitudes' decay with the order.
     roundness : float, optional
         Minimum-zone roundness wanted (the profile's unit).
 
     Returns
     -------
     array (n_samples,)
+        The profile (unit of ``roundness``, or arbitrary).
     """
     n = _check_n(n_samples)
     ks = np.asarray(harmonics)
     if ks.ndim != 1 or ks.size == 0 or np.any(ks < 0) or np.any(ks >= n / 2):
         raise ValueError(f"harmonics must be orders in 0..N/2-1 = {n // 2 - 1}")
+    rng = validate.rng(rng)
     t = TWO_PI * np.arange(n) / n
     amp = rng.standard_normal(len(ks)) * np.maximum(ks, 1) ** (-float(decay))
     ph = rng.uniform(0, TWO_PI, len(ks))
@@ -60,36 +67,38 @@ def simulate_measurements(profile, dx, dy, positions, *, n_rev: int, interleave:
     of ``N`` angles takes ``interleave`` revolutions and the ``n_rev // interleave`` sets are
     averaged angle by angle.  The synchronous motion ``dx, dy`` repeats every revolution; the
     asynchronous motion is new every revolution (random harmonics in ``async_harmonics``, rms
-    ``async_sd`` per axis); each probe adds white noise ``noise_sd``.  Returns ``(M, 4, N)``.
+    ``async_sd`` per axis); each probe adds white noise ``noise_sd``.
 
     Parameters
     ----------
     profile, dx, dy : arrays (N,)
         The true profile and synchronous error motion (mm).
     positions : sequence of int (4,)
-        Probe positions.
+        Probe positions (sample indices, p_0 = 0).
     n_rev : int
-        Revolutions per measurement.
+        Revolutions per measurement (>= interleave).
     interleave : int
-        Revolutions per full set of angles.
+        Revolutions per full set of angles (>= 1, dividing N).
     async_sd, noise_sd : float
         Asynchronous motion and probe noise (mm).
     n_measurements : int
-        M.
-    rng : numpy.random.Generator
+        Repeated measurements M (>= 1).
+    rng : None, int or numpy.random.Generator
+        The stream of the motion and the noise (a Generator is used as it is).
     async_harmonics : (int, int)
         Harmonic band of the asynchronous motion.
 
     Returns
     -------
     array (M, 4, N)
+        The averaged probe signals (mm).
     """
     r = _profile(profile)
     n = r.shape[-1]
-    for name, v in (("n_rev", n_rev), ("interleave", interleave),
-                    ("n_measurements", n_measurements)):
-        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 1:
-            raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+    n_rev = validate.integer(n_rev, "n_rev", low=1)
+    interleave = validate.integer(interleave, "interleave", low=1)
+    n_measurements = validate.integer(n_measurements, "n_measurements", low=1)
+    rng = validate.rng(rng)
     if n % interleave:
         raise ValueError(f"interleave ({interleave}) must divide N ({n})")
     if n_rev < interleave:
@@ -119,8 +128,7 @@ def simulate_measurements(profile, dx, dy, positions, *, n_rev: int, interleave:
 
 
 def coincidence_ratio(curves, k: float = 2.0) -> np.ndarray:
-    """How far apart the mean curves of groups of repeated measurements are, in units of ``k``
-    standard errors of their difference: ``(G, G)`` matrix, 0 on the diagonal.
+    """How far apart groups' mean curves are, in units of ``k`` standard errors of the difference.
 
     ``curves``: ``(G, M, P)``, ``G`` groups (e.g. spindle speeds), ``M >= 2`` repeated
     measurements of a curve of ``P`` points each.  For groups ``a, b`` with means ``m_a, m_b`` and
@@ -143,6 +151,7 @@ def coincidence_ratio(curves, k: float = 2.0) -> np.ndarray:
     Returns
     -------
     array (G, G)
+        The ratios, symmetric, 0 on the diagonal.
     """
     c = np.asarray(curves, dtype=float)
     if c.ndim != 3 or c.shape[1] < 2 or c.shape[2] < 1:
@@ -169,7 +178,7 @@ def measure_separated(profile, dx, dy, positions, phi, w, *, speed_rpm: float, d
     ``async_sd_600 (speed / 600)^async_exponent``; the signals (:func:`simulate_measurements`,
     ``n_measurements`` of them) are low-passed to ``lowpass_harmonic`` and separated with the
     layout ``positions``, ``phi``, ``w`` (:func:`~.separation.separate_details`, told that no
-    harmonic above the cut-off is present).  Returns ``(separation, revolutions)``.
+    harmonic above the cut-off is present).
 
     Parameters
     ----------
@@ -180,7 +189,7 @@ def measure_separated(profile, dx, dy, positions, phi, w, *, speed_rpm: float, d
     phi : array (3,)
         Probe angles (rad).
     w : array (4,)
-        Weights.
+        Weights a0..a3.
     speed_rpm, duration_s : float
         Spindle speed (r/min) and acquisition time (s).
     interleave : int
@@ -192,16 +201,18 @@ def measure_separated(profile, dx, dy, positions, phi, w, *, speed_rpm: float, d
     n_measurements : int
         Repeated measurements.
     lowpass_harmonic : int
-        Low-pass cut-off.
+        Highest harmonic kept by the low-pass filter, 1..N/2.
     first_harmonic : str
         Convention of the first harmonic (:func:`separate_details`).
-    rng : numpy.random.Generator
+    rng : None, int or numpy.random.Generator
+        The stream of the motion and the noise (a Generator is used as it is).
 
     Returns
     -------
     separation : Separation
         Of every measurement, ``(n_measurements, N)`` arrays.
     revolutions : int
+        Revolutions per measurement.
     """
     n_rev = max(interleave, int(duration_s * speed_rpm / 60) // interleave * interleave)
     amp = async_sd_600 * (speed_rpm / 600) ** async_exponent

@@ -14,10 +14,13 @@
                    :func:`leave_one_experiment_out`, :func:`replicate_split`
 ``baselines``      no compensation and :class:`GroupedRidge` on all sensors, against which the
                    paper's selected models are judged; :func:`pool_metrics`
-``synthetic``      the seeded reconstruction of the paper's dataset (not the authors' data)
 =================  ========================================================================
 
-Everything in ``io``, ``clustering``, ``models`` and ``validation`` is importable from here.
+The seeded reconstruction of the paper's dataset, calibrated to its printed tables, is paper
+code: :mod:`mtaccuracy.compendium.xu2022_reconstruction`.
+
+Everything in ``io``, ``clustering``, ``models``, ``validation`` and ``baselines`` is importable
+from here.
 Units: positions in mm, errors in um, slopes k in um/m (so ``k * x_mm / 1000`` is um),
 temperatures in degrees Celsius.  The position axis is shifted to start at 0 (the paper models
 185..445 mm as 0..260 mm so that the intercept b is the error at the first target).
@@ -32,7 +35,7 @@ Example: the decoupled MLR on arrays, composed with scikit-learn's model selecti
                     scoring=POOLED_RMSE_SCORER)   # RMSE over all positions and measurements
 """
 
-from . import baselines, clustering, io, models, synthetic, validation  # noqa: F401
+from . import baselines, clustering, io, models, validation  # noqa: F401
 from .baselines import *  # noqa: F403
 from .clustering import *  # noqa: F403
 from .io import *  # noqa: F403

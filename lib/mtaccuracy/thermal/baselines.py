@@ -25,6 +25,7 @@ from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import validate_data
 
+from .. import validate
 from .models import DecoupledRegressor, SearchedRegressor, grouped_folds
 
 __all__ = ["BASELINES", "RIDGE_ALPHAS", "RIDGE_TIE_RTOL", "GroupedRidge", "ridge_all_sensors",
@@ -112,20 +113,25 @@ class GroupedRidge(SearchedRegressor):
 
 
 def ridge_all_sensors(offsets_mm, n_sensors: int) -> DecoupledRegressor:
-    """The ridge baseline, unfitted: k on the first ``n_sensors`` columns (absolute
-    temperatures), b on the next ``n_sensors`` (rises), each a :class:`GroupedRidge`.
+    """The ridge baseline, unfitted: k and b each a :class:`GroupedRidge` on every sensor.
+
+    k on the first ``n_sensors`` columns (absolute temperatures), b on the next ``n_sensors``
+    (rises).
 
     Parameters
     ----------
     offsets_mm : array (P,)
         Target positions from the first target (mm).
     n_sensors : int
-        Number of sensors; the design is ``[temperatures, rises]``, (n, 2 * n_sensors).
+        Number of sensors, at least 1; the design is ``[temperatures, rises]``,
+        (n, 2 * n_sensors).
 
     Returns
     -------
     DecoupledRegressor
+        Unfitted, with a :class:`GroupedRidge` for k and for b.
     """
+    n_sensors = validate.integer(n_sensors, "n_sensors", low=1)
     return DecoupledRegressor(offsets_mm, list(range(n_sensors)),
                               list(range(n_sensors, 2 * n_sensors)),
                               k_estimator=GroupedRidge(), b_estimator=GroupedRidge())
@@ -161,8 +167,9 @@ ERROR_TARGET = "thermal positioning error"
 
 
 def selection_vs_baselines(loeo: pd.DataFrame) -> pd.DataFrame:
-    """The error metrics of every model of a leave-one-experiment-out run, per held-out
-    experiment and pooled over all of them (``held_out == "all"``).
+    """The error metrics of every model of a leave-one-out run, per held-out experiment and pooled.
+
+    The pooled rows (over all held-out experiments) have ``held_out == "all"``.
 
     Parameters
     ----------

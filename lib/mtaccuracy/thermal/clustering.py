@@ -1,8 +1,8 @@
-"""Temperature-sensitive points (Xu et al. 2022, Section 3): fuzzy equivalence clustering
-(Eqs. 1-3) and Deng's grey relational grade (Eq. 4).
+"""Temperature-sensitive points (Xu et al. 2022, Section 3): fuzzy clustering and grey grades.
 
-Written by hand because it is the paper's method and neither scipy nor scikit-learn has it.
-Arrays are (n_samples, n_variables): rows are measurements, columns sensors.
+Fuzzy equivalence clustering (Eqs. 1-3) and Deng's grey relational grade (Eq. 4).  Written by
+hand because it is the paper's method and neither scipy nor scikit-learn has it.  Arrays are
+(n_samples, n_variables): rows are measurements, columns sensors.
 """
 
 from __future__ import annotations
@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+
+from .. import validate
 
 __all__ = [
     "similarity_matrix", "max_min_compose", "transitive_closure", "lambda_cut", "Clustering",
@@ -64,13 +66,14 @@ def max_min_compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     a : array (n, m)
-        A fuzzy relation.
+        A fuzzy relation: membership degrees in [0, 1].
     b : array (m, p)
-        Another.
+        A fuzzy relation composed after ``a``.
 
     Returns
     -------
     array (n, p)
+        The composed relation, every entry one of ``a``'s or ``b``'s.
     """
     return np.minimum(a[:, :, None], b[None, :, :]).max(axis=1)
 
@@ -87,15 +90,16 @@ def transitive_closure(r: np.ndarray, max_squarings: int = 64) -> tuple[np.ndarr
     r : array (n, n)
         Reflexive, symmetric similarity (:func:`similarity_matrix`).
     max_squarings : int
-        Give up (RuntimeError) after this many squarings.
+        Give up (RuntimeError) after this many squarings; at least 0.
 
     Returns
     -------
     closure : array (n, n)
         t(R), a fuzzy equivalence relation.
     squarings : int
-        k.
+        k, the squarings it took.
     """
+    max_squarings = validate.integer(max_squarings, "max_squarings", low=0)
     r = np.asarray(r, dtype=float)
     for k in range(max_squarings + 1):
         r2 = max_min_compose(r, r)
@@ -113,7 +117,7 @@ def lambda_cut(t: np.ndarray, lam: float) -> np.ndarray:
     t : array (n, n)
         A fuzzy equivalence relation (:func:`transitive_closure`).
     lam : float
-        The cut level.
+        The cut level: i and j share a class where ``t_ij >= lam``.
 
     Returns
     -------
@@ -143,7 +147,7 @@ class Clustering:
     labels : array of int (n,)
         Class of each variable.
     closure : array (n, n)
-        t(R).
+        t(R), the transitive closure the cut was taken of.
     squarings : int
         Squarings the closure took.
     gap : float
@@ -175,13 +179,14 @@ def cut_levels(t: np.ndarray, rtol: float = LEVEL_RTOL) -> np.ndarray:
     Parameters
     ----------
     t : array (n, n)
-        t(R).
+        t(R), a fuzzy equivalence relation (:func:`transitive_closure`).
     rtol : float
         Relative tolerance of equal levels (:data:`LEVEL_RTOL`).
 
     Returns
     -------
     array (m,)
+        The levels, descending.
     """
     levels = np.unique(t)[::-1]
     last_of_run = np.append(levels[:-1] - levels[1:] > rtol * np.abs(levels[:-1]), True)
@@ -199,19 +204,20 @@ def cut_for(t: np.ndarray, n_clusters: int, rtol: float = LEVEL_RTOL):
     Parameters
     ----------
     t : array (n, n)
-        t(R).
+        t(R), a fuzzy equivalence relation (:func:`transitive_closure`).
     n_clusters : int
-        Classes wanted.
+        Classes wanted, at least 1.
     rtol : float
-        Relative tolerance of equal levels.
+        Relative tolerance of equal levels (:data:`LEVEL_RTOL`).
 
     Returns
     -------
     lam : float
-        The cut.
+        The cut level.
     labels : array of int (n,)
         Classes at that cut (:func:`lambda_cut`).
     """
+    n_clusters = validate.integer(n_clusters, "n_clusters", low=1)
     levels = cut_levels(t, rtol)
     best = (levels[0], lambda_cut(t, levels[0]))
     for lam in levels:  # from the highest level down, classes merge
@@ -239,15 +245,15 @@ def fuzzy_clusters(x: np.ndarray, names, n_clusters: int = 3) -> Clustering:
     names : sequence of str
         Variable names, one per column.
     n_clusters : int
-        Classes wanted (the paper: 3).
+        Classes wanted, 1 to the number of variables (the paper: 3).
 
     Returns
     -------
     Clustering
+        The classes at the cut, the cut and its distance to the nearest other level.
     """
     names = list(names)
-    if not 1 <= n_clusters <= len(names):
-        raise ValueError(f"n_clusters must be in 1..{len(names)}, got {n_clusters}")
+    n_clusters = validate.integer(n_clusters, "n_clusters", low=1, high=len(names))
     x = np.asarray(x, dtype=float)
     flat = [names[j] for j in np.flatnonzero(np.ptp(x, axis=0) == 0)]
     if flat:
@@ -268,10 +274,12 @@ def normalise_range(x: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     x : array (n,) or (n, m)
+        Values; each column is scaled on its own.
 
     Returns
     -------
     array, the shape of ``x``
+        In [0, 1].
     """
     x = np.asarray(x, dtype=float)
     lo, span = x.min(axis=0), np.ptp(x, axis=0)
@@ -342,8 +350,8 @@ class Selection:
     margins: dict = field(default_factory=dict)
 
 
-def select_sensitive_points(temperatures: pd.DataFrame, target, n_clusters: int = 3,
-                            rho: float = 0.5, *, clustering: Clustering | None = None
+def select_sensitive_points(temperatures: pd.DataFrame, target, *, n_clusters: int = 3,
+                            rho: float = 0.5, clustering: Clustering | None = None
                             ) -> Selection:
     """Temperature-sensitive points: one sensor per fuzzy cluster (Xu et al. 2022, Section 2).
 
@@ -362,9 +370,9 @@ def select_sensitive_points(temperatures: pd.DataFrame, target, n_clusters: int 
     target : array (n,)
         The error at one position (um), or k (um/m) or b (um).
     n_clusters : int
-        Clusters, so sensors selected.
+        Clusters, so sensors selected (the paper: 3).
     rho : float
-        Distinguishing coefficient of the grade.
+        Distinguishing coefficient of the grade, in (0, 1] (the paper: 0.5).
     clustering : Clustering, optional
         :func:`fuzzy_clusters` of these ``temperatures`` with ``n_clusters``, computed once and
         passed to every call that selects on the same temperatures for another target (the
@@ -374,6 +382,7 @@ def select_sensitive_points(temperatures: pd.DataFrame, target, n_clusters: int 
     Returns
     -------
     Selection
+        The clusters, every sensor's grade, the sensor chosen per cluster and the margins.
     """
     names = list(temperatures.columns)
     x = temperatures.to_numpy(dtype=float)
@@ -412,7 +421,7 @@ def most_frequent(selections, n: int = 3, order=None) -> list[str]:
     selections : iterable of list of str
         The sensors chosen each time (one selection per position, Section 3.1).
     n : int
-        How many to keep.
+        How many to keep, at least 0.
     order : sequence of str, optional
         Sensor order for ties and for the result; default sorted names.
 
@@ -421,6 +430,7 @@ def most_frequent(selections, n: int = 3, order=None) -> list[str]:
     list of str
         In ``order``.
     """
+    n = validate.integer(n, "n", low=0)
     counts = Counter(s for sel in selections for s in sel)
     order = list(order) if order is not None else sorted(counts)
     return sorted(sorted(counts, key=lambda s: (-counts[s], order.index(s)))[:n], key=order.index)

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .. import csvlines
+from .. import csvlines, validate
 
 __all__ = [
     "DataFormatError", "DroppedSensorWarning", "IgnoredColumnWarning", "ThermalData",
@@ -74,13 +74,18 @@ class DataFormatError(ValueError):
 
 
 class DroppedSensorWarning(UserWarning):
-    """A dead sensor (its reading never changes within an experiment, or it holds no number)
-    was dropped by :func:`read_measurements`; the message names the file, sensor and value."""
+    """A dead sensor was dropped by :func:`read_measurements`.
+
+    Dead: its reading never changes within an experiment, or it holds no number.  The message
+    names the file, the sensor and the value.
+    """
 
 
 class IgnoredColumnWarning(UserWarning):
-    """Columns that are not part of the schema (``spindle_speed_rpm``, ``note``) were ignored
-    by :func:`read_measurements`; the message names the file and the columns."""
+    """Columns outside the schema (``spindle_speed_rpm``, ``note``) were ignored on reading.
+
+    Raised by :func:`read_measurements`; the message names the file and the columns.
+    """
 
 
 @dataclass(frozen=True)
@@ -151,6 +156,7 @@ class ThermalData:
         Returns
         -------
         ThermalData
+            Their measurements, with their feeds; positions and source unchanged.
         """
         experiments = [int(e) for e in np.atleast_1d(experiments)]
         unknown = sorted(set(experiments) - set(self.experiments))
@@ -222,8 +228,7 @@ def _decode(path: Path, raw: bytes) -> str:
 
 
 def _header_line(text: str) -> tuple[int, int, int]:
-    """Where the first non-blank line starts and ends in ``text``, and its number (1-based);
-    ``(0, 0, 1)`` for a blank text."""
+    """Start, end and number (1-based) of the first non-blank line; ``(0, 0, 1)`` if blank."""
     first = re.search(r"\S", text)
     if first is None:
         return 0, 0, 1
@@ -234,8 +239,10 @@ def _header_line(text: str) -> tuple[int, int, int]:
 
 
 def _separator(path: Path, text: str) -> str:
-    """The field separator the header (the first non-blank line) uses: ``","`` or ``";"`` (a
-    header with ``;`` and no ``,``); refuse a tab-separated header and one holding both."""
+    """The header's field separator, ``","`` or ``";"``; refuse tabs and a header with both.
+
+    The header is the first non-blank line; ``";"`` when it holds ``;`` and no ``,``.
+    """
     start, end, number = _header_line(text)
     line = text[start:end]
     if ";" in line and "," in line:
@@ -252,8 +259,7 @@ def _separator(path: Path, text: str) -> str:
 
 
 def _records_of(text: str, sep: str):
-    """The records of a file's text (:func:`mtaccuracy.csvlines.records`), the header first,
-    the fields as the file has them."""
+    """A file's records (:func:`mtaccuracy.csvlines.records`), header first, fields as written."""
     return csvlines.records(text, sep=sep)
 
 
@@ -269,9 +275,12 @@ def _blank(fields) -> bool:
 
 
 def _where(path: Path, rows, column: int | None = None) -> list[tuple[int, str]]:
-    """The line (1-based, as an editor shows it) of each of the data rows ``rows`` (positions
-    in the table :func:`_read_csv` returns) and, with ``column`` (its position in the header),
-    the text of that field in the file ('' where the row is short); in the order given."""
+    """The line and, with ``column``, the field text of each data row of ``rows``, in order.
+
+    Lines are 1-based, as an editor shows them; ``rows`` are positions in the table
+    :func:`_read_csv` returns, ``column`` a position in the header; the text is '' where the
+    row is short.
+    """
     wanted = {int(r) for r in rows}
     found: dict[int, tuple[int, str]] = {}
     text = _decode(path, path.read_bytes())
@@ -293,8 +302,10 @@ def _where(path: Path, rows, column: int | None = None) -> list[tuple[int, str]]
 
 
 def _line_numbers(path: Path, rows) -> list[int]:
-    """The file's line numbers (1-based, as an editor shows them) of data rows ``rows``
-    (positions in the table :func:`_read_csv` returns), in the order given."""
+    """The file's line numbers (1-based, as an editor shows them) of data rows ``rows``.
+
+    ``rows`` are positions in the table :func:`_read_csv` returns; the order is kept.
+    """
     return [line for line, _ in _where(path, rows)]
 
 
@@ -305,8 +316,10 @@ def _lines(path: Path, mask) -> str:
 
 
 def _unreadable(path: Path, exc: Exception) -> DataFormatError:
-    """The message for a file pandas cannot tokenise, naming the line at fault (the line
-    pandas names counts records, not lines)."""
+    """The message for a file pandas cannot tokenise, naming the line at fault.
+
+    The line pandas names counts records, not lines, so the file is scanned again.
+    """
     if isinstance(exc, pd.errors.EmptyDataError):
         return _problem(path, "is empty (no header line)")
     if isinstance(exc, pd.errors.ParserError):
@@ -317,9 +330,11 @@ def _unreadable(path: Path, exc: Exception) -> DataFormatError:
 
 
 def _ragged(path: Path) -> DataFormatError | None:
-    """The first row with more fields than the header, or a quote never closed (None if
-    neither).  When the first data rows all have more fields than the header, a comma file
-    with decimal commas is the likely cause, and the message says so."""
+    """The error for the first row wider than the header or a quote never closed, else None.
+
+    When the first data rows all have more fields than the header, a comma file with decimal
+    commas is the likely cause, and the message says so.
+    """
     text = _decode(path, path.read_bytes())
     sep = _separator(path, text)
     records = _records_of(text, sep)
@@ -356,9 +371,12 @@ _UNNAMED = "<unnamed column {}>"
 
 
 def _header(path: Path, text: str, sep: str) -> list[str] | None:
-    """The column names of the header, stripped (an empty one named :data:`_UNNAMED`); refuse
-    a name given twice (pandas would rename the second ``T1_degC.1`` silently).  None when the
-    scanner cannot read the header (pandas' error then names the problem)."""
+    """The header's column names, stripped; refuse a name given twice.
+
+    An empty name becomes :data:`_UNNAMED` (pandas would rename a second ``T1_degC``
+    ``T1_degC.1`` silently).  None when the scanner cannot read the header (pandas' error then
+    names the problem).
+    """
     try:
         # the header line alone when it is a whole record (no quoted line break in it)
         rec = next(_records_of(text[:_header_line(text)[1]], sep), None)
@@ -432,8 +450,7 @@ def _read_csv(path: Path, on_read=None) -> pd.DataFrame:
 
 
 def _check_units(path, columns, quantity: str, expected: str) -> None:
-    """Refuse a column that names ``quantity`` in another unit than ``expected`` (called when
-    ``expected`` itself is missing)."""
+    """Refuse a column naming ``quantity`` in another unit (called when ``expected`` is missing)."""
     for c in columns:
         if c == expected or not c.startswith(quantity + "_"):
             continue
@@ -453,8 +470,10 @@ def _require(path, df, columns) -> None:
 
 
 def _parse(s: pd.Series, sep: str) -> np.ndarray:
-    """The numbers of a text column (NaN where a value is not one); in a semicolon file a
-    decimal comma reads as a decimal point."""
+    """The numbers of a text column, NaN where a value is not one.
+
+    In a semicolon file a decimal comma reads as a decimal point.
+    """
     text = s.astype(str).str.strip()
     if sep == ";":
         text = text.str.replace(",", ".", regex=False)
@@ -527,8 +546,10 @@ _OTHER_SCALES = {"k", "kelvin", "f", "fahrenheit"}
 
 
 def _unit(name: str) -> str | None:
-    """The unit a column name ends in: ``[unit]`` or ``(unit)``, else what follows its last
-    ``_`` unless that is a number; None without one."""
+    """The unit a column name ends in, or None.
+
+    ``[unit]`` or ``(unit)``, else what follows its last ``_`` unless that is a number.
+    """
     m = _BRACKETED.search(name)
     if m:
         return m.group(1)
@@ -540,9 +561,11 @@ def _unit(name: str) -> str | None:
 
 
 def _temperature_unit(unit: str) -> str | None:
-    """``"celsius"`` or ``"other"`` for a temperature unit, however spelled (``C``, ``degc``,
-    ``°C``, ``oC``, ``K``, ``degK``, ``kelvin``, ``F``, ``degF`` ...), None for anything else
-    (``rpm``, ``deg`` alone: an angle)."""
+    """``"celsius"`` or ``"other"`` for a temperature unit however spelled, else None.
+
+    Spellings: ``C``, ``degc``, ``°C``, ``oC``, ``K``, ``degK``, ``kelvin``, ``F``, ``degF``
+    ...; None for anything else (``rpm``, ``deg`` alone: an angle).
+    """
     u = re.sub(r"[\s°º]", "", unit.lower())
     u = re.sub(r"^(degrees?|deg|grad)_?", "", u)
     return "celsius" if u in _CELSIUS else "other" if u in _OTHER_SCALES else None
@@ -557,8 +580,10 @@ def _holds_numbers(s: pd.Series, sep: str) -> bool:
 
 
 def _temperature_columns(path: Path, df: pd.DataFrame) -> tuple[dict[str, str], dict[str, str]]:
-    """Sensor name -> its column ``<sensor>_degC``, and the columns ignored (column -> why);
-    refuses temperatures in another unit or spelling and columns of numbers without a unit."""
+    """Sensor name -> its column ``<sensor>_degC``, and the columns ignored (column -> why).
+
+    Refuses temperatures in another unit or spelling and columns of numbers without a unit.
+    """
     sep = df.attrs.get("separator", ",")
     sensors: dict[str, str] = {}
     ignored: dict[str, str] = {}
@@ -609,9 +634,11 @@ def _temperature_columns(path: Path, df: pd.DataFrame) -> tuple[dict[str, str], 
 
 
 def _readings(path: Path, df: pd.DataFrame, sensors: dict[str, str]):
-    """The readings of every sensor (degC, file order), and the sensors that hold no number at
-    all (sensor -> why): every cell empty, or one text such as ``NaN`` or ``OL`` in every
-    cell.  A sensor with some numbers and some cells that are not numbers is refused."""
+    """The readings of every sensor (degC, file order), and the sensors holding no number.
+
+    No number (sensor -> why): every cell empty, or one text such as ``NaN`` or ``OL`` in
+    every cell.  A sensor with some numbers and some cells that are not numbers is refused.
+    """
     sep = df.attrs.get("separator", ",")
     values, dead = {}, {}
     for name, c in sensors.items():
@@ -629,8 +656,11 @@ def _readings(path: Path, df: pd.DataFrame, sensors: dict[str, str]):
 
 
 def _constant(values: dict[str, np.ndarray], experiments: np.ndarray) -> dict[str, str]:
-    """The sensors whose reading never changes within any experiment (sensor -> why, with the
-    value): they carry no rise, the only thing the models learn from a temperature."""
+    """The sensors whose reading never changes within any experiment (sensor -> why).
+
+    The why names the value: such a sensor carries no rise, the only thing the models learn
+    from a temperature.
+    """
     if not values:
         return {}
     g = pd.DataFrame(values).groupby(experiments, sort=True)
@@ -693,7 +723,7 @@ def read_measurements(folder, on_read=None) -> ThermalData:
     Parameters
     ----------
     folder : path
-        The folder holding the files.
+        Holds ``temperatures.csv``, ``errors.csv`` and, optionally, ``experiments.csv``.
     on_read : callable, optional
         Called as ``on_read(path)`` for every file read (the compendium passes
         ``provenance.track`` to hash its inputs).
@@ -885,8 +915,10 @@ def read_measurements(folder, on_read=None) -> ThermalData:
 
 
 def _check_listed(path: Path, listed: np.ndarray, data: set, files: str) -> None:
-    """Refuse an ``experiments.csv`` that lists an experiment without data, or misses one that
-    has data, naming the experiments (and the lines of the ones listed)."""
+    """Refuse an ``experiments.csv`` listing an experiment without data or missing one with.
+
+    The message names the experiments (and the lines of the ones listed).
+    """
     extra = np.array([e not in data for e in listed.tolist()])
     missing = sorted(data - set(listed.tolist()))
     problems = []
@@ -939,7 +971,7 @@ def save_csv(df: pd.DataFrame, path, float_format: str = "%.6g") -> None:
     Parameters
     ----------
     df : DataFrame
-        The table.
+        Written without its index.
     path : path
         The file; its folder is created if missing.
     float_format : str
@@ -954,7 +986,7 @@ def save_csv(df: pd.DataFrame, path, float_format: str = "%.6g") -> None:
         os.replace(tmp, path)
 
 
-def write_measurements(data: ThermalData, folder, temperature_decimals: int = 2,
+def write_measurements(data: ThermalData, folder, *, temperature_decimals: int = 2,
                        error_decimals: int = 3, save=None, before_overwrite=None) -> list[Path]:
     """Write ``data`` in the schema of :func:`read_measurements`.
 
@@ -963,7 +995,7 @@ def write_measurements(data: ThermalData, folder, temperature_decimals: int = 2,
     Parameters
     ----------
     data : ThermalData
-        The measurements.
+        The measurements (read, reconstructed or simulated).
     folder : path
         Where ``temperatures.csv``, ``errors.csv`` (and ``experiments.csv`` when ``data.feeds``)
         go; created if missing.
@@ -989,6 +1021,8 @@ def write_measurements(data: ThermalData, folder, temperature_decimals: int = 2,
         v = np.asarray(v)
         return v.astype(int) if np.all(v == np.round(v)) else v
 
+    temperature_decimals = validate.integer(temperature_decimals, "temperature_decimals", low=0)
+    error_decimals = validate.integer(error_decimals, "error_decimals", low=0)
     folder = Path(folder)
     temps = pd.concat([data.index[["experiment", "measurement"]].astype(int),
                        pd.DataFrame({"time_min": whole(data.index.time_min)}),

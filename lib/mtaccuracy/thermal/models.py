@@ -39,6 +39,8 @@ from sklearn.model_selection import GridSearchCV, GroupKFold, KFold, ParameterGr
 from sklearn.svm import SVR
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from .. import validate
+
 __all__ = [
     "decouple", "compose", "StandardisedSVR", "GroupedSVR", "PointByPointRegressor",
     "DecoupledRegressor", "svr_search", "svr_simplicity", "canonical_best", "tie_margin",
@@ -174,7 +176,7 @@ class StandardisedSVR(RegressorMixin, BaseEstimator):
         The SVR fitted on the standardised data.
     """
 
-    def __init__(self, kernel="rbf", C=1.0, gamma="scale", epsilon=0.1, tol=SVR_SOLVER_TOL):
+    def __init__(self, *, kernel="rbf", C=1.0, gamma="scale", epsilon=0.1, tol=SVR_SOLVER_TOL):
         self.kernel = kernel
         self.C = C
         self.gamma = gamma
@@ -189,7 +191,7 @@ class StandardisedSVR(RegressorMixin, BaseEstimator):
         X : array (n, p)
             Inputs (temperatures or rises, degC).
         y : array (n,)
-            Target.
+            Target (k in um/m, b in um, or an error in um).
         unbounded_fits : UnboundedFits, optional
             Fits of the same data with a smaller C whose dual variables all stayed below it:
             when one is there, it is this fit's model (not fitted again); when this fit is
@@ -222,7 +224,7 @@ class StandardisedSVR(RegressorMixin, BaseEstimator):
         Parameters
         ----------
         X : array (n, p)
-            Inputs.
+            Inputs, the columns of ``fit``'s (degC).
 
         Returns
         -------
@@ -362,7 +364,7 @@ def bounded_grid(grid, n_samples: int, max_cn: float = SVR_MAX_CN) -> list[dict]
         ``GridSearchCV`` parameter grid of :class:`StandardisedSVR` (a dict without ``"C"``
         stands for the default C = 1).
     n_samples : int
-        Training rows of the search (all of them: every fold has fewer).
+        Training rows of the search (all of them: every fold has fewer); at least 1.
     max_cn : float
         The bound on ``C * n_samples`` (:data:`SVR_MAX_CN`); ``inf`` keeps the grid.
 
@@ -377,6 +379,7 @@ def bounded_grid(grid, n_samples: int, max_cn: float = SVR_MAX_CN) -> list[dict]
     ValueError
         When no candidate is left.
     """
+    n_samples = validate.integer(n_samples, "n_samples", low=1)
     out = []
     for g in [grid] if isinstance(grid, dict) else grid:
         if "C" not in g:
@@ -475,8 +478,8 @@ def tie_margin(cv_results: dict, rtol: float = SVR_TIE_RTOL) -> tuple[int, float
     return int((gap <= rtol).sum()), float(np.abs(others - rtol).min()) if others.size else np.nan
 
 
-def svr_search(x: np.ndarray, y: np.ndarray, groups=None, grid=None,
-               tie_rtol: float = SVR_TIE_RTOL, *, max_cn: float = SVR_MAX_CN, progress=None):
+def svr_search(x: np.ndarray, y: np.ndarray, *, groups=None, grid=None,
+               tie_rtol: float = SVR_TIE_RTOL, max_cn: float = SVR_MAX_CN, progress=None):
     """Choose SVR hyperparameters by grouped cross-validation on the training data only.
 
     The folds leave one training experiment out at a time (``GroupKFold`` with one fold per
@@ -553,9 +556,10 @@ def _prefixed(progress, prefix: str):
 
 
 def grouped_folds(n: int, groups, what: str):
-    """The cross-validation folds of a thermal model's hyperparameter search: one per group
-    (an experiment held out at a time, as the model is used on experiments it has not seen),
-    or ``KFold(min(5, n))`` (unshuffled) without groups.
+    """The cross-validation folds of a thermal model's hyperparameter search.
+
+    One fold per group (an experiment held out at a time, as the model is used on experiments
+    it has not seen), or ``KFold(min(5, n))`` (unshuffled) without groups.
 
     Parameters
     ----------
@@ -569,6 +573,7 @@ def grouped_folds(n: int, groups, what: str):
     Returns
     -------
     GroupKFold or KFold
+        Unfitted splitter: ``GroupKFold(n_groups)`` with groups, else ``KFold(min(5, n))``.
     """
     if groups is None:
         return KFold(n_splits=min(5, n))
@@ -579,9 +584,11 @@ def grouped_folds(n: int, groups, what: str):
 
 
 class SearchedRegressor(RegressorMixin, BaseEstimator):
-    """Base of a regressor whose ``fit`` chooses its hyperparameters by a search and keeps the
-    chosen model, refitted on all data, as ``best_estimator_`` (:class:`GroupedSVR`,
-    :class:`mtaccuracy.thermal.GroupedRidge`)."""
+    """Base of a regressor whose ``fit`` chooses its hyperparameters by a search.
+
+    The chosen model, refitted on all data, is kept as ``best_estimator_`` (:class:`GroupedSVR`,
+    :class:`mtaccuracy.thermal.GroupedRidge`).
+    """
 
     def predict(self, X):
         """Predictions of the chosen candidate.
@@ -589,7 +596,7 @@ class SearchedRegressor(RegressorMixin, BaseEstimator):
         Parameters
         ----------
         X : array (n, p)
-            Inputs.
+            Inputs, the columns of ``fit``'s.
 
         Returns
         -------
@@ -633,7 +640,7 @@ class GroupedSVR(SearchedRegressor):
         self.tie_rtol = tie_rtol
         self.max_cn = max_cn
 
-    def fit(self, X, y, groups=None, progress=None):
+    def fit(self, X, y, groups=None, *, progress=None):
         """Search the grid with grouped folds and refit the chosen candidate.
 
         Parameters
@@ -641,7 +648,7 @@ class GroupedSVR(SearchedRegressor):
         X : array (n, p)
             Inputs (temperatures or rises, degC).
         y : array (n,)
-            Target.
+            Target (k in um/m, b in um, or an error in um).
         groups : array (n,), optional
             Experiment of each row: one fold per experiment.
         progress : callable, optional
@@ -652,8 +659,8 @@ class GroupedSVR(SearchedRegressor):
         self
         """
         X, y = validate_data(self, X, y, y_numeric=True)
-        self.search_ = svr_search(X, y, groups, self.grid, self.tie_rtol, max_cn=self.max_cn,
-                                  progress=progress)
+        self.search_ = svr_search(X, y, groups=groups, grid=self.grid, tie_rtol=self.tie_rtol,
+                                  max_cn=self.max_cn, progress=progress)
         self.best_estimator_ = self.search_.best_estimator_
         return self
 
@@ -712,7 +719,7 @@ class PointByPointRegressor(RegressorMixin, BaseEstimator):
         Parameters
         ----------
         X : array (n, p)
-            Inputs.
+            Inputs, the columns of ``fit``'s (temperature rises, degC).
 
         Returns
         -------
@@ -761,7 +768,7 @@ class DecoupledRegressor(RegressorMixin, BaseEstimator):
     ``clone``, ``get_params``/``set_params`` and use in ``GridSearchCV`` with ``GroupKFold``.
     """
 
-    def __init__(self, offsets_mm, k_columns, b_columns, k_estimator=None, b_estimator=None):
+    def __init__(self, offsets_mm, k_columns, b_columns, *, k_estimator=None, b_estimator=None):
         self.offsets_mm = offsets_mm
         self.k_columns = k_columns
         self.b_columns = b_columns
@@ -771,7 +778,7 @@ class DecoupledRegressor(RegressorMixin, BaseEstimator):
     def _split(self, X):
         return X[:, list(self.k_columns)], X[:, list(self.b_columns)]
 
-    def fit(self, X, y, groups=None, progress=None):
+    def fit(self, X, y, groups=None, *, progress=None):
         """Decouple the error profiles into k and b (Eq. 6) and regress each.
 
         Parameters
@@ -810,14 +817,14 @@ class DecoupledRegressor(RegressorMixin, BaseEstimator):
         Parameters
         ----------
         X : array (n, p)
-            Inputs.
+            Inputs, the columns of ``fit``'s.
 
         Returns
         -------
         k : array (n,)
-            um/m.
+            Predicted slopes (um/m).
         b : array (n,)
-            um.
+            Predicted intercepts (um).
         """
         check_is_fitted(self)
         X = validate_data(self, X, reset=False)
@@ -830,7 +837,7 @@ class DecoupledRegressor(RegressorMixin, BaseEstimator):
         Parameters
         ----------
         X : array (n, p)
-            Inputs.
+            Inputs, the columns of ``fit``'s.
 
         Returns
         -------
@@ -855,9 +862,9 @@ def fit_linear(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     x : array (R, n, p)
-        Inputs of R problems.
+        Inputs of R problems, n rows each.
     y : array (R, n) or (R, n, q)
-        Targets.
+        Targets: one or q per row.
 
     Returns
     -------
@@ -879,11 +886,12 @@ def predict_linear(coef: np.ndarray, x: np.ndarray) -> np.ndarray:
     coef : array (R, 1 + p) or (R, 1 + p, q)
         Coefficients, intercept first.
     x : array (R, n, p)
-        Inputs.
+        Inputs of the R problems.
 
     Returns
     -------
     array (R, n) or (R, n, q)
+        Predictions, one or q per row.
     """
     coef, x = np.asarray(coef, dtype=float), np.asarray(x, dtype=float)
     if coef.ndim == x.ndim - 1:

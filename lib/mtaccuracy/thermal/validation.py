@@ -63,12 +63,12 @@ def metrics(residuals) -> dict:
 
 
 def pooled_rmse(y_true, y_pred) -> float:
-    """The RMSE of all residuals at once, pooled over positions and measurements (the one RMSE
-    of this package, :func:`metrics`).
+    """The RMSE of all residuals at once, pooled over positions and measurements.
 
-    scikit-learn's ``root_mean_squared_error`` on a multi-output target averages the RMSEs of
-    the outputs (positions) instead, which weighs a position of small errors like one of large
-    ones; the two differ whenever the positions' errors differ in size.
+    The one RMSE of this package (:func:`metrics`).  scikit-learn's ``root_mean_squared_error``
+    on a multi-output target averages the RMSEs of the outputs (positions) instead, which weighs
+    a position of small errors like one of large ones; the two differ whenever the positions'
+    errors differ in size.
 
     Parameters
     ----------
@@ -96,7 +96,7 @@ def design(data: ThermalData, inputs: dict, model: str) -> np.ndarray:
     data : ThermalData
         n measurements.
     inputs : dict
-        ``{"point": [...], "k": [...], "b": [...]}`` sensor names.
+        ``{"point": [...], "k": [...], "b": [...]}``: the sensors of each model's inputs.
     model : {"point", "decoupled"}
         ``"point"``: the temperature rises (degC) of ``inputs["point"]``, (n, p).
         ``"decoupled"``: the absolute temperatures of ``inputs["k"]`` then the rises of
@@ -105,6 +105,7 @@ def design(data: ThermalData, inputs: dict, model: str) -> np.ndarray:
     Returns
     -------
     array (n, p)
+        One row per measurement of ``data`` (degC).
     """
     if model == "point":
         return data.rises()[list(inputs["point"])].to_numpy()
@@ -133,7 +134,7 @@ def point_by_point(data: ThermalData, inputs: dict) -> PointByPointRegressor:
                                                          data.errors)
 
 
-def decoupled(data: ThermalData, inputs: dict, kind: str = "mlr", *,
+def decoupled(data: ThermalData, inputs: dict, *, kind: str = "mlr",
               progress=None) -> DecoupledRegressor:
     """The decoupled model (Xu et al. 2022, Eq. 9) fitted on a dataset.
 
@@ -292,9 +293,9 @@ class SplitResult:
     settings: dict = field(default_factory=dict)
 
 
-def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: float = 0.5,
-                   kinds=("mlr", "svr"), sensors: dict | None = None, *,
-                   progress=None, baselines=()) -> SplitResult:
+def evaluate_split(data: ThermalData, *, train, test, n_clusters: int = 3, rho: float = 0.5,
+                   kinds=("mlr", "svr"), sensors: dict | None = None, progress=None,
+                   baselines=()) -> SplitResult:
     """One train/test split: sensitive points, models, held-out metrics (Xu et al. 2022, Sec. 5).
 
     Selects sensitive points on ``train`` only (:func:`select_sensitive_points`), fits the
@@ -307,9 +308,9 @@ def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: flo
     train, test : int or list of int
         Experiments to fit on and to predict.
     n_clusters : int
-        Clusters of the fuzzy clustering, so sensors per model.
+        Clusters of the fuzzy clustering, so sensors per model (the paper: 3).
     rho : float
-        Distinguishing coefficient of the grey relational grade (Eq. 4).
+        Distinguishing coefficient of the grey relational grade (Eq. 4), in (0, 1].
     kinds : tuple of {"mlr", "svr"}
         Decoupled models fitted.
     sensors : dict, optional
@@ -328,6 +329,7 @@ def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: flo
     Returns
     -------
     SplitResult
+        The selections, the fitted models, their predictions of ``test`` and its metrics table.
     """
     missing = sorted({s for v in (sensors or {}).values() for s in v} - set(data.sensors))
     if missing:
@@ -341,12 +343,13 @@ def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: flo
     clusters = fuzzy_clusters(rises.to_numpy(dtype=float), list(rises.columns), n_clusters)
     pos_sel = []
     for i in range(n_pos):
-        pos_sel.append(select_sensitive_points(rises, tr.errors[:, i], n_clusters, rho,
-                                               clustering=clusters))
+        pos_sel.append(select_sensitive_points(rises, tr.errors[:, i], n_clusters=n_clusters,
+                                               rho=rho, clustering=clusters))
         if progress is not None and ((i + 1) % max(1, n_pos // 10) == 0 or i + 1 == n_pos):
             progress(f"sensitive points: {i + 1} of {n_pos} positions")
-    k_sel = select_sensitive_points(tr.temperatures, k_tr, n_clusters, rho)
-    b_sel = select_sensitive_points(rises, b_tr, n_clusters, rho, clustering=clusters)
+    k_sel = select_sensitive_points(tr.temperatures, k_tr, n_clusters=n_clusters, rho=rho)
+    b_sel = select_sensitive_points(rises, b_tr, n_clusters=n_clusters, rho=rho,
+                                    clustering=clusters)
     selected = {"point": most_frequent([s.selected for s in pos_sel], n_clusters,
                                        order=data.sensors),
                 "k": k_sel.selected, "b": b_sel.selected}
@@ -358,7 +361,7 @@ def evaluate_split(data: ThermalData, train, test, n_clusters: int = 3, rho: flo
         if progress is not None and kind != "svr":
             progress(f"decoupled_{kind}")
         models[f"decoupled_{kind}"] = decoupled(
-            tr, chosen, kind, progress=_prefixed(progress, f"decoupled_{kind}, "))
+            tr, chosen, kind=kind, progress=_prefixed(progress, f"decoupled_{kind}, "))
     unknown = sorted(set(baselines) - set(BASELINES))
     if unknown:
         raise ValueError(f"unknown baseline(s) {unknown}; use {list(BASELINES)}")
@@ -409,9 +412,9 @@ def _settings(data, train, test, n_clusters, rho, kinds, sensors, baselines=()) 
             "baselines": tuple(baselines)}
 
 
-def leave_one_experiment_out(data: ThermalData, n_clusters: int = 3, rho: float = 0.5,
+def leave_one_experiment_out(data: ThermalData, *, n_clusters: int = 3, rho: float = 0.5,
                              kinds=("mlr", "svr"), sensors: dict | None = None,
-                             reuse=(), *, progress=None, baselines=()) -> pd.DataFrame:
+                             reuse=(), progress=None, baselines=()) -> pd.DataFrame:
     """:func:`evaluate_split` with each experiment held out in turn (selection redone each time).
 
     Parameters
@@ -447,8 +450,9 @@ def leave_one_experiment_out(data: ThermalData, n_clusters: int = 3, rho: float 
         r = next((r for r in reuse if r.settings == want), None)
         if r is not None and step is not None:
             step("reused")
-        r = r or evaluate_split(data, train, [e], n_clusters, rho, kinds, sensors,
-                                progress=step, baselines=baselines)
+        r = r or evaluate_split(data, train=train, test=[e], n_clusters=n_clusters, rho=rho,
+                                kinds=kinds, sensors=sensors, progress=step,
+                                baselines=baselines)
         t = r.table.copy()
         t.insert(0, "held_out", e)
         for j, key in enumerate(("point", "k", "b"), 1):
@@ -485,7 +489,7 @@ def batch_metrics(residuals) -> dict:
             "mae": np.abs(r).mean(axis=1)}
 
 
-def replicate_split(replicates, train, test, inputs: dict, svr_params: dict | None = None
+def replicate_split(replicates, *, train, test, inputs: dict, svr_params: dict | None = None
                     ) -> pd.DataFrame:
     """The fits of :func:`evaluate_split` with fixed inputs, on every noise replicate at once.
 
@@ -498,11 +502,12 @@ def replicate_split(replicates, train, test, inputs: dict, svr_params: dict | No
     ----------
     replicates : Replicates
         ``index``, ``sensors``, ``temperatures`` (R, n, S), ``errors`` (R, n, P),
-        ``positions_mm`` (:func:`mtaccuracy.thermal.synthetic.noise_replicates`).
+        ``positions_mm``: R datasets stacked on a leading axis (the compendium's
+        ``xu2022_reconstruction.noise_replicates`` makes them).
     train, test : list of int
         Experiments to fit on and to predict.
     inputs : dict
-        ``{"point": [...], "k": [...], "b": [...]}`` sensor names.
+        ``{"point": [...], "k": [...], "b": [...]}``: the sensors of each model's inputs.
     svr_params : dict, optional
         ``{"k": params, "b": params}`` of :class:`StandardisedSVR`; None skips the SVR.
 

@@ -1,8 +1,11 @@
 """The reconstructed dataset of Xu et al. 2022 (``data/thermal/``): a seeded, documented generator.
 
-The published values it is built from (Table 5's k and b, Table 1's experiments) are passed in
-by the caller (:func:`targets_from_tables`); the compendium reads them from ``data/papers/``
-(``mtaccuracy.compendium.xu2022``).
+Paper code (issue 25 item 1): every constant below was calibrated to the paper's printed tables,
+so it lives in the compendium beside :mod:`mtaccuracy.compendium.xu2022`, which reads the
+published values it is built from (Table 5's k and b, Table 1's experiments) from
+``data/papers/`` and passes them in (:func:`targets_from_tables`).  It uses the thermal package
+(:class:`~mtaccuracy.thermal.ThermalData`, :func:`~mtaccuracy.thermal.decouple`) and adds no
+science to it.
 
 The paper publishes no temperatures and no per-position errors, only what was computed from
 them: the slope k and intercept b of all 32 measurements (Table 5), the experiment settings
@@ -54,9 +57,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import least_squares
 
-from .io import ThermalData
-from .models import decouple
+from .. import validate
+from ..thermal import ThermalData, decouple
 
 __all__ = [
     "DEFAULT_SEED", "TIMES_MIN", "POSITIONS_MM", "AMBIENT", "Sensor", "SENSORS",
@@ -80,8 +84,7 @@ AMBIENT_TAU_MIN = 90.0
 
 @dataclass(frozen=True)
 class Sensor:
-    """A first-order thermal node.  ``initial`` is the sensor's own initial offset (degC) per
-    experiment, added to its group's offset; ``bias`` a constant calibration offset.
+    """One sensor of the reconstruction: a first-order thermal node (Newton cooling).
 
     Attributes
     ----------
@@ -96,7 +99,7 @@ class Sensor:
     bias : float
         Constant calibration offset (degC).
     initial : tuple of 4 floats
-        Own initial offset (degC) in experiments 1-4.
+        Own initial offset (degC) to the air in experiments 1-4, added to its group's offset.
     """
 
     group: str
@@ -137,16 +140,15 @@ INTERFEROMETER_NOISE_UM = 0.06
 
 @dataclass(frozen=True)
 class Targets:
-    """What the reconstruction reproduces: Table 5's slope ``k`` (n_exp, n_meas) in um/m and
-    intercept ``b`` (n_exp, n_meas) in um, and Table 1 ``t1`` (experiment, feed_mm_per_min,
-    ambient_min_C, ambient_max_C), one row per experiment.
+    """What the reconstruction reproduces: Table 5's lines and Table 1's experiments.
 
     Attributes
     ----------
     k, b : arrays (n_exp, n_meas)
-        Table 5 (um/m, um).
+        Table 5's slope (um/m) and intercept (um) of every measurement.
     t1 : DataFrame (n_exp, 4)
-        Table 1.
+        Table 1, one row per experiment: experiment, feed_mm_per_min, ambient_min_C,
+        ambient_max_C.
     """
 
     k: np.ndarray
@@ -172,6 +174,7 @@ def targets_from_tables(table5: pd.DataFrame, table1: pd.DataFrame) -> Targets:
     Returns
     -------
     Targets
+        k and b shaped (experiments, measurements), Table 1 as floats.
     """
     n_exp = len(table1)
     k = table5.k_um_per_m.astype(float).to_numpy().reshape(n_exp, -1)
@@ -212,7 +215,7 @@ def simulate(sensors: dict[str, Sensor], group_offsets: dict, t1: pd.DataFrame) 
     Parameters
     ----------
     sensors : dict of str to Sensor
-        The thermal nodes.
+        The thermal nodes by name; the output's sensor axis follows this order.
     group_offsets : dict of str to tuple of 4 floats
         Initial offset of each group to the air in experiments 1-4 (degC).
     t1 : DataFrame (n_exp, 4)
@@ -244,8 +247,10 @@ def simulate(sensors: dict[str, Sensor], group_offsets: dict, t1: pd.DataFrame) 
 
 
 def _unit_residual_shapes(offsets: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Unit-amplitude shapes orthogonal to 1 and x (static pitch shape, bow, zeroing vector) and
-    the projector onto that orthogonal complement."""
+    """Unit shapes orthogonal to 1 and x (pitch shape, bow, zeroing) and the projector onto them.
+
+    The projector is the one onto the orthogonal complement of the straight lines.
+    """
     u = offsets / offsets[-1]
     basis = np.column_stack([np.ones_like(u), u])
     proj = np.eye(len(u)) - basis @ np.linalg.pinv(basis)
@@ -258,10 +263,12 @@ def _unit_residual_shapes(offsets: np.ndarray) -> tuple[np.ndarray, ...]:
 
 def _generate(rng: np.random.Generator, k: np.ndarray, b: np.ndarray, t1: pd.DataFrame,
               reps: tuple = ()) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """Sensor names and the rounded temperatures (*reps, E, J, S) and errors (*reps, E, J, P)
-    drawn from ``rng``: the noise-free histories of :func:`simulate` plus sensor noise, and
-    Table 5's lines plus the residual.  ``reps`` is a leading shape of independent noise
-    realisations; with ``reps = ()`` the draws are exactly those of one reconstruction."""
+    """Sensor names, rounded temperatures (*reps, E, J, S) and errors (*reps, E, J, P) from ``rng``.
+
+    The noise-free histories of :func:`simulate` plus sensor noise, and Table 5's lines plus the
+    residual.  ``reps`` is a leading shape of independent noise realisations; with ``reps = ()``
+    the draws are exactly those of one reconstruction.
+    """
     names = list(SENSORS)
     clean = simulate(SENSORS, GROUP_OFFSETS, t1)                   # (E, S, J)
     air = ambient(t1, TIMES_MIN.astype(float))                      # (E, J)
@@ -319,21 +326,20 @@ def reconstruct(targets: Targets, seed: int = DEFAULT_SEED) -> ThermalData:
 
 @dataclass(frozen=True)
 class Replicates:
-    """``n`` realisations of the reconstruction's noise, stacked on a leading axis:
-    ``temperatures`` (n, measurements, sensors) in the column order ``sensors``, ``errors``
-    (n, measurements, positions); ``index`` and ``positions_mm`` as in :class:`ThermalData`.
+    """``n`` realisations of the reconstruction's noise, stacked on a leading replicate axis.
+
     Replicate 0 is :func:`reconstruct` with the same seed, value for value.
 
     Attributes
     ----------
     index : DataFrame (m, 3)
-        experiment, measurement, time_min.
+        experiment, measurement, time_min of each measurement (as :class:`ThermalData`).
     sensors : list of str
-        Column order of the temperatures.
+        Sensor order of the last axis of ``temperatures``.
     temperatures : array (n, m, S)
-        degC.
+        Temperatures (degC) of every replicate and measurement.
     errors : array (n, m, P)
-        um.
+        Positioning errors (um) of every replicate, measurement and target.
     positions_mm : array (P,)
         Target positions (mm).
     """
@@ -349,7 +355,9 @@ class Replicates:
 
 
 def noise_replicates(targets: Targets, seed: int = DEFAULT_SEED, n: int = 40) -> Replicates:
-    """Replicate 0 is the reconstruction of ``seed``; replicates 1..n-1 redraw every noise term
+    """The reconstruction of ``seed`` and ``n - 1`` redraws of all its noise, batched.
+
+    Replicate 0 is the reconstruction of ``seed``; replicates 1..n-1 redraw every noise term
     (sensor noise, T12's quantisation of it, interferometer noise, the bow that follows the
     nut's noisy rise) from one generator seeded by ``SeedSequence(seed).spawn(1)``, all at
     once.  The noise-free histories and Table 5's lines are the same in every replicate: the
@@ -363,14 +371,14 @@ def noise_replicates(targets: Targets, seed: int = DEFAULT_SEED, n: int = 40) ->
     seed : int
         Seed of the reconstruction (replicate 0).
     n : int
-        Replicates, at least 2.
+        Replicates, replicate 0 included; at least 2 (a spread needs two).
 
     Returns
     -------
     Replicates
+        Stacked on a leading axis of length ``n``.
     """
-    if n < 2:
-        raise ValueError(f"need at least 2 replicates for a spread, got {n}")
+    n = validate.integer(n, "n", low=2)
     k, b, t1 = targets.k, targets.b, targets.t1
     n_exp, n_meas = k.shape
     order, t0, e0 = _generate(np.random.default_rng(seed), k, b, t1)
@@ -407,7 +415,7 @@ def printed_eq8(models: pd.DataFrame) -> dict:
     Parameters
     ----------
     models : DataFrame
-        ``xu2022_models.csv``.
+        ``xu2022_models.csv`` (model, target, term, coefficient).
 
     Returns
     -------
@@ -421,15 +429,14 @@ def printed_eq8(models: pd.DataFrame) -> dict:
 
 
 def printed_model(coefficients: dict, values):
-    """One printed regression: intercept + sum of coefficient x sensor.  ``values`` maps a sensor
-    to its temperatures (absolute or rises, as the model needs); a term ``dT2`` reads ``T2``.
+    """One printed regression: intercept + sum of coefficient x sensor.
 
     Parameters
     ----------
     coefficients : dict
-        ``{"intercept": c0, term: c, ...}``.
+        ``{"intercept": c0, term: c, ...}``; a term ``dT2`` reads the values of ``T2``.
     values : mapping of str to array (n,)
-        Temperatures (degC) by sensor.
+        Temperatures (degC) by sensor: absolute or rises, as the model needs.
 
     Returns
     -------
@@ -442,21 +449,20 @@ def printed_model(coefficients: dict, values):
 
 
 def eq9_consistency(data: ThermalData, models: pd.DataFrame) -> pd.DataFrame:
-    """The paper's Eq. 9 applied to ``data``'s temperatures, beside the k and b decoupled from
-    ``data``'s errors.  ``models`` is ``xu2022_models.csv``.  One row per measurement.
+    """The paper's Eq. 9 on ``data``'s temperatures beside the k and b decoupled from its errors.
 
     Parameters
     ----------
     data : ThermalData
         Measurements (or the reconstruction).
     models : DataFrame
-        ``xu2022_models.csv``.
+        The printed models, ``xu2022_models.csv`` (model, target, term, coefficient).
 
     Returns
     -------
     DataFrame (n, 9)
-        The index columns, then ``k_decoupled``, ``k_eq9``, ``k_residual`` (um/m) and the same
-        for b (um).
+        One row per measurement: the index columns, then ``k_decoupled``, ``k_eq9``,
+        ``k_residual`` (um/m) and the same for b (um).
     """
     k_meas, b_meas = decouple(data.offsets_mm(), data.errors)
     eq9 = printed_eq9(models)
@@ -470,20 +476,20 @@ def eq9_consistency(data: ThermalData, models: pd.DataFrame) -> pd.DataFrame:
 
 
 def eq8_residuals(data: ThermalData, models: pd.DataFrame) -> pd.DataFrame:
-    """The paper's Eq. 8 rows (on temperature rises) applied to ``data``, minus the measured
-    error at those positions.  One row per measurement and printed position.
+    """The measured error minus the paper's printed Eq. 8 rows (on temperature rises) on ``data``.
 
     Parameters
     ----------
     data : ThermalData
         Measurements (or the reconstruction).
     models : DataFrame
-        ``xu2022_models.csv``.
+        The printed models, ``xu2022_models.csv`` (model, target, term, coefficient).
 
     Returns
     -------
     DataFrame
-        The index columns, ``position_mm`` and ``residual`` (um).
+        One row per measurement and printed position: the index columns, ``position_mm`` and
+        ``residual`` (um).
     """
     rises = data.rises()
     frames = []
@@ -539,7 +545,7 @@ def published_residuals(metrics: pd.DataFrame) -> dict:
             "max_eq8": value("point_by_point_mlr", "thermal positioning error", "max_residual")}
 
 
-def calibrate(targets: Targets, models: pd.DataFrame, metrics: pd.DataFrame,
+def calibrate(targets: Targets, models: pd.DataFrame, metrics: pd.DataFrame, *,
               max_nfev: int = 20000, eq8_weight: float = 1.0):
     """How :data:`SENSORS` (T1, T2, T6, T7, T11, T12) and :data:`GROUP_OFFSETS` were found.
 
@@ -561,23 +567,19 @@ def calibrate(targets: Targets, models: pd.DataFrame, metrics: pd.DataFrame,
     Not run by the notebook (it takes about a minute): the rounded result is stored in
     :data:`SENSORS` and :data:`GROUP_OFFSETS`, so generation needs no optimiser; run again, it
     gives back the stored values.
-    ``targets`` are Table 5 and Table 1 (:func:`targets_from_tables`), ``models`` the
-    printed models (``xu2022_models.csv``: model, target, term, coefficient), ``metrics`` the
-    printed metrics (``xu2022_metrics.csv``, :func:`published_residuals`).
-    Returns (sensors, group_offsets, scipy result).
 
     Parameters
     ----------
     targets : Targets
-        Table 5 and Table 1.
+        Table 5 and Table 1 (:func:`targets_from_tables`).
     models : DataFrame
-        The printed models.
+        The printed models, ``xu2022_models.csv`` (model, target, term, coefficient).
     metrics : DataFrame
-        The printed metrics.
+        The printed metrics, ``xu2022_metrics.csv`` (read by :func:`published_residuals`).
     max_nfev : int
-        Evaluations allowed.
+        Residual evaluations ``least_squares`` may spend before it stops.
     eq8_weight : float
-        Weight of Eq. 8's terms.
+        Factor on Eq. 8's terms against Eq. 9's (0 calibrates to Eq. 9 alone).
 
     Returns
     -------
@@ -588,8 +590,6 @@ def calibrate(targets: Targets, models: pd.DataFrame, metrics: pd.DataFrame,
     fit : scipy.optimize.OptimizeResult
         The least-squares result.
     """
-    from scipy.optimize import least_squares
-
     k5, b5, t1 = targets.k, targets.b, targets.t1
     res = published_residuals(metrics)
     hinge_k = res["max_k"] - CALIBRATION_MARGINS["k"]
