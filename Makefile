@@ -105,14 +105,17 @@ bench: $(STAMP)
 	$(GUARD)
 	@$(PY) -m mtaccuracy.compendium.bench --from-env
 
-# Regenerate the lock from the direct requirements in a throw-away venv.
+# Regenerate the lock in a throw-away venv from the direct requirements pyproject.toml declares
+# (.ci/direct-requirements: dependencies and the compendium and test extras).
 lock:
 	rm -rf /tmp/mtaccuracy-lock && $(PYTHON) -m venv /tmp/mtaccuracy-lock
 	/tmp/mtaccuracy-lock/bin/pip install --quiet --upgrade pip setuptools
-	/tmp/mtaccuracy-lock/bin/pip install --quiet jupyterlab papermill numpy scipy SALib chaospy \
-	    pandas matplotlib nbval scikit-learn ipykernel pytest ruff sympy playwright sphinx myst-nb \
-	    sphinx-book-theme numpydoc jupyter-server-mathjax itables panel
-	{ head -4 environment.txt; /tmp/mtaccuracy-lock/bin/pip freeze --all; } > environment.txt.new
+	$(PYTHON) .ci/direct-requirements > /tmp/mtaccuracy-lock/direct.txt
+	/tmp/mtaccuracy-lock/bin/pip install --quiet -r /tmp/mtaccuracy-lock/direct.txt
+	{ echo "# Full pip lock for mtaccuracy: 'pip freeze --all' in a clean Python 3.11 venv after"; \
+	  echo "# installing the direct requirements of pyproject.toml (dependencies and the"; \
+	  echo "# compendium and test extras: .ci/direct-requirements). Regenerate with 'make lock'."; \
+	  /tmp/mtaccuracy-lock/bin/pip freeze --all; } > environment.txt.new
 	mv environment.txt.new environment.txt
 
 # First finishes a commit a killed run left half done and removes what dead runs left (staging

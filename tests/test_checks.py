@@ -13,17 +13,17 @@ def test_atlas_table_counts_key_poses_and_dominant_errors_break_ties_by_catalogu
     # two poses, three errors, one output: indices from a hand-made Jacobian
     jac = np.array([[[1.0, 1.0, 0.5]], [[0.1, 2.0, 0.0]]])             # (P=2, q=1, d=3)
     var = np.ones(3)
-    idx = S.indices_at_poses(jac, var)                                # (2, 3, 1)
-    t = S.atlas_table(idx, ["a", "b", "c"], ["y"], key_share=0.2)
+    idx = S.indices_at_poses(jac, var=var)                            # (2, 3, 1)
+    t = S.atlas_table(idx, names=["a", "b", "c"], outputs=["y"], key_share=0.2)
     assert list(t.symbol) == ["a", "b", "c"]
     assert np.allclose(t.key_share, [0.5, 1.0, 0.0])       # pose 0: 4/9, 4/9, 1/9; pose 1: b only
     assert np.isclose(t.max_index.iloc[1], 4 / 4.01)
     dom = S.dominant_errors(jac, var)
     assert dom[:, 0].tolist() == [0, 1]                               # a = b at pose 0: a first
     with pytest.raises(ValueError, match="key_share must be in"):
-        S.atlas_table(idx, ["a", "b", "c"], ["y"], key_share=1.5)
+        S.atlas_table(idx, names=["a", "b", "c"], outputs=["y"], key_share=1.5)
     with pytest.raises(ValueError, match=r"indices must be \(P, 3, 2\)"):
-        S.atlas_table(idx, ["a", "b", "c"], ["y", "z"], key_share=0.2)
+        S.atlas_table(idx, names=["a", "b", "c"], outputs=["y", "z"], key_share=0.2)
 
 
 def test_an_output_with_no_first_order_term_is_named_and_has_no_dominant_error():
@@ -39,9 +39,10 @@ def test_an_output_with_no_first_order_term_is_named_and_has_no_dominant_error()
 def test_sampling_agrees_with_the_closed_form_of_a_linear_model_within_the_allowance():
     jac = np.array([[2.0, 0.5, 1.0, -1.5], [0.3, 1.8, -0.7, 1.1]])
     bounds = np.vstack([-np.ones(4), np.ones(4)])
-    checks = [S.sample_at_pose(lambda e: e @ jac.T, jac, bounds, 2048, 100, 7 + i)
-              for i in range(2)]
-    rows, summary, widen, m = S.compare_with_sampling(checks, list("abcd"), ["u", "v"])
+    checks = [S.sample_at_pose(lambda e: e @ jac.T, jac, bounds=bounds, n=2048, n_boot=100,
+                               seed=7 + i) for i in range(2)]
+    rows, summary, widen, m = S.compare_with_sampling(checks, names=list("abcd"),
+                                                      outputs=["u", "v"])
     z = stats.norm.ppf
     assert m == 16 and widen == pytest.approx(z(1 - 0.025 / 16) / z(0.975))
     assert (summary.largest_ratio_to_allowed <= 1).all()
@@ -50,8 +51,25 @@ def test_sampling_agrees_with_the_closed_form_of_a_linear_model_within_the_allow
     # a closed form that is wrong is caught: swap two errors' indices
     bad = checks[0]
     bad.closed_form = bad.closed_form[[1, 0, 2, 3]]
-    _, summary2, _, _ = S.compare_with_sampling([bad], list("abcd"), ["u", "v"])
+    _, summary2, _, _ = S.compare_with_sampling([bad], names=list("abcd"), outputs=["u", "v"])
     assert (summary2.largest_ratio_to_allowed > 1).all()
+
+
+def test_checks_take_keywords_after_the_data_and_refuse_bad_counts():
+    jac = np.array([[1.0, 2.0]])
+    bounds = np.vstack([-np.ones(2), np.ones(2)])
+    with pytest.raises(TypeError):
+        S.atlas_table(np.ones((1, 2, 1)), ["a", "b"], ["y"], 0.5)
+    with pytest.raises(TypeError):
+        S.sample_at_pose(lambda e: e @ jac.T, jac, bounds, 64, 10, 0)
+    with pytest.raises(TypeError):
+        S.compare_with_sampling([], ["a", "b"], ["y"])
+    with pytest.raises(ValueError, match="n_boot must be an integer >= 1, got 0"):
+        S.sample_at_pose(lambda e: e @ jac.T, jac, bounds=bounds, n=64, n_boot=0, seed=0)
+    with pytest.raises(ValueError, match="n must be an integer >= 2, got 10.5"):
+        S.sample_at_pose(lambda e: e @ jac.T, jac, bounds=bounds, n=10.5, n_boot=5, seed=0)
+    with pytest.raises(ValueError, match=r"level must be in \(0, 1\)"):
+        S.compare_with_sampling([], names=["a"], outputs=["y"], level=1.0)
 
 
 def test_catalogue_table():

@@ -57,6 +57,23 @@ def documented(body: str) -> list[str]:
     return out
 
 
+def bare_entries(body: str) -> list[str]:
+    """The entries of a Parameters section that give a name and type but no description line
+    (issue 25 item 9: ``machine : Horizontal3Axis`` and nothing else says nothing)."""
+    lines = textwrap.dedent(body).strip("\n").splitlines()
+    out = []
+    for i, line in enumerate(lines):
+        if line.strip() and not line.startswith((" ", "\t")):
+            rest = []
+            for nxt in lines[i + 1:]:
+                if nxt.strip() and not nxt.startswith((" ", "\t")):
+                    break
+                rest.append(nxt.strip())
+            if not "".join(rest):
+                out.append(line.split(" : ")[0].strip())
+    return out
+
+
 def _returns_value(func) -> bool:
     ann = inspect.signature(func).return_annotation
     if ann is not inspect.Signature.empty:
@@ -72,12 +89,19 @@ def _returns_value(func) -> bool:
                for n in ast.walk(body))
 
 
+def summary_problems(name: str, doc: str) -> list[str]:
+    """A summary (the docstring's first paragraph) that runs past one line (issue 25 item 9)."""
+    first = doc.strip().split("\n\n", 1)[0]
+    return [f"{name}: the summary runs over {first.count(chr(10)) + 1} lines"] \
+        if "\n" in first else []
+
+
 def function_problems(name: str, func) -> list[str]:
     """What a function's docstring lacks of the numpydoc rules."""
     doc = inspect.getdoc(func)
     if not doc:
         return [f"{name}: no docstring"]
-    out, sec = [], sections(doc)
+    out, sec = summary_problems(name, doc), sections(doc)
     params = [p for p in inspect.signature(func).parameters if p not in ("self", "cls")]
     if params:
         if "Parameters" not in sec:
@@ -88,6 +112,8 @@ def function_problems(name: str, func) -> list[str]:
             extra = [p for p in doc_names if p not in params]
             if missing or extra:
                 out.append(f"{name}: Parameters undocumented {missing}, not in signature {extra}")
+            out += [f"{name}: parameter {p} has a type and nothing else"
+                    for p in bare_entries(sec["Parameters"])]
     if _returns_value(func) and not ({"Returns", "Yields"} & set(sec)):
         out.append(f"{name}: no Returns section")
     return out
@@ -97,7 +123,7 @@ def class_problems(name: str, cls) -> list[str]:
     """What a class's docstring (constructor) and its public methods and properties lack."""
     if not inspect.getdoc(cls):
         return [f"{name}: no docstring"]
-    out = []
+    out = summary_problems(name, inspect.getdoc(cls))
     try:
         params = [p for p in inspect.signature(cls).parameters if p not in ("self", "cls")]
     except (TypeError, ValueError):
@@ -132,7 +158,7 @@ def class_problems(name: str, cls) -> list[str]:
 def module_problems(module_name: str) -> list[str]:
     mod = importlib.import_module(module_name)
     public = getattr(mod, "__all__", None)
-    out = []
+    out = summary_problems(module_name, inspect.getdoc(mod) or "")
     for name, obj in vars(mod).items():
         if (public is not None and name not in public) or (public is None and name[0] == "_"):
             continue
@@ -189,6 +215,7 @@ def test_the_rules_catch_a_missing_section_a_drifted_name_and_a_missing_returns(
         Parameters
         ----------
         x : float
+            A number.
         """
         return 2 * x
 
@@ -198,6 +225,7 @@ def test_the_rules_catch_a_missing_section_a_drifted_name_and_a_missing_returns(
         Parameters
         ----------
         x : float
+            The closed-over value.
         """
         def f():
             return x
@@ -295,3 +323,35 @@ def test_the_rules_catch_bad_classes_methods_and_properties():
         "Bad.make: no Parameters section", "Bad.make: no Returns section"]
     assert class_problems("Fields", Fields) == [
         "Fields: constructor arguments ['b'] not in Attributes"]
+
+
+def test_a_summary_over_two_lines_is_named():
+    def two(x):
+        """First line of a summary
+        that goes on.
+
+        Parameters
+        ----------
+        x : int
+            Anything.
+        """
+    def one(x):
+        """One line.
+
+        Parameters
+        ----------
+        x : int
+            Anything.
+        """
+    assert function_problems("two", two) == ["two: the summary runs over 2 lines"]
+
+    def bare(machine):
+        """One line.
+
+        Parameters
+        ----------
+        machine : Horizontal3Axis
+        """
+    assert function_problems("bare", bare) == ["bare: parameter machine has a type and nothing "
+                                               "else"]
+    assert function_problems("one", one) == []

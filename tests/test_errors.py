@@ -50,3 +50,51 @@ def test_select_names_the_allowed_symbols():
     assert errors.select(cat, ["dx(x)", "S_xz"]) == [0, 20]
     with pytest.raises(ValueError, match="unknown error name.*allowed: dx\\(x\\)"):
         errors.select(cat, ["dq(x)"])
+
+
+# --- one maker of ISO 230-1 codes (issue 25 item 3) ------------------------------------------
+
+def test_every_code_of_the_package_map_is_what_iso_code_makes_of_its_symbol():
+    rot = {"x": "A", "y": "B", "z": "C"}
+    square = {"S_xy": ("X", "Y"), "S_yz": ("Y", "Z"), "S_xz": ("X", "Z")}
+    names = errors.iso_names()
+    checked = 0
+    for symbol, code in names.items():
+        if symbol in square:
+            assert code == errors.squareness_code(*square[symbol]), symbol
+        elif symbol[:2] in ("d_", "e_") and len(symbol) == 4:      # motions: d_xz, e_yc
+            comp = symbol[2] if symbol[0] == "d" else rot[symbol[2]]
+            assert code == errors.iso_code(comp, symbol[3]), symbol
+        else:                                                    # location errors: E?0?
+            assert code == errors.iso_code(code[1], code[3], zero=True), symbol
+            assert len(code) == 4
+        checked += 1
+    assert checked == len(names) == 41
+
+
+def test_the_chain_and_the_catalogues_make_the_same_codes():
+    from mtaccuracy.machines import chain
+    cat, _ = chain.iso_catalogue("w X b Y Z t")
+    three = {s.iso_code for s in errors.three_axis_catalogue()}
+    assert three == {s.symbol for s in cat}          # 18 motions and 3 squareness errors
+    five = {s.iso_code for s in errors.five_axis_ac_catalogue()}
+    ac, _ = chain.iso_catalogue("w C A b Y X Z t")
+    # the paper's motions and squareness errors are among the chain's codes (its location
+    # errors are placed differently: the paper's d_xAM is no ISO 230-7 location error)
+    motions = {c for c in five if "0" not in c} | {"EC0Y", "EA0Z", "EB0Z"}
+    assert motions <= {s.symbol for s in ac}
+
+
+@pytest.mark.parametrize("args, kwargs, words", [
+    (("Q", "X"), {}, "component and an axis among XYZABC"),
+    (("X", "XY"), {}, "component and an axis"),
+    (("X", "X"), {"square": True}, None)])
+def test_iso_code_refuses_what_is_not_a_code(args, kwargs, words):
+    if words is None:
+        with pytest.raises(TypeError):
+            errors.iso_code(*args, **kwargs)
+        return
+    with pytest.raises(ValueError, match=words):
+        errors.iso_code(*args, **kwargs)
+    with pytest.raises(ValueError, match="two different linear axes"):
+        errors.squareness_code("X", "A")

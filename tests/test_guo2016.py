@@ -136,7 +136,8 @@ def test_the_bound_is_nearly_attained_by_the_top_eigenvector():
 def test_lhs_rank_eigenvalues_has_the_law_of_real_designs():
     n, k = 40, 5
     lam = sensitivity.lhs_rank_eigenvalues(n, k, designs=600, seed=3)
-    designs = sensitivity.repeated_latin_hypercube(n, np.array([np.zeros(k), np.ones(k)]), 600, 4)
+    designs = sensitivity.repeated_latin_hypercube(n, np.array([np.zeros(k), np.ones(k)]),
+                                                   repeats=600, seed=4)
     direct = _lambda_max(designs)
     assert lam.shape == (600,) and np.all((lam >= 1) & (lam <= k))
     se = np.hypot(lam.std(), direct.std()) / np.sqrt(600)

@@ -209,3 +209,59 @@ def test_the_graph_sees_local_imports_cycles_and_upward_imports():
     assert graph["mtaccuracy.machines.chain"] == ["mtaccuracy.kinematics"]   # relative
     assert cycles(graph) == [["mtaccuracy.kinematics", "mtaccuracy.machines.chain"]]
     assert upward_imports(graph) == {("mtaccuracy.kinematics", "mtaccuracy.machines.chain"): 1}
+
+
+# --- function-local imports say why (issue 25 item 1) ----------------------------------------
+
+def _own_statements(fn):
+    """The statements of a function at any depth (in ``if``, ``try``, ``with``...), but not
+    those of a function or class defined inside it (the outer walk visits those itself)."""
+    todo = list(fn.body)
+    while todo:
+        node = todo.pop()
+        yield node
+        if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            todo += [c for c in ast.iter_child_nodes(node) if isinstance(c, ast.stmt)]
+
+
+def unexplained_local_imports(source: str) -> list[int]:
+    """The lines of function-local imports with no stated reason: no comment on the import
+    lines or in the comment lines right above them, and no ``Local imports:`` paragraph in the
+    module docstring (a module whose functions import on purpose, say why once)."""
+    tree = ast.parse(source)
+    if "Local imports:" in (ast.get_docstring(tree) or ""):
+        return []
+    lines = source.splitlines()
+    out = []
+    for fn in ast.walk(tree):
+        if not isinstance(fn, ast.FunctionDef | ast.AsyncFunctionDef):
+            continue
+        for node in _own_statements(fn):
+            if not isinstance(node, ast.Import | ast.ImportFrom):
+                continue
+            own = lines[node.lineno - 1:node.end_lineno]
+            above, k = [], node.lineno - 2
+            while k >= 0 and lines[k].strip().startswith(("#", "import ", "from ")):
+                above.append(lines[k])
+                k -= 1
+            if not any("#" in line for line in own + above):
+                out.append(node.lineno)
+    return out
+
+
+def test_every_function_local_import_says_why():
+    bad = {str(p.relative_to(LIB)): unexplained_local_imports(p.read_text(encoding="utf-8"))
+           for p in MODULES.values()}
+    bad = {k: v for k, v in bad.items() if v}
+    assert not bad, f"function-local imports without a reason (a comment, or a 'Local " \
+                    f"imports:' paragraph in the module docstring): {bad}"
+
+
+def test_the_local_import_check_sees_a_bare_one():
+    bare = "def f():\n    import json\n    return json\n"
+    assert unexplained_local_imports(bare) == [2]
+    assert unexplained_local_imports("def f():\n    import json  # lazy: rare path\n") == []
+    assert unexplained_local_imports("def f():\n    # heavy\n    import a\n    import b\n") == []
+    assert unexplained_local_imports('"""M.\n\nLocal imports: heavy."""\n' + bare) == []
+    assert unexplained_local_imports("def f():\n    try:\n        import a\n    except "
+                                     "ImportError:\n        pass\n") == [3]

@@ -24,13 +24,13 @@ def test_uniform_moments_and_linear_indices_equal_sampling_with_uniform_offset_e
     assert np.allclose(mean, SCALE) and np.allclose(var, (2 * SCALE) ** 2 / 12)
     pose = dict(x=560.0, y=120.0, z=410.0, tool_z=-80.0)
     jac = H3.jacobian(pose)[0, :3]                       # (3, 21)
-    lin = S.linear_indices(jac, np.sqrt(var))                        # (3, 21)
-    ua, ub = S.base_samples(2**13, 21, "sobol", 3)
+    lin = S.linear_indices(jac, sd=np.sqrt(var))                        # (21, 3), as st
+    ua, ub = S.base_samples(2**13, 21, method="sobol", seed=3)
     s1, st = S.sobol_indices(lambda e: e @ jac.T, S.from_unit_uniform(ua, bounds),
                              S.from_unit_uniform(ub, bounds))
     # Sobol' design, N = 8192: the sampling error of these indices is below 0.01
-    assert np.abs(st - lin.T).max() < 0.015 and np.abs(s1 - lin.T).max() < 0.015
-    assert lin.T[:, 0].max() > 0.1  # not a trivial comparison
+    assert np.abs(st - lin).max() < 0.015 and np.abs(s1 - lin).max() < 0.015
+    assert lin[:, 0].max() > 0.1  # not a trivial comparison
 
 
 def _affine_case():
@@ -51,7 +51,7 @@ def test_pose_box_indices_are_the_exact_integrals_when_affine_in_the_pose(nodes)
     mean, var = np.array([0.3, -1.0, 0.0, 2.0]), np.array([1.0, 0.5, 2.0, 0.1])
     ts = np.array([-1.0, 0.0, 2.5])
     box = dict(x=(-1.0, 3.0), y=(2.0, 2.5))
-    s1, st, v = S.pose_box_indices(jac, mean, var, poses=dict(t=ts), pose_bounds=box,
+    s1, st, v = S.pose_box_indices(jac, mean=mean, var=var, poses=dict(t=ts), pose_bounds=box,
                                    nodes=nodes)
     assert s1.shape == st.shape == (3, 4, 2) and v.shape == (3, 2)
     # analytic: x, y independent uniforms; E[J] at the centre, E[J^2] adds B^2 var_x + C^2
@@ -66,7 +66,8 @@ def test_pose_box_indices_are_the_exact_integrals_when_affine_in_the_pose(nodes)
         assert np.allclose(s1[i], (ej**2 * var / vv[:, None]).T, rtol=1e-12, atol=1e-15)
         assert np.allclose(st[i], (ej2 * var / vv[:, None]).T, rtol=1e-12, atol=1e-15)
     # one node is the midpoint: the mean is right, the spread over the box is lost
-    m1, t1, _ = S.pose_box_indices(jac, mean, var, dict(t=ts), box, nodes=1)
+    m1, t1, _ = S.pose_box_indices(jac, mean=mean, var=var, poses=dict(t=ts), pose_bounds=box,
+                                   nodes=1)
     assert np.allclose(m1, t1) and not np.allclose(t1, st, atol=1e-3)
 
 
@@ -99,7 +100,8 @@ def test_trigonometric_pose_dependence_converges_as_nodes_grow():
     exact_s1, exact_st = (ej**2 * var / vv[:, None]).T, (ej2 * var / vv[:, None]).T
     errors = []
     for nodes in (2, 4, 8, 16):
-        s1, st, v = S.pose_box_indices(jac, m, var, pose_bounds=dict(A=(lo, hi)), nodes=nodes)
+        s1, st, v = S.pose_box_indices(jac, mean=m, var=var, pose_bounds=dict(A=(lo, hi)),
+                                         nodes=nodes)
         errors.append(np.abs(st[0] - exact_st).max())
     assert errors[0] > 1e-3                       # two nodes are not enough here
     assert errors[1] < errors[0] / 10 and errors[2] < errors[1] / 100
@@ -115,14 +117,15 @@ def test_pose_box_indices_equal_sampling_with_the_pose_as_an_input_on_h3():
     mean, var = S.uniform_moments(bounds, 21)
     box = dict(x=(0.0, 700.0), y=(0.0, 600.0), z=(0.0, 500.0))
     tool = dict(tool_x=0.0, tool_y=0.0, tool_z=-150.0)
-    s1, st, v = S.pose_box_indices(H3.jacobian, mean, var, tool, box, 3,
+    s1, st, v = S.pose_box_indices(H3.jacobian, mean=mean, var=var, poses=tool, pose_bounds=box,
+                                   components=3,
                                    names=H3.axes + H3.tool_offsets, required=H3.axes)
     full = np.hstack([bounds, np.array(list(box.values())).T])      # (2, 24)
 
     def model(z):
         p = dict(zip("xyz", z[:, 21:].T, strict=True), **tool)
         return np.einsum("nqd,nd->nq", H3.jacobian(p)[:, :3], z[:, :21])
-    ua, ub = S.base_samples(2**13, 24, "sobol", 8)
+    ua, ub = S.base_samples(2**13, 24, method="sobol", seed=8)
     a, b = S.from_unit_uniform(ua, full), S.from_unit_uniform(ub, full)
     es1, est = S.sobol_indices(model, a, b)
     assert np.abs(est[:21] - st[0]).max() < 0.02 and np.abs(es1[:21] - s1[0]).max() < 0.02
@@ -135,7 +138,8 @@ def test_rotary_box_on_the_zheng_machine_converges():
     mean, var = np.zeros(41), ZHENG_SD**2
     fixed = {k: ZHENG_POSE[k] for k in "xyz"}
     box = dict(A=(0.0, 1.2), C=(0.0, 2.0))
-    st = [S.pose_box_indices(ZHENG.jacobian, mean, var, fixed, box, nodes=n)[1][0]
+    st = [S.pose_box_indices(ZHENG.jacobian, mean=mean, var=var, poses=fixed,
+                               pose_bounds=box, nodes=n)[1][0]
           for n in (2, 4, 8, 12)]
     steps = [np.abs(st[i + 1] - st[i]).max() for i in range(3)]
     assert steps[0] > 1e-4 and steps[1] < steps[0] / 10 and steps[2] < 1e-10
@@ -145,14 +149,14 @@ def test_indices_at_poses_sum_to_one_and_equal_one_pose_at_a_time():
     rng = np.random.default_rng(5)
     poses = {k: rng.uniform(lo, hi, 7) for k, (lo, hi) in ZHENG.travels.items()}
     jac = ZHENG.jacobian(poses)                           # (7, 6, 41)
-    s = S.indices_at_poses(jac, ZHENG_SD**2)
+    s = S.indices_at_poses(jac, var=ZHENG_SD**2)
     assert s.shape == (7, 41, 6)
     assert np.allclose(s.sum(1), 1.0, rtol=0, atol=1e-14)
     for i in range(7):
-        assert np.allclose(s[i], S.linear_indices(jac[i], ZHENG_SD).T, rtol=1e-13, atol=0)
+        assert np.allclose(s[i], S.linear_indices(jac[i], sd=ZHENG_SD), rtol=1e-13, atol=0)
     # an output with no variance (here: a zero row) gets zeros, not NaN
     jac[2, 4] = 0.0
-    s = S.indices_at_poses(jac, ZHENG_SD**2)
+    s = S.indices_at_poses(jac, var=ZHENG_SD**2)
     assert np.all(s[2, :, 4] == 0) and np.allclose(s[2, :, 3].sum(), 1.0)
 
 
@@ -220,21 +224,25 @@ def test_bad_input_messages():
     mean, var = np.zeros(4), np.ones(4)
     for bad in (0, -1, 1.5, True, "2"):
         with pytest.raises(ValueError, match="nodes must be an integer >= 1"):
-            S.pose_box_indices(jac, mean, var, dict(t=0.0, x=0.0, y=0.0), nodes=bad)
+            S.pose_box_indices(jac, mean=mean, var=var, poses=dict(t=0.0, x=0.0, y=0.0),
+                               nodes=bad)
     with pytest.raises(ValueError, match="pose_bounds"):
-        S.pose_box_indices(jac, mean, var, dict(t=0.0, y=0.0), dict(x=(1.0, 1.0)))
+        S.pose_box_indices(jac, mean=mean, var=var, poses=dict(t=0.0, y=0.0),
+                           pose_bounds=dict(x=(1.0, 1.0)))
     with pytest.raises(ValueError, match="different lengths"):
-        S.pose_box_indices(jac, mean, var, dict(t=[0.0, 1.0], x=[1.0, 2.0, 3.0], y=0.0))
+        S.pose_box_indices(jac, mean=mean, var=var,
+                           poses=dict(t=[0.0, 1.0], x=[1.0, 2.0, 3.0], y=0.0))
     with pytest.raises(ValueError, match="unknown pose name"):
-        S.pose_box_indices(jac, mean, var, dict(t=0.0, x=0.0, y=0.0, w=1.0),
+        S.pose_box_indices(jac, mean=mean, var=var, poses=dict(t=0.0, x=0.0, y=0.0, w=1.0),
                            names=("t", "x", "y"))
     with pytest.raises(ValueError, match="lacks axis"):
-        S.pose_box_indices(jac, mean, var, dict(t=0.0, x=0.0), required=("x", "y"))
+        S.pose_box_indices(jac, mean=mean, var=var, poses=dict(t=0.0, x=0.0),
+                           required=("x", "y"))
     with pytest.raises(ValueError, match=r"jacobian_fn must return \(M, q, 3\)"):
-        S.pose_box_indices(jac, mean[:3], var[:3], dict(t=0.0, x=0.0, y=0.0))
+        S.pose_box_indices(jac, mean=mean[:3], var=var[:3], poses=dict(t=0.0, x=0.0, y=0.0))
     with pytest.raises(ValueError, match="var must be finite and >= 0"):
-        S.pose_box_indices(jac, mean, -var, dict(t=0.0, x=0.0, y=0.0))
+        S.pose_box_indices(jac, mean=mean, var=-var, poses=dict(t=0.0, x=0.0, y=0.0))
     with pytest.raises(ValueError, match=r"\(P, q, d\)"):
-        S.indices_at_poses(np.zeros((6, 41)), np.ones(41))
+        S.indices_at_poses(np.zeros((6, 41)), var=np.ones(41))
     with pytest.raises(ValueError, match=r"model must return \(10, 2\)"):
         S.nonlinear_remainder(lambda x: x, np.zeros((2, 3)), np.zeros((10, 3)))

@@ -62,7 +62,7 @@ def test_pce_recovers_analytic_indices_of_linear_and_interacting_functions():
 
 
 def test_sampling_estimators_agree_with_the_same_analytic_indices():
-    ua, ub = S.base_samples(2**14, 5, "lhs", 3)
+    ua, ub = S.base_samples(2**14, 5, method="lhs", seed=3)
     s1, st = S.sobol_indices(interacting, S.from_unit_normal(ua, np.ones(5)),
                              S.from_unit_normal(ub, np.ones(5)))
     e1, et = analytic()
@@ -155,7 +155,7 @@ def test_legendre_family_is_orthonormal_for_the_uniform_law():
 
 
 def test_inputs_pick_the_family_of_their_law_and_transform_both_ways():
-    inp = P.ChaosInputs([stats.uniform(2, 3), stats.norm(1, 2), stats.lognorm(0.5)])
+    inp = S.Inputs([stats.uniform(2, 3), stats.norm(1, 2), stats.lognorm(0.5)])
     assert inp.families == ("legendre", "hermite", "hermite")
     x = np.array([[2.0, 1.0, 1.0], [5.0, 5.0, np.exp(0.5)], [3.5, -1.0, 2.0]])
     z = inp.to_standard(x)
@@ -166,16 +166,16 @@ def test_inputs_pick_the_family_of_their_law_and_transform_both_ways():
     with pytest.raises(ValueError, match=r"\(n, 3\)"):
         inp.to_standard(x[:, :2])
     with pytest.raises(TypeError, match="frozen scipy.stats"):
-        P.ChaosInputs([0.5])
+        S.Inputs([0.5])
     with pytest.raises(ValueError, match="lower < upper"):
-        P.ChaosInputs.uniform([0, 1], [1, 1])
+        S.Inputs.uniform([0, 1], [1, 1])
 
 
 def test_design_matrix_mixed_families_equals_direct_products():
     z = np.c_[RNG.uniform(-1, 1, 9), RNG.standard_normal(9), RNG.uniform(-1, 1, 9)]
     fam = ("legendre", "hermite", "legendre")
     alphas = P.multi_indices(3, 4)
-    psi = P.design_matrix(z, alphas, fam)
+    psi = P.design_matrix(z, alphas, families=fam)
     t = P.poly_table(z, 4, fam)
     direct = np.prod([t[alphas[:, i], :, i] for i in range(3)], axis=0).T
     assert np.allclose(psi, direct, rtol=1e-13, atol=1e-13)
@@ -189,7 +189,7 @@ def test_omp_path_loo_equals_loo_path_and_order_equals_scikit_learn():
     alphas = P.multi_indices(4, 3)
     psi = P.design_matrix(z, alphas)
     y = z[:, 0] + 0.5 * z[:, 1] * z[:, 2] + 0.2 * z[:, 3] ** 3 + 0.05 * RNG.standard_normal(80)
-    order, loo = P.omp_path(psi, y, 12, None)
+    order, loo = P.omp_path(psi, y, max_terms=12, patience=None)
     assert np.allclose(loo, P.loo_path(psi[:, [0, *order]], y), rtol=1e-9)
     # scikit-learn's OMP on the centred problem (constant projected out) takes the same columns
     x = psi[:, 1:] - psi[:, 1:].mean(0)
@@ -205,7 +205,7 @@ def test_omp_path_loo_equals_loo_path_and_order_equals_scikit_learn():
 def test_adaptive_pce_recovers_the_interaction_polynomial_exactly(method):
     b = BENCHMARKS["interaction_polynomial"]()
     x = b.sample(120, 4)
-    res = P.fit_sparse_pce(x, b.model(x), P.ChaosInputs(b.marginals), method=method)
+    res = P.fit_sparse_pce(x, b.model(x), inputs=b.inputs, method=method)
     assert res.fit.degree == 2 and res.reliable and res.fit.validation < 1e-20
     assert np.allclose(res.s1, b.s1, atol=1e-12) and np.allclose(res.st, b.st, atol=1e-12)
 
@@ -215,7 +215,7 @@ def test_adaptive_pce_on_ishigami_with_legendre_reaches_four_digits():
     # 1e-4 (the truncation error of sin at the chosen degree; OpenTURNS: 3e-4 at n = 2000)
     b = ishigami()
     x = b.sample(300, 1)
-    res = P.fit_sparse_pce(x, b.model(x), P.ChaosInputs(b.marginals), degrees=range(1, 15))
+    res = P.fit_sparse_pce(x, b.model(x), inputs=b.inputs, degrees=range(1, 15))
     assert res.fit.families == ("legendre",) * 3 and res.fit.degree >= 9
     assert np.abs(res.s1 - b.s1).max() < 1e-4 and np.abs(res.st - b.st).max() < 1e-4
     assert res.fit.validation < 1e-6 and res.fit.loo < 1e-6
@@ -227,7 +227,7 @@ def test_hermite_through_a_normal_transform_is_far_worse_on_uniform_inputs():
     x = b.sample(300, 1)
     z = stats.norm.ppf((x + np.pi) / (2 * np.pi))
     with pytest.warns(P.PoorFitWarning):
-        res = P.fit_sparse_pce(z, b.model(x), None, degrees=range(1, 11))
+        res = P.fit_sparse_pce(z, b.model(x), degrees=range(1, 11))
     assert np.abs(res.st - b.st).max() > 1e-2
 
 
@@ -236,7 +236,7 @@ def test_g_function_8d_within_the_stated_tolerance():
     # the variance is about 1 %, and the indices are within 0.02 of the exact ones
     b = BENCHMARKS["g_function_8d"]()
     x = b.sample(500, 2)
-    res = P.fit_sparse_pce(x, b.model(x), P.ChaosInputs(b.marginals), degrees=range(1, 7))
+    res = P.fit_sparse_pce(x, b.model(x), inputs=b.inputs, degrees=range(1, 7))
     assert res.reliable and res.fit.validation < 0.03
     assert np.abs(res.s1 - b.s1).max() < 0.02 and np.abs(res.st - b.st).max() < 0.02
     assert list(np.argsort(-res.st, kind="stable")[:4]) == [0, 1, 2, 3]
@@ -246,7 +246,7 @@ def test_g_function_41d_ranks_the_six_inputs_and_warns_that_degree_3_is_too_poor
     b = BENCHMARKS["g_function_41d"]()
     x = b.sample(1000, 1)
     with pytest.warns(P.PoorFitWarning, match="validation error"):
-        res = P.fit_sparse_pce(x, b.model(x), P.ChaosInputs(b.marginals))
+        res = P.fit_sparse_pce(x, b.model(x), inputs=b.inputs)
     assert not res.reliable and 0.2 < res.fit.validation < 0.5  # 27 % of V is in interactions
     top = np.argsort(-res.st, kind="stable")
     assert set(top[:2]) == {0, 1} and set(top[2:4]) == {2, 3} and set(top[4:6]) == {4, 5}
@@ -259,10 +259,11 @@ def test_loo_of_selected_terms_is_optimistic_and_validation_is_not():
     b = g_function([0, 0, 1, 1, 2, 2] + [99] * 10)
     x = b.sample(200, 3)
     y = b.model(x)
-    inp = P.ChaosInputs(b.marginals)
-    psi = P.design_matrix(inp.to_standard(x), P.multi_indices(16, 3), inp.families)
-    order, loo = P.omp_path(psi, y, 120, None)
-    curve, _ = P.validation_curve(psi, y, "omp", 120, 5, P.column_norms(psi), 0)
+    inp = b.inputs
+    psi = P.design_matrix(inp.to_standard(x), P.multi_indices(16, 3), families=inp.families)
+    order, loo = P.omp_path(psi, y, max_terms=120, patience=None)
+    curve, _ = P.validation_curve(psi, y, method="omp", length=120, folds=5,
+                                  norms=P.column_norms(psi), seed=0)
     assert loo[120] < 0.1 * curve[1:].min()  # the LOO at 120 terms claims 10x better than any
     assert curve[120] > 2 * curve[1:].min()  # ... and validation says it has overfitted
 
@@ -270,19 +271,19 @@ def test_loo_of_selected_terms_is_optimistic_and_validation_is_not():
 def test_fit_sparse_pce_refuses_bad_input():
     x = RNG.uniform(-1, 1, (40, 2))
     y = x[:, 0]
-    inp = P.ChaosInputs.uniform([-1, -1], [1, 1])
+    inp = S.Inputs.uniform([-1, -1], [1, 1])
     with pytest.raises(ValueError, match=r"x \(n, d\) and y \(n,\)"):
-        P.fit_sparse_pce(x, y[:30], inp)
+        P.fit_sparse_pce(x, y[:30], inputs=inp)
     with pytest.raises(ValueError, match="finite"):
-        P.fit_sparse_pce(x, np.r_[y[:-1], np.nan], inp)
+        P.fit_sparse_pce(x, np.r_[y[:-1], np.nan], inputs=inp)
     with pytest.raises(ValueError, match="folds"):
-        P.fit_sparse_pce(x, y, inp, folds=1)
+        P.fit_sparse_pce(x, y, inputs=inp, folds=1)
     with pytest.raises(ValueError, match="solver"):
-        P.fit_sparse_pce(x, y, inp, method="lasso")
+        P.fit_sparse_pce(x, y, inputs=inp, method="lasso")
     with pytest.raises(ValueError, match="3 input laws for 2"):
-        P.fit_sparse_pce(x, y, P.ChaosInputs.uniform([0, 0, 0], [1, 1, 1]))
+        P.fit_sparse_pce(x, y, inputs=S.Inputs.uniform([0, 0, 0], [1, 1, 1]))
     with pytest.raises(ValueError, match="max_basis"):
-        P.fit_sparse_pce(x, y, inp, degrees=(3,), max_basis=5)
+        P.fit_sparse_pce(x, y, inputs=inp, degrees=(3,), max_basis=5)
 
 
 def test_exact_benchmark_indices():
@@ -302,8 +303,9 @@ def test_omp_on_a_fold_equals_omp_on_the_fold_rows():
     y = z[:, 0] * z[:, 1] + z[:, 2] ** 2 + 0.1 * RNG.standard_normal(60)
     rows = np.sort(RNG.choice(60, 45, replace=False))
     norms = P.column_norms(psi)
-    o1, l1 = P.omp_path(psi, y, 15, None, norms=norms, rows=rows)
-    o2, l2 = P.omp_path(np.asfortranarray(psi[rows]), y[rows], 15, None, norms=norms)
+    o1, l1 = P.omp_path(psi, y, max_terms=15, patience=None, norms=norms, rows=rows)
+    o2, l2 = P.omp_path(np.asfortranarray(psi[rows]), y[rows], max_terms=15, patience=None,
+                        norms=norms)
     assert np.array_equal(o1, o2) and np.allclose(l1, l2, rtol=1e-10)
 
 
@@ -311,6 +313,6 @@ def test_validation_curve_refuses_bad_arguments():
     z = RNG.standard_normal((40, 2))
     psi = P.design_matrix(z, P.multi_indices(2, 2))
     with pytest.raises(ValueError, match="unknown sparse solver 'lasso'"):
-        P.validation_curve(psi, z[:, 0], "lasso", 3)
-    with pytest.raises(ValueError, match="folds must be an integer from 2 to n/2 = 20"):
-        P.validation_curve(psi, z[:, 0], "omp", 3, folds=30)
+        P.validation_curve(psi, z[:, 0], method="lasso", length=3)
+    with pytest.raises(ValueError, match=r"folds must be an integer in \[2, 20\], got 30"):
+        P.validation_curve(psi, z[:, 0], method="omp", length=3, folds=30)

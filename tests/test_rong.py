@@ -33,11 +33,11 @@ def test_ranked_ties_sampling_noise_in_catalogue_order_keeps_real_differences():
     st[10, 0] = 0.45 - 2e-6                     # a real difference of 2e-6 stays one
     r = rong.ranked(st)
     assert r[5, 0] == r[7, 0] and r[11, 0] > r[10, 0]
-    ks = S.key_errors(r[:, 0], NAMES, 0.9)
+    ks = S.key_errors(r[:, 0], names=NAMES, threshold=0.9)
     assert ks.names[:2] == (NAMES[11], NAMES[10])
     assert NAMES[5] in ks.names and NAMES[7] not in ks.names   # catalogue order, not the 4e-10
     # unrounded, the rule would have taken dx(z): the case the ranking exists for
-    assert NAMES[7] in S.key_errors(st[:, 0], NAMES, 0.9).names
+    assert NAMES[7] in S.key_errors(st[:, 0], names=NAMES, threshold=0.9).names
 
 
 def test_ranked_values_survive_the_saved_table(tmp_path):
@@ -53,7 +53,7 @@ def test_ranked_values_survive_the_saved_table(tmp_path):
     back = pd.read_csv(path)
     for k in range(3):
         d = back[back.output == k].sort_values("ST", ascending=False, kind="stable")
-        ks = S.key_errors(r[:, k], NAMES, 0.9)
+        ks = S.key_errors(r[:, k], names=NAMES, threshold=0.9)
         assert tuple(d.symbol[:ks.n_key]) == ks.names
         assert np.array_equal(d.ST.to_numpy(), np.sort(r[:, k])[::-1])
 
@@ -69,7 +69,7 @@ def test_half_widths_from_ranges_split_translational_and_angular():
 
 
 def _unit_rows(n=512, seed=3):
-    ua, _ = S.base_samples(n, D + 3, "sobol", seed)
+    ua, _ = S.base_samples(n, D + 3, method="sobol", seed=seed)
     return ua
 
 
@@ -84,7 +84,8 @@ def test_range_path_ends_match_an_independent_grid_formulation():
     for h, row in zip((BORROWED, hz), path.itertuples(), strict=True):
         v = (jac ** 2).mean(0) * (h ** 2 / 3)                          # (3, D): E[J^2] var
         st = (v / v.sum(1, keepdims=True)).T
-        sets = S.key_errors_by_output(rong.ranked(st, 4), NAMES, ["Ex", "Ey", "Ez"], 0.9)
+        sets = S.key_errors_by_output(rong.ranked(st, 4), names=NAMES, outputs=["Ex", "Ey", "Ez"],
+                                      threshold=0.9)
         u = S.union_key_set(sets, NAMES)
         assert row.n_key == len(u)
     # the two sourced ends of notebook 02: 7 and 17 key errors
@@ -126,7 +127,7 @@ def test_exact_indices_tie_exchangeable_pairs_and_ranked_keeps_the_catalogue_mem
     r = rong.ranked(st)
     i, j = NAMES.index("dx(y)"), NAMES.index("dx(z)")
     assert r[i, 0] == r[j, 0] > 0
-    sets = S.key_errors_by_output(r, NAMES, ["Ex", "Ey", "Ez"], 0.9)
+    sets = S.key_errors_by_output(r, names=NAMES, outputs=["Ex", "Ey", "Ez"], threshold=0.9)
     assert "dx(y)" in sets["Ex"].names and "dx(z)" not in sets["Ex"].names
     assert "dy(x)" in sets["Ey"].names and "dy(z)" not in sets["Ey"].names
 
@@ -180,13 +181,15 @@ def test_a_coincidental_tie_is_broken_by_catalogue_order():
     st = rong.linear_indices_at_poses(MACHINE, b, poses=dict(x=175.0, y=450.0, z=125.0))[0]
     j = [NAMES.index(s) for s in ("ey(z)", "dx(y)", "dx(z)")]
     assert np.ptp(st[j, 0]) < 1e-15 * st[j, 0].max()  # equal up to rounding
-    keys = S.key_errors_by_output(S.merge_ties(st), NAMES, ["Ex", "Ey", "Ez"], 0.9)
+    keys = S.key_errors_by_output(S.merge_ties(st), names=NAMES, outputs=["Ex", "Ey", "Ez"],
+                                  threshold=0.9)
     assert keys["Ex"].names == ("ez(x)", "ez(z)", "dx(y)")
     # whichever of the three the rounding favours, the answer is the same
     for winner in j:
         nudged = st.copy()
         nudged[winner, 0] *= 1 + 4e-16
-        again = S.key_errors_by_output(S.merge_ties(nudged), NAMES, ["Ex", "Ey", "Ez"], 0.9)
+        again = S.key_errors_by_output(S.merge_ties(nudged), names=NAMES,
+                                       outputs=["Ex", "Ey", "Ez"], threshold=0.9)
         assert again["Ex"].names == keys["Ex"].names
 
 
@@ -245,3 +248,35 @@ def test_the_study_models_are_the_machines_position_error_with_the_pose_as_input
     want = MACHINE.position_error(e, dict(x=xyz[:, 0], y=xyz[:, 1], z=xyz[:, 2], **tool))
     assert np.array_equal(rong.errors_and_pose_model(MACHINE, tool)(np.c_[e, xyz]), want)
     assert np.array_equal(rong.errors_at_poses_model(MACHINE, xyz, tool)(e), want)
+
+
+def test_range_bracket_figure_draws_the_path_its_ends_and_the_published_values():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = pd.DataFrame({"t": [0.0, 0.5, 1.0], "n_key_Ex": [4, 5, 6], "n_key_Ey": [3, 3, 5],
+                         "n_key_Ez": [2, 4, 4], "n_key": [8, 11, 17],
+                         "residual_relative": [0.25, 0.1, 0.0]})
+    fig = rong.range_bracket_figure(path, outputs=["Ex", "Ey", "Ez"], n_key_pub=12,
+                                    n_kept_by_rate=11, rate_pub=48.0, residual_mm_pub=0.05,
+                                    full_mm_pub=0.25, residual_pct_text="15", threshold=0.9,
+                                    published_colour="r", reproduced_colour="g")
+    try:
+        ax0, ax1 = fig.axes
+        lines0 = {ln.get_label(): ln for ln in ax0.get_lines()}
+        assert np.array_equal(lines0["union"].get_ydata(), path.n_key)
+        assert np.array_equal(lines0["Ey"].get_ydata(), path.n_key_Ey)
+        # the two sourced sets are the path's ends, annotated with their counts
+        ends = lines0["the two sourced sets"]
+        assert list(ends.get_xdata()) == [0.0, 1.0] and list(ends.get_ydata()) == [8, 17]
+        assert [a.get_text() for a in ax0.texts] == ["8", "17"]
+        assert list(lines0["published: 12"].get_ydata()) == [12, 12]
+        assert list(lines0["implied by the published 48 %: 11"].get_ydata()) == [11, 11]
+        lines1 = {ln.get_label(): ln for ln in ax1.get_lines()}
+        assert np.allclose(lines1["ours"].get_ydata(), [25.0, 10.0, 0.0])   # in %
+        assert np.allclose(lines1["published 0.05 / 0.25 mm"].get_ydata(), 20.0)  # 0.05 / 0.25
+        assert np.allclose(lines1["text: within 15 %"].get_ydata(), 15.0)
+        assert "90% rule" in fig._suptitle.get_text()
+    finally:
+        plt.close(fig)

@@ -42,9 +42,9 @@ def test_latin_hypercube_refuses_bad_input():
 
 def test_repeated_designs_are_deterministic_and_prefix_stable():
     b = np.array([[0.0, 0.0], [1.0, 1.0]])
-    a = S.repeated_latin_hypercube(10, b, 4, 7)
-    assert np.array_equal(a, S.repeated_latin_hypercube(10, b, 4, 7))
-    assert np.array_equal(a[:2], S.repeated_latin_hypercube(10, b, 2, 7))
+    a = S.repeated_latin_hypercube(10, b, repeats=4, seed=7)
+    assert np.array_equal(a, S.repeated_latin_hypercube(10, b, repeats=4, seed=7))
+    assert np.array_equal(a[:2], S.repeated_latin_hypercube(10, b, repeats=2, seed=7))
     assert not np.array_equal(a[0], a[1])
 
 

@@ -27,7 +27,7 @@ BOUNDS = np.array([[-np.pi] * 3, [np.pi] * 3])
 
 
 def test_agrees_with_salib_on_the_same_runs():
-    ua, ub = S.base_samples(256, 3, "sobol", 0)
+    ua, ub = S.base_samples(256, 3, method="sobol", seed=0)
     a, b = S.from_unit_uniform(ua, BOUNDS), S.from_unit_uniform(ub, BOUNDS)
     ya, yb, yab = S.sobol_evaluate(ishigami, a, b)
     s1, st = S.sobol_estimate(ya, yb, yab)
@@ -41,7 +41,7 @@ def test_agrees_with_salib_on_the_same_runs():
 
 @pytest.mark.parametrize("method", ["mc", "lhs", "sobol"])
 def test_ishigami_converges_to_the_analytic_indices(method):
-    ua, ub = S.base_samples(2**14, 3, method, 4)
+    ua, ub = S.base_samples(2**14, 3, method=method, seed=4)
     s1, st = S.sobol_indices(ishigami, S.from_unit_uniform(ua, BOUNDS),
                              S.from_unit_uniform(ub, BOUNDS))
     e1, et = ishigami_exact()
@@ -49,7 +49,7 @@ def test_ishigami_converges_to_the_analytic_indices(method):
 
 
 def test_chunking_does_not_change_the_result_and_reports_progress():
-    ua, ub = S.base_samples(100, 3, "mc", 2)
+    ua, ub = S.base_samples(100, 3, method="mc", seed=2)
     seen = []
     one = S.sobol_evaluate(ishigami, ua, ub, chunk=10_000)
     many = S.sobol_evaluate(ishigami, ua, ub, chunk=37, progress=lambda d, t: seen.append((d, t)))
@@ -62,7 +62,7 @@ def test_chunking_does_not_change_the_result_and_reports_progress():
 def test_streaming_indices_equal_the_stored_estimate(n, chunk):
     """sobol_indices never holds yab; it must give sobol_estimate's numbers, for every way
     the runs are batched (several AB blocks per call, one, or one block over several)."""
-    ua, ub = S.base_samples(n, 5, "mc", 11)
+    ua, ub = S.base_samples(n, 5, method="mc", seed=11)
 
     def model(x):   # two outputs far from zero (centring matters) with interactions
         return np.c_[ishigami(x) + 40.0, x[:, 3] * x[:, 4] - 3.0 + x[:, 0]]
@@ -78,7 +78,7 @@ def test_streaming_indices_equal_the_stored_estimate(n, chunk):
 
 def test_a_model_returning_a_view_of_its_input_is_safe():
     """The AB blocks share one buffer, changed between calls: outputs must be copied."""
-    ua, ub = S.base_samples(50, 4, "mc", 5)
+    ua, ub = S.base_samples(50, 4, method="mc", seed=5)
     ya, yb, yab = S.sobol_evaluate(lambda x: x, ua, ub, chunk=120)
     assert np.array_equal(ya, ua) and np.array_equal(yb, ub)
     for i in range(4):
@@ -91,7 +91,7 @@ def test_a_model_returning_a_view_of_its_input_is_safe():
 
 
 def test_estimate_by_input_blocks_equals_one_block(monkeypatch):
-    ua, ub = S.base_samples(64, 6, "mc", 8)
+    ua, ub = S.base_samples(64, 6, method="mc", seed=8)
     y = S.sobol_evaluate(lambda x: np.c_[ishigami(x), x.sum(1)], ua, ub)
     whole = S.sobol_estimate(*y)
     monkeypatch.setattr(S.sobol, "_ESTIMATE_BLOCK", 130)     # one input at a time
@@ -104,10 +104,10 @@ def test_estimate_by_input_blocks_equals_one_block(monkeypatch):
 def test_bootstrap_half_width_shrinks_with_n():
     widths = []
     for n in (256, 4096):
-        ua, ub = S.base_samples(n, 3, "mc", 3)
+        ua, ub = S.base_samples(n, 3, method="mc", seed=3)
         ya, yb, yab = S.sobol_evaluate(ishigami, S.from_unit_uniform(ua, BOUNDS),
                                        S.from_unit_uniform(ub, BOUNDS))
-        w1, wt = S.sobol_bootstrap(ya, yb, yab, 50, 0)
+        w1, wt = S.sobol_bootstrap(ya, yb, yab, n_boot=50, seed=0)
         assert w1.shape == wt.shape == (3, 1)
         widths.append(wt[1, 0])
     assert widths[1] < widths[0] / 2.5  # ~ 1/sqrt(N): factor 4 expected
@@ -115,7 +115,7 @@ def test_bootstrap_half_width_shrinks_with_n():
 
 def test_bad_input():
     with pytest.raises(ValueError, match="allowed: mc, lhs, sobol"):
-        S.base_samples(8, 2, "halton", 0)
+        S.base_samples(8, 2, method="halton", seed=0)
     with pytest.raises(ValueError, match="one shape"):
         S.sobol_evaluate(ishigami, np.zeros((4, 3)), np.zeros((5, 3)))
 
@@ -123,12 +123,13 @@ def test_bad_input():
 def test_linear_indices_equal_the_sampling_estimate_of_a_linear_model():
     jac = np.array([[2.0, -1.0, 0.5], [0.0, 0.0, 0.0]])
     sd = np.array([1.0, 3.0, 2.0])
-    lin = S.linear_indices(jac, sd)
-    assert np.allclose(lin[0], [4.0, 9.0, 1.0] / np.float64(14.0)) and not lin[1].any()
-    ua, ub = S.base_samples(2**14, 3, "sobol", 5)
+    lin = S.linear_indices(jac, sd=sd)                    # (inputs, outputs), as st
+    assert np.allclose(lin[:, 0], [4.0, 9.0, 1.0] / np.float64(14.0)) and not lin[:, 1].any()
+    ua, ub = S.base_samples(2**14, 3, method="sobol", seed=5)
     s1, st = S.sobol_indices(lambda x: x @ jac[0], S.from_unit_normal(ua, sd),
                              S.from_unit_normal(ub, sd))
-    assert np.allclose(st[:, 0], lin[0], atol=0.02) and np.allclose(s1[:, 0], lin[0], atol=0.02)
+    assert np.allclose(st[:, 0], lin[:, 0], atol=0.02) and \
+        np.allclose(s1[:, 0], lin[:, 0], atol=0.02)
 
 
 
@@ -145,25 +146,25 @@ def _direct_bootstrap(ya, yb, yab, n_boot, seed, chunk=20):
 
 
 def test_bootstrap_by_counts_equals_resampling_the_rows():
-    ua, ub = S.base_samples(300, 3, "mc", 6)
+    ua, ub = S.base_samples(300, 3, method="mc", seed=6)
     ya, yb, yab = S.sobol_evaluate(lambda x: np.c_[ishigami(x) + 50.0, x[:, 0]],
                                    S.from_unit_uniform(ua, BOUNDS), S.from_unit_uniform(ub, BOUNDS))
     ref1, reft = _direct_bootstrap(ya, yb, yab, 45, 9)
     for block in (2**21, 300 * 7):  # one product, or several (the draws do not change)
-        s1b, stb = S.sobol_bootstrap_samples(ya, yb, yab, 45, 9, block=block)
+        s1b, stb = S.sobol_bootstrap_samples(ya, yb, yab, n_boot=45, seed=9, block=block)
         assert s1b.shape == stb.shape == (45, 3, 2)
         assert np.allclose(s1b, ref1, rtol=0, atol=1e-12)  # an offset of 50 costs no precision
         assert np.allclose(stb, reft, rtol=0, atol=1e-12)
-    w1, wt = S.sobol_bootstrap(ya, yb, yab, 45, 9)
+    w1, wt = S.sobol_bootstrap(ya, yb, yab, n_boot=45, seed=9)
     assert np.allclose(w1, S.ci_half_width(ref1)) and np.allclose(wt, S.ci_half_width(reft))
 
 
 def test_bootstrap_counts_are_resamples():
-    blocks = list(S.bootstrap_counts(10, 7, 3, chunk=3, block=20))
+    blocks = list(S.bootstrap_counts(10, 7, seed=3, chunk=3, block=20))
     w = np.concatenate(blocks)
     assert w.shape == (7, 10) and np.all(w.sum(1) == 10) and len(blocks) > 1
-    with pytest.raises(ValueError, match="positive integer"):
-        next(S.bootstrap_counts(10, 0, 3))
+    with pytest.raises(ValueError, match="n_boot must be an integer >= 1, got 0"):
+        next(S.bootstrap_counts(10, 0, seed=3))
 
 
 def test_merge_ties_makes_the_sort_canonical():
@@ -189,14 +190,14 @@ def test_base_blocks_are_the_whole_draw_in_pieces(method, rows):
     """Drawn a block at a time, A and B are bitwise the whole draw: the B stream of ``mc``
     starts n d draws on, the Sobol' sequence continues where the last block stopped."""
     n, d = 128, 5
-    whole = S.base_samples(n, d, method, 7)
+    whole = S.base_samples(n, d, method=method, seed=7)
     rng = np.random.default_rng(7)        # the designs as scipy and numpy draw them whole
     ref = {"mc": lambda: (rng.random((n, d)), rng.random((n, d))),
            "lhs": lambda: tuple(qmc.LatinHypercube(d=d, rng=rng).random(n) for _ in "ab"),
            "sobol": lambda: np.split(qmc.Sobol(d=2 * d, scramble=True, rng=rng).random(n), 2,
                                      axis=1)}[method]()
     assert all(np.array_equal(w, r) for w, r in zip(whole, ref, strict=True))
-    blocks = list(S.base_blocks(n, d, method, 7, rows=rows))
+    blocks = list(S.base_blocks(n, d, method=method, seed=7, rows=rows))
     assert len(blocks) == -(-n // rows) and all(len(a) <= rows for a, _ in blocks)
     for k in (0, 1):
         assert np.array_equal(np.concatenate([blk[k] for blk in blocks]), whole[k])
@@ -208,7 +209,7 @@ def test_a_generator_seed_gives_the_whole_draw_and_ends_where_it_would(bit_gener
     whole_rng = np.random.Generator(bit_generator(3))
     whole = (whole_rng.random((50, 4)), whole_rng.random((50, 4)))    # numpy's whole draw
     rng = np.random.Generator(bit_generator(3))
-    blocks = list(S.base_blocks(50, 4, "mc", rng, rows=16))
+    blocks = list(S.base_blocks(50, 4, method="mc", seed=rng, rows=16))
     for k in (0, 1):
         assert np.array_equal(np.concatenate([blk[k] for blk in blocks]), whole[k])
     assert rng.random() == whole_rng.random()
@@ -224,10 +225,10 @@ def test_streamed_design_equals_the_whole_array_estimate(method):
     runs of base_samples' A and B, the same seed) to rounding; one block gives it bitwise."""
     n, d = 256, 5
     to_inputs = lambda u: S.from_unit_uniform(u, np.array([[-np.pi] * d, [np.pi] * d]))  # noqa
-    ua, ub = S.base_samples(n, d, method, 12)
+    ua, ub = S.base_samples(n, d, method=method, seed=12)
     a, b = to_inputs(ua), to_inputs(ub)
     e1, et = S.sobol_estimate(*S.sobol_evaluate(_offset_model, a, b))
-    design = S.SobolDesign(n, d, method, 12, to_inputs=to_inputs)
+    design = S.SobolDesign(n, d, method=method, seed=12, to_inputs=to_inputs)
     for rows in (37, 64):   # uneven and even blocks
         seen = []
         s1, st = S.sobol_indices(_offset_model, design, chunk=300, rows=rows,
@@ -245,20 +246,21 @@ def test_streamed_design_equals_the_whole_array_estimate(method):
 def test_sobol_balance_warning_is_about_the_design_not_the_block():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        list(S.base_blocks(256, 2, "sobol", 0, rows=48))          # N a power of 2: silent
+        list(S.base_blocks(256, 2, method="sobol", seed=0, rows=48))  # N a power of 2: silent
     with pytest.warns(UserWarning, match="power of 2"):
-        list(S.base_blocks(300, 2, "sobol", 0, rows=64))          # N is not
+        list(S.base_blocks(300, 2, method="sobol", seed=0, rows=64))  # N is not
 
 
 def test_design_bad_input():
-    design = S.SobolDesign(16, 2, "mc", 0)
+    design = S.SobolDesign(16, 2, method="mc", seed=0)
     with pytest.raises(ValueError, match="not both"):
         S.sobol_indices(lambda x: x, design, np.zeros((16, 2)))
     with pytest.raises(ValueError, match="rows must be"):
         S.sobol_indices(lambda x: x, design, rows=0)
     with pytest.raises(ValueError, match="allowed: mc, lhs, sobol"):
-        S.sobol_indices(lambda x: x, S.SobolDesign(16, 2, "halton", 0))
+        S.sobol_indices(lambda x: x, S.SobolDesign(16, 2, method="halton", seed=0))
     with pytest.raises(ValueError, match="n must be"):
-        S.base_blocks(1, 2, "mc", 0)
+        S.base_blocks(1, 2, method="mc", seed=0)
     ya, yb, yab = S.sobol_evaluate(lambda x: x, design)      # a design, drawn whole
-    assert np.array_equal(ya, S.base_samples(16, 2, "mc", 0)[0]) and yab.shape == (2, 16, 2)
+    assert np.array_equal(ya, S.base_samples(16, 2, method="mc", seed=0)[0])
+    assert yab.shape == (2, 16, 2)

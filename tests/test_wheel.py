@@ -36,12 +36,16 @@ SECTION = "## Using the library in your own work"
 PLACEHOLDER = "path/to/your/folder"
 
 
-def readme_examples(text: str) -> list[str]:
-    """The ```python blocks of the README's library section, in order."""
-    if SECTION not in text:
-        raise AssertionError(f"README.md has no section {SECTION!r}")
-    section = text.split(SECTION, 1)[1].split("\n## ", 1)[0]
-    return re.findall(r"```python\n(.*?)```", section, flags=re.S)
+#: CONTRIBUTING.md's section of the five typical calls, run like README's examples.
+TYPICAL = "## Five typical calls"
+
+
+def readme_examples(text: str, section: str = SECTION, name: str = "README.md") -> list[str]:
+    """The ```python blocks of a section (default: the README's library section), in order."""
+    if section not in text:
+        raise AssertionError(f"{name} has no section {section!r}")
+    part = text.split(section, 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"```python\n(.*?)```", part, flags=re.S)
 
 
 def build_wheel(source: Path, out: Path) -> Path:
@@ -135,12 +139,13 @@ CHILD = textwrap.dedent('''
     for i, code in enumerate(job["examples"]):
         out = io.StringIO()
         with contextlib.redirect_stdout(out):
-            exec(compile(code, f"README.md example {i + 1}", "exec"), {"__name__": "__main__"})
+            exec(compile(code, f"README/CONTRIBUTING example {i + 1}", "exec"),
+                 {"__name__": "__main__"})
         printed = out.getvalue().splitlines()
         for line in code.splitlines():
             if line.startswith("print(") and "#" in line:
                 want = line.rsplit("#", 1)[1].strip()
-                assert want in printed, f"example {i + 1} printed {printed}, README says {want}"
+                assert want in printed, f"example {i + 1} printed {printed}, its text says {want}"
     from mtaccuracy.machines import build
     zheng = build("ac_double_turntable")
     iso = errors.iso_names()
@@ -173,8 +178,10 @@ def install_and_run(source: Path, tmp: Path) -> dict:
                     "--disable-pip-version-check", "-q", "--target", str(site), str(wheel)],
                    check=True, capture_output=True, timeout=120)
     shutil.copytree(source / "data" / "thermal", tmp / "your_folder")  # the reader's own data
-    examples = [b.replace(PLACEHOLDER, str(tmp / "your_folder"))
-                for b in readme_examples((source / "README.md").read_text(encoding="utf-8"))]
+    blocks = readme_examples((source / "README.md").read_text(encoding="utf-8")) + \
+        readme_examples((source / "CONTRIBUTING.md").read_text(encoding="utf-8"), TYPICAL,
+                        "CONTRIBUTING.md")
+    examples = [b.replace(PLACEHOLDER, str(tmp / "your_folder")) for b in blocks]
     ours = list(dict.fromkeys([sysconfig.get_paths()["purelib"],
                                sysconfig.get_paths()["platlib"]]))
     job = {"examples": examples,
@@ -241,6 +248,14 @@ def test_the_core_dependencies_leave_out_the_compendium(installed):
 
 def test_readme_examples_are_found_and_a_missing_section_is_named():
     assert len(readme_examples((ROOT / "README.md").read_text(encoding="utf-8"))) >= 3
+    typical = readme_examples((ROOT / "CONTRIBUTING.md").read_text(encoding="utf-8"), TYPICAL,
+                              "CONTRIBUTING.md")
+    # a pose error, Sobol indices, a sparse PCE, a spindle separation, a thermal model
+    assert len(typical) == 5
+    for block, call in zip(typical, ("pose_error", "sobol_indices", "fit_sparse_pce",
+                                     "spindle.separate", "thermal.DecoupledRegressor"),
+                           strict=True):
+        assert call in block and "print(" in block
     with pytest.raises(AssertionError, match="no section"):
         readme_examples("# a README without the library section\n")
 
@@ -255,3 +270,20 @@ def test_the_build_requirement_reads_the_licence_expression():
         assert not setuptools.specifier.contains(Version("76.9")), setuptools
     locked = re.search(r"^setuptools==(\S+)$", (ROOT / "environment.txt").read_text(), re.M)
     assert locked and setuptools.specifier.contains(Version(locked[1])), setuptools
+
+
+def test_make_lock_installs_what_pyproject_declares_and_the_lock_has_each():
+    """``make lock`` installs the output of .ci/direct-requirements, which is every direct
+    requirement of pyproject.toml (dependencies and extras) but the project itself; each is
+    pinned in environment.txt."""
+    out = subprocess.run([sys.executable, str(ROOT / ".ci" / "direct-requirements")],
+                         capture_output=True, text=True, check=True).stdout.split()
+    names = {canonicalize_name(Requirement(r).name) for r in out}
+    cfg = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    declared = {canonicalize_name(Requirement(r).name) for r in
+                [*cfg["dependencies"], *sum(cfg["optional-dependencies"].values(), [])]}
+    assert names == declared - {"mtaccuracy"} and len(out) == len(names)
+    pinned = {canonicalize_name(m[1]) for m in
+              re.finditer(r"^([A-Za-z0-9_.-]+)==", (ROOT / "environment.txt").read_text(), re.M)}
+    assert names <= pinned, f"declared but not pinned: {sorted(names - pinned)}"
+    assert "direct-requirements" in (ROOT / "Makefile").read_text()

@@ -2,6 +2,7 @@
 experiment and the bases they give, the paper's experimental layout as printed, and the GA
 settings study (its speed-ups against their definition, its determinism)."""
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
@@ -98,3 +99,129 @@ def test_check_run_names_the_parameters_that_contradict_each_other(change, words
     yang2021.check_run(RUN, "05_x")                    # the defaults pass
     with pytest.raises(ValueError, match=r"^05_x: " + words):
         yang2021.check_run({**RUN, **change}, "05_x")
+
+
+def _section13():
+    """The printed Section 1.3 simulation: N = 128, probes 0 14 65 116, a3 = 1.953."""
+    n = 128
+    t = 2 * np.pi * np.arange(n) / n
+    prof = (20 + 1.2 * np.cos(t) - 0.8 * np.sin(t) + 0.2 * np.sin(2 * t) + 0.5 * np.cos(6 * t)
+            - 0.8 * np.cos(8 * t))
+    delta = 1.3 + 0.6 * np.sin(2 * t + np.pi / 12) - 0.4 * np.cos(12 * t + np.pi / 10)
+    positions = [0, 14, 65, 116]
+    phi = SP.probe_angles(positions, n)
+    return t, prof, delta, positions, phi, SP.full_weights(phi, 1.953)
+
+
+def test_every_mapping_keeps_the_mean_and_the_radial_pair_is_exact():
+    _, prof, delta, positions, phi, w = _section13()
+    alt = yang2021.mappings_and_conventions(prof, delta, phi=phi, weights=w, positions=positions)
+    assert len(alt) == 2 * len(SP.MAPPINGS)
+    # a first harmonic has zero mean: every separation keeps the set mean, 20
+    assert np.allclose(alt.mean_separated, 20, atol=1e-12)
+    assert np.allclose(alt.mean_reconstructed, 20, atol=1e-12)
+    exact = alt[(alt.mapping == "radial") & (alt.convention == "radial")].iloc[0]
+    assert exact.max_profile_error < 1e-12 and exact.max_error_motion_error < 1e-12
+    assert exact.mean_separated_error == pytest.approx(1.3, abs=1e-12)
+    # the reversed radial mapping turns the constant 1.3 with the workpiece: all of it looks like
+    # a first harmonic of the profile
+    rev = alt[alt.mapping == "radial_reversed"]
+    assert np.allclose(rev.mean_separated_error, 0, atol=1e-12)
+    assert (rev.max_error_motion_error > 1).all()
+
+
+def test_the_eq17_sign_check_recovers_a_and_b_under_the_right_convention():
+    t, _, _, _, phi, w = _section13()
+    a, b = 0.5, -0.3
+    eq17 = yang2021.eq17_sign_check(t, phi, w, k=6, a=a, b=b).set_index("model")
+    eq11, eq13 = eq17.iloc[0], eq17.iloc[1]
+    # under Eq. 13's convention the sign-fixed Eq. 17 is the inverse, the printed one gives -A, -B
+    assert (eq13.A_eq17_sign_fixed, eq13.B_eq17_sign_fixed) == pytest.approx((a, b))
+    assert (eq13.A_eq17_printed, eq13.B_eq17_printed) == pytest.approx((-a, -b))
+    # under Eq. 11's the exact inverse has -mu; the printed form recovers neither coefficient
+    assert (eq11.A_inverse_of_this_model, eq11.B_inverse_of_this_model) == pytest.approx((a, b))
+    assert abs(eq11.A_eq17_printed - a) > 0.1 and abs(eq11.B_eq17_printed - b) > 0.1
+    assert (eq17.A_true == a).all() and (eq17.B_true == b).all()
+
+
+def test_the_noise_figure_draws_eq18_n_times_the_corrected_variance():
+    kk = np.arange(2, 6)
+    q2 = np.array([1.0, 2.0, 3.0, 4.0])
+    fig = yang2021.noise_transfer_figure(kk, q2 / 100, q2, noise_um=0.1, n_samples=64,
+                                         colours=("C0", "C1"))
+    mc, corrected, printed = (line.get_ydata() for line in fig.axes[0].get_lines())
+    assert np.allclose(corrected, 2 * q2 * 0.01 / 64) and np.allclose(printed, 64 * corrected)
+    assert "sigma = 0.1 µm" in fig.axes[0].get_title()
+    plt.close(fig)
+
+
+def _table1_row(**kw):
+    row = dict(H_weights_only_bound=0.31234, H_possible_for_the_weights=True, H_consistent=True,
+               a1_consistent=True, abs_a1_consistent=True, a2_consistent=True,
+               H_min_within_rounding=0.2561, H_max_within_rounding=0.2583)
+    return pd.Series({**row, **kw})
+
+
+PRINTED = pd.Series(dict(H="0.257", phi1_rad="0.522", phi2_rad="3.45", phi3_rad="5.47",
+                         a1="1.2", a2="2.1", a3="1.39"))
+
+
+def test_table1_texts_say_why_a_printed_row_fails_or_holds():
+    printed, ours, ok, note = yang2021.table1_consistency_texts(
+        _table1_row(H_possible_for_the_weights=False), PRINTED)
+    assert printed == "H = 0.257 at phi = (0.522, 3.45, 5.47), a = (1, 1.2, 2.1, 1.39)"
+    assert not ok and ours == "impossible: the printed weights force H >= 0.312 at any angles"
+    assert note.startswith("weights-only bound") and "H >= 0.3123 for every" in note
+    _, ours, ok, note = yang2021.table1_consistency_texts(_table1_row(a1_consistent=False),
+                                                          PRINTED)
+    assert ok and ours == "H 0.256..0.258 within the rounding of the printed angles and a3"
+    assert note.startswith("consistent with Eqs. 15 and 20 within the printed rounding once the "
+                           "sign of a1 is restored; the weights alone allow it (weights-only")
+    _, _, ok, note = yang2021.table1_consistency_texts(
+        _table1_row(a1_consistent=False, abs_a1_consistent=False), PRINTED)
+    assert not ok and note.startswith("not consistent") and "sign of a1" not in note
+
+
+def test_least_squares_is_never_noisier_than_the_weights():
+    rng = np.random.default_rng(5)
+    lo, hi = np.array(list(SP.PAPER_BOX[:3]) + [(0.1, 3.0)]).T
+    layouts = {f"r{i}": lo + rng.random(4) * (hi - lo) for i in range(6)}
+    band = np.arange(2, 21)
+    tab = yang2021.least_squares_vs_weighted(layouts, band)
+    assert tab.layout.tolist() == list(layouts)          # Gauss-Markov, row by row
+    assert (tab.worst_q2_least_squares <= tab.worst_q2_weighted * (1 + 1e-9)).all()
+    assert (tab.mean_q2_least_squares <= tab.mean_q2_weighted * (1 + 1e-9)).all()
+    x = layouts["r0"]
+    q2 = SP.transfer(x[:3], SP.full_weights(x[:3], x[3]), band)
+    assert tab.worst_q2_weighted[0] == q2.max() and tab.mean_q2_weighted[0] == q2.mean()
+
+
+def test_the_speed_figure_closes_and_offsets_the_first_measurement_of_each_speed():
+    theta = np.linspace(0, 2 * np.pi, 8, endpoint=False)
+    curves = np.arange(2 * 3 * 8, dtype=float).reshape(2, 3, 8)
+    fig = yang2021.speed_curves_figure(theta, curves, np.zeros(8), offset=3.0, speeds=[600, 900],
+                                       title="Fig. 19", colours=plt.get_cmap("tab10"))
+    true, *by_speed = fig.axes[0].get_lines()
+    assert true.get_label() == "true" and np.allclose(true.get_ydata(), 3.0)
+    assert [ln.get_label() for ln in by_speed] == ["600 r/min", "900 r/min"]
+    assert np.allclose(by_speed[1].get_ydata(), np.r_[curves[1, 0], curves[1, 0, 0]] + 3)
+    assert len(by_speed[0].get_xdata()) == 9
+    plt.close(fig)
+
+
+def test_the_ranges_statement_counts_the_orders_above_the_band():
+    sweep = pd.DataFrame({"k": np.arange(2, 13),
+                          "H_best_known": [0.3, 0.29, 0.26, 0.25, 0.26, 0.28, 0.26, 0.25, 0.27,
+                                           0.26, 0.25]})
+    ours, ok, note = yang2021.ranges_statement(sweep, np.array([20, 30]), np.array([0.26, 0.2745]),
+                                               k_tab=4, band_text="0.273")
+    # above 0.273 + 0.0005: k = 7 (0.28) and 30 (0.2745); 0.27 at k = 10 is inside
+    assert not ok
+    assert ours == ("best known H in the ranges within Fig. 10's band (<= 0.273) at 9 of 11 "
+                    "orders k = 4..12 and 20 30; above it at k = 7 30")
+    assert note.startswith("within 12.0 % of 1/4 there; below Table 1's smallest order the "
+                           "ranges give up to 0.300 (k = 2; above the band at k = 2 3); Table "
+                           "1's second part (k = 20..30) is lost")
+    ours, ok, _ = yang2021.ranges_statement(sweep[sweep.k != 7], np.array([20]), np.array([0.26]),
+                                            k_tab=4, band_text="0.273")
+    assert ok and "above it" not in ours

@@ -78,8 +78,8 @@ def test_only_angular_errors_move_the_tool_axis():
              "z": rng.uniform(-275, 275, 4), "A": rng.uniform(-2.2, 2.2, 4),
              "C": rng.uniform(0, 6.2, 4)}
     sd = np.array([5e-3 if e.translational else 1.6e-5 for e in machine.catalogue])
-    s = linear_indices(machine.jacobian(poses), sd)
-    for p in s:
+    s = linear_indices(machine.jacobian(poses), sd=sd)
+    for p in s.swapaxes(-1, -2):                       # components x errors, as Table 2
         d = zheng2024.group_shares(p, machine.catalogue, COMP)
         assert (d.translational[3:] < 1e-12).all()
         assert (d.translational[:3] > 0.05).all()      # but they do move the tool tip
@@ -115,3 +115,75 @@ def test_table3_printed_arithmetic():
     assert parts == pytest.approx(tot["PCE"])
     for m, key in (("MCS", "time_reduction_vs_mcs"), ("LHS", "time_reduction_vs_lhs")):
         assert round(100 * (1 - tot["PCE"] / tot[m]), 1) == float(facts[key])
+
+
+def test_table_indices_are_the_library_indices_laid_out_as_table_2():
+    machine = build("ac_double_turntable")
+    sd = np.array([5e-3 if e.translational else 1.6e-5 for e in machine.catalogue])
+    jac = machine.jacobian({"x": [10.0, 80.0], "y": 40.0, "z": 60.0, "A": 0.6, "C": 1.1})
+    tab = zheng2024.table_indices(jac, sd=sd)
+    assert tab.shape == (2, 6, 41)
+    assert np.allclose(tab.sum(-1), 1.0)                   # a component's row sums to 1
+    # the same numbers as the library's (errors, components) array, transposed
+    assert np.array_equal(tab, linear_indices(jac, sd=sd).transpose(0, 2, 1))
+    # by hand, for one entry: J^2 sd^2 over the component's sum
+    j = jac[1, 3] ** 2 * sd**2
+    assert tab[1, 3, 7] == pytest.approx(j[7] / j.sum(), rel=1e-13)
+
+
+def test_pce_fit_quality_lists_each_component_in_order():
+    from types import SimpleNamespace
+
+    fits = {k: SimpleNamespace(coef=np.ones(k + 1), n_candidates=100 + k, loo=10.0 ** -k)
+            for k in (1, 0)}                              # any key order: rows follow comps
+    d = zheng2024.pce_fit_quality(fits, ["Px", "Py"])
+    assert list(d.columns) == ["component", "terms_kept", "basis_size", "corrected_LOO"]
+    assert d.component.tolist() == ["Px", "Py"] and d.terms_kept.tolist() == [1, 2]
+    assert d.basis_size.tolist() == [100, 101] and d.corrected_LOO.tolist() == [1.0, 0.1]
+
+
+def test_key_relative_difference_is_relative_to_the_sampled_value():
+    names = ["a", "b", "c"]
+    pce = np.array([[0.5, 0.3, 0.2], [0.1, 0.1, 0.8]])
+    st = {"PCE": pce, "MCS": pce.copy(), "LHS": pce.copy()}
+    keys = {("Px", "a"), ("Py", "c")}
+    assert zheng2024.key_relative_difference(st, keys=keys, comps=["Px", "Py"], names=names) == 0
+    st["LHS"][1, 2] = 0.64                                 # 0.8 / 0.64 - 1 = 25 %
+    st["MCS"][0, 0] = 0.55                                 # |0.5 / 0.55 - 1| = 9.1 %
+    st["MCS"][0, 1] = 0.01                                 # not a key error: left out
+    got = zheng2024.key_relative_difference(st, keys=keys, comps=["Px", "Py"], names=names)
+    assert got == pytest.approx(0.25, rel=1e-12)
+    got = zheng2024.key_relative_difference(st, keys=keys, comps=["Px", "Py"], names=names,
+                                            against=("MCS",))
+    assert got == pytest.approx(0.05 / 0.55, rel=1e-12)
+    with pytest.raises(ValueError, match="at least one key error"):
+        zheng2024.key_relative_difference(st, keys=set(), comps=["Px", "Py"], names=names)
+
+
+def test_published_relative_difference_takes_the_larger_of_the_two_columns():
+    t2 = pd.DataFrame({"pce": [0.10, 0.20, 0.30], "mcs": [0.10, 0.25, 0.30],
+                       "lhs": [0.11, 0.20, 0.30]})
+    rel, worst = zheng2024.published_relative_difference(t2)
+    assert rel.to_numpy() == pytest.approx([1 - 0.10 / 0.11, 0.2, 0.0], rel=1e-12)
+    assert worst == 1
+    rel, worst = zheng2024.published_relative_difference(t2.iloc[[2]])   # all equal: first row
+    assert worst == 0 and rel.max() == 0
+
+
+def test_fig7_texts_give_both_readings_of_eq_24():
+    assert zheng2024.both_sizes("from 500", "not reached") == (
+        "from 500 (R at the larger size), not reached (at the smaller)")
+    idx = pd.MultiIndex.from_tuples([(m, rd, "d_xc") for m in ("LHS", "MCS")
+                                     for rd in zheng2024.READINGS],
+                                    names=["method", "reading", "symbol"])
+    txt = pd.DataFrame({"R at the larger size": ["from 1", "from 2", "from 500", "from 1000"],
+                        "R at the smaller size": ["x", "y", "from 200", "not reached"]}, idx)
+    assert zheng2024.convergence_text(txt, method="MCS", symbol="d_xc") == (
+        "base samples: from 500 (R at the larger size), from 200 (at the smaller); "
+        "model runs: from 1000 (R at the larger size), not reached (at the smaller)")
+    idx = pd.MultiIndex.from_tuples([("MCS", rd, s) for rd in zheng2024.READINGS
+                                     for s in ("d_xc", "d_yc")])
+    r = pd.DataFrame({1000: [12.0, 3.04, 1.0, 2.0], 2000: [4.0, 8.96, np.nan, 5.52]}, idx)
+    assert zheng2024.fluctuation_text(r, method="MCS") == (
+        "base samples: 3.0 to 12.0 % (R at the larger size), 4.0 to 9.0 % (at the smaller); "
+        "model runs: 1.0 to 2.0 % (R at the larger size), 5.5 to 5.5 % (at the smaller)")

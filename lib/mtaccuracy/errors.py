@@ -25,6 +25,70 @@ UNIT_SCALE = {"um": 1e-3, "mm": 1.0, "rad": 1.0, "urad": 1e-6, "um/m": 1e-6,
 
 _ROT = {"x": "A", "y": "B", "z": "C"}
 
+#: The six ISO 230-1 error components: translations along x, y, z, rotations about x, y, z.
+ISO_COMPONENTS = "XYZABC"
+
+
+def iso_code(component: str, axis: str, *, zero: bool = False) -> str:
+    """The ISO 230-1 code of an error: ``E``, the component, ``0`` for an axis line, the axis.
+
+    The library's one maker of codes (the catalogues here and :func:`mtaccuracy.machines.chain.
+    iso_catalogue` use it; ``data/iso230_names.csv`` is checked against it by the tests).
+
+    Parameters
+    ----------
+    component : str
+        What the error displaces: ``X``, ``Y``, ``Z`` (a translation along it) or ``A``, ``B``,
+        ``C`` (a rotation about x, y, z); lower case is accepted.
+    axis : str
+        The axis it belongs to (``X Y Z A B C``).
+    zero : bool
+        True for an error of the axis line itself (a squareness or location error), which ISO
+        230-1 writes with a ``0`` (``EC0Y``: squareness of Y about z); False for an error motion.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> iso_code("x", "z"), iso_code("C", "Y", zero=True)
+    ('EXZ', 'EC0Y')
+    """
+    c, a = str(component).upper(), str(axis).upper()
+    if len(c) != 1 or c not in ISO_COMPONENTS or len(a) != 1 or a not in ISO_COMPONENTS:
+        raise ValueError(f"an ISO 230-1 code needs a component and an axis among "
+                         f"{ISO_COMPONENTS}, got {component!r}, {axis!r}")
+    return f"E{c}{'0' if zero else ''}{a}"
+
+
+def squareness_code(reference: str, axis: str) -> str:
+    """The ISO 230-1 code of the squareness of linear ``axis`` to ``reference`` (``EC0Y``).
+
+    The axis is tilted about the normal of the plane of the two axes.
+
+    Parameters
+    ----------
+    reference, axis : str
+        Two different linear axes (``X``, ``Y``, ``Z``); ``reference`` is the one taken as
+        square.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> squareness_code("X", "Y"), squareness_code("Y", "Z"), squareness_code("X", "Z")
+    ('EC0Y', 'EA0Z', 'EB0Z')
+    """
+    r, a = str(reference).upper(), str(axis).upper()
+    if r == a or not {r, a} <= set("XYZ"):
+        raise ValueError(f"squareness needs two different linear axes, got {reference!r}, "
+                         f"{axis!r}")
+    normal = 3 - "XYZ".index(r) - "XYZ".index(a)
+    return iso_code("ABC"[normal], a, zero=True)
+
 
 @dataclass(frozen=True)
 class ErrorSpec:
@@ -67,9 +131,9 @@ class ErrorSpec:
 
 def _motion(kind: str, direction: str, axis: str, angular_unit: str) -> ErrorSpec:
     if kind == "angular":
-        return ErrorSpec(f"e{direction}({axis})", f"E{_ROT[direction]}{axis.upper()}", kind,
+        return ErrorSpec(f"e{direction}({axis})", iso_code(_ROT[direction], axis), kind,
                          axis, direction, False, True, angular_unit)
-    return ErrorSpec(f"d{direction}({axis})", f"E{direction.upper()}{axis.upper()}", kind, axis,
+    return ErrorSpec(f"d{direction}({axis})", iso_code(direction, axis), kind, axis,
                      direction, True, True, "um")
 
 
@@ -102,9 +166,12 @@ def three_axis_catalogue(angular_unit: str = "rad") -> tuple[ErrorSpec, ...]:
             for a, d in (("x", "y"), ("x", "z"), ("y", "x"), ("y", "z"), ("z", "x"), ("z", "y"))]
     cat += [_motion("angular", d, a, angular_unit) for a in "xyz" for d in "xyz"]
     cat += [
-        ErrorSpec("S_xy", "EC0Y", "squareness", "xy", "z", False, False, "um/m"),
-        ErrorSpec("S_yz", "EA0Z", "squareness", "yz", "x", False, False, "um/m"),
-        ErrorSpec("S_xz", "EB0Z", "squareness", "xz", "y", False, False, "um/m"),
+        ErrorSpec("S_xy", squareness_code("X", "Y"), "squareness", "xy", "z", False, False,
+                  "um/m"),
+        ErrorSpec("S_yz", squareness_code("Y", "Z"), "squareness", "yz", "x", False, False,
+                  "um/m"),
+        ErrorSpec("S_xz", squareness_code("X", "Z"), "squareness", "xz", "y", False, False,
+                  "um/m"),
     ]
     return tuple(cat)
 
@@ -115,10 +182,12 @@ def symbols(catalogue: tuple[ErrorSpec, ...]) -> list[str]:
     Parameters
     ----------
     catalogue : tuple of ErrorSpec
+        A catalogue (:func:`three_axis_catalogue`, a machine's ``catalogue``).
 
     Returns
     -------
     list of str
+        The symbols in catalogue order: the column order of the error arrays.
     """
     return [e.symbol for e in catalogue]
 

@@ -13,6 +13,9 @@ The sparse-PCE benchmarks (issue 13) run the same cases, on the same samples, th
 (``FunctionalChaosAlgorithm``, LARS with corrected LOO, the Legendre basis at a fixed degree),
 an optional dependency of the bench only: without it those rows say so and the rest runs.  Each
 prints the time and the largest error of S1 and ST against the exact indices.
+
+Local imports: each task imports what it measures inside its function, so that its time and
+memory are its own (a task runs in a process of its own).
 """
 
 from __future__ import annotations
@@ -80,7 +83,7 @@ def task_guo_spearman():
     b = errors.uniform_bounds(m.catalogue, {"positioning": (0, 3), "straightness": (0, 4),
                                             "angular": (0, 3.2e-5), "squareness": (0, 1.9)})
     pose = dict(x=100.0, y=100.0, z=100.0)
-    d = sensitivity.repeated_latin_hypercube(500, b, 200, 2)
+    d = sensitivity.repeated_latin_hypercube(500, b, repeats=200, seed=2)
     y = sensitivity.position_outputs(m.pose_error(d.reshape(-1, 21), pose)).reshape(200, 500, 4)
     t, _ = _min_time(lambda: sensitivity.spearman(d, y))
     return dict(time=t, note="")
@@ -98,7 +101,7 @@ def _zheng_pce(components):
     from .. import sensitivity as S
 
     m, sd, pose = _zheng()
-    u = S.base_samples(1000, 41, "lhs", 1)[0]
+    u = S.base_samples(1000, 41, method="lhs", seed=1)[0]
     xi = S.from_unit_normal(u, np.ones(41))
     yv = m.pose_error(xi * sd, pose)
 
@@ -124,13 +127,14 @@ def task_zheng_mcs():
     from .. import sensitivity as S
 
     m, sd, pose = _zheng()
-    design = S.SobolDesign(100_000, 41, "mc", 2, to_inputs=lambda u: S.from_unit_normal(u, sd))
+    design = S.SobolDesign(100_000, 41, method="mc", seed=2,
+                           to_inputs=lambda u: S.from_unit_normal(u, sd))
 
     def run():   # sampling included; streamed: the base rows and AB runs are never all held
         return S.sobol_indices(lambda z: m.pose_error(z, pose), design, chunk=250_000)
     t, (s1, st) = _min_time(run)
-    lin = S.linear_indices(m.jacobian(pose), sd)[0]
-    return dict(time=t, note=f"largest |ST - linear closed form| {np.abs(st.T - lin).max():.1e}")
+    lin = S.linear_indices(m.jacobian(pose), sd=sd)[0]
+    return dict(time=t, note=f"largest |ST - linear closed form| {np.abs(st - lin).max():.1e}")
 
 
 #: base rows N of the memory-against-N rows (the last only without --quick)
@@ -146,13 +150,14 @@ def _sobol_memory(n: int) -> dict:
 
     m, sd, pose = _zheng()
     jac = m.jacobian(pose).reshape(6, 41)
-    design = S.SobolDesign(n, 41, "mc", 2, to_inputs=lambda u: S.from_unit_normal(u, sd))
+    design = S.SobolDesign(n, 41, method="mc", seed=2,
+                           to_inputs=lambda u: S.from_unit_normal(u, sd))
     t0 = time.perf_counter()
     s1, st = S.sobol_indices(lambda e: e @ jac.T, design, chunk=250_000)
     t = time.perf_counter() - t0
-    exact = S.linear_indices(jac, sd)             # (6, 41), exact for a linear model: S1 = ST
-    return dict(time=t, err_s1=float(np.abs(s1.T - exact).max()),
-                err_st=float(np.abs(st.T - exact).max()),
+    exact = S.linear_indices(jac, sd=sd)             # (41, 6), exact for a linear model: S1 = ST
+    return dict(time=t, err_s1=float(np.abs(s1 - exact).max()),
+                err_st=float(np.abs(st - exact).max()),
                 note=f"one run; {n * 43 / t / 1e6:.1f} M runs/s")
 
 
@@ -170,14 +175,14 @@ def task_zheng_linear_pose():
                 out = fn()
             return out
         return run
-    t, s = _min_time(each(lambda: S.linear_indices(m.jacobian(pose), sd)))
+    t, s = _min_time(each(lambda: S.linear_indices(m.jacobian(pose), sd=sd)))
     t_jac, jac = _min_time(each(lambda: m.jacobian(pose)))
-    t_idx, _ = _min_time(each(lambda: S.linear_indices(jac, sd)))
+    t_idx, _ = _min_time(each(lambda: S.linear_indices(jac, sd=sd)))
     return dict(time=t / loop,
                 note=f"{t / loop * 1e3:.3f} ms per call (loop of {loop} timed); of it Jacobian "
                      f"{t_jac / loop * 1e3:.3f} "
-                     f"ms, indices {t_idx / loop * 1e6:.0f} us; {s.shape[-1]} x "
-                     f"{s.shape[-2]} indices")
+                     f"ms, indices {t_idx / loop * 1e6:.0f} us; {s.shape[-2]} x "
+                     f"{s.shape[-1]} indices")
 
 
 def task_zheng_linear_atlas():
@@ -187,7 +192,7 @@ def task_zheng_linear_atlas():
     rng = np.random.default_rng(0)
     poses = {k: rng.uniform(lo, hi, 10_000) for k, (lo, hi) in m.travels.items()}
     var = sd**2
-    t, s = _min_time(lambda: S.indices_at_poses(m.jacobian(poses), var))
+    t, s = _min_time(lambda: S.indices_at_poses(m.jacobian(poses), var=var))
     t_jac, jac = _min_time(lambda: m.jacobian(poses))
     return dict(time=t, note=f"{len(s) / t / 1e3:.0f} k poses/s; of it Jacobian "
                              f"{t_jac * 1e3:.0f} ms; output {s.shape}")
@@ -224,10 +229,11 @@ def _task_ours(name, method):
     from ..sensitivity import pce as P
 
     b, x, y, degrees, _, _ = _case(name)
-    inp = P.ChaosInputs(b.marginals)
+    inp = b.inputs
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", P.PoorFitWarning)
-        t, res = _min_time(lambda: P.fit_sparse_pce(x, y, inp, degrees=degrees, method=method))
+        t, res = _min_time(lambda: P.fit_sparse_pce(x, y, inputs=inp, degrees=degrees,
+                                                    method=method))
     f = res.fit
     return dict(time=t, **_errors(b, res.s1, res.st),
                 note=f"degree {f.degree}, q {f.q_norm:g}, {len(f.coef)} terms of {f.n_candidates}"
@@ -243,7 +249,7 @@ def _task_openturns(name):
                                             "skipped")
     b, x, y, _, degree, repeat = _case(name)
     d = x.shape[1]
-    dists = [ot.Uniform(*m.support()) for m in b.marginals]
+    dists = [ot.Uniform(*m.support()) for m in b.inputs.marginals]
 
     def run():
         enum = ot.HyperbolicAnisotropicEnumerateFunction(d, 1.0)

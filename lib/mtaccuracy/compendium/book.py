@@ -31,6 +31,9 @@ The site is written to ``build/book/html`` (a fresh build in ``build/book/.html-
 then moved in place, so a killed build never leaves half a site); its pages' source goes to
 ``build/book/src``.  Both folders are the build's own (a marker file says so): a folder of that
 name without the marker is never deleted or overwritten.
+
+Local imports: Sphinx, itables and MathJax are imported when the book is built, so that
+the checks of the outputs against their provenance run without them.
 """
 
 from __future__ import annotations
@@ -48,6 +51,8 @@ from pathlib import Path
 
 import pandas as pd
 import yaml
+
+import mtaccuracy
 
 from . import parameters, paths, provenance, reproduction
 from .plotting import unit_symbol
@@ -321,8 +326,6 @@ def scorecard_page(cards: pd.DataFrame) -> str:
 
 def api_modules() -> list[str]:
     """The library's public modules (the science layer), for the reference."""
-    import mtaccuracy
-
     mods = []
     for m in pkgutil.walk_packages(mtaccuracy.__path__, "mtaccuracy."):
         name = m.name

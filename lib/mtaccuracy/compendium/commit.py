@@ -150,7 +150,7 @@ class Result:
 @contextlib.contextmanager
 def _locked():
     """The checkout's commit lock (released by the kernel when the process dies)."""
-    import fcntl
+    import fcntl  # POSIX only: imported where the lock is taken, so the module imports anywhere
 
     d = journal_dir()
     d.mkdir(parents=True, exist_ok=True)

@@ -40,23 +40,28 @@ loads nothing from outside 127.0.0.1.
 Safety: the server listens on ``127.0.0.1`` only (:func:`check_address` refuses any other
 address, ``0.0.0.0`` included) and accepts websocket connections only from pages served at
 ``127.0.0.1:<port>`` or ``localhost:<port>``.
+
+Local imports: Panel and Bokeh (seconds to import) are imported by the functions that build
+the app, so that the model, the bench and the tests import this module at once.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import functools
 import html
 import os
 import shlex
 import socket
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 from . import explore_model as M
-from . import xu2022
+from . import paths, xu2022
 from .plotting import unit_symbol
 
 __all__ = ["LOOPBACK", "create_app", "check_address", "free_port", "serve", "main"]
@@ -105,8 +110,6 @@ def _unlocked(method):
     """Run a widget callback inside ``pn.io.unlocked()``: it changes Bokeh models (sources,
     ranges), which Bokeh allows only under the document's lock, and Panel runs some callbacks
     without it (a text input's Enter key); outside a server it does nothing."""
-    import functools
-
     @functools.wraps(method)
     def run(*args, **kwargs):
         import panel as pn
@@ -118,10 +121,6 @@ def _unlocked(method):
 
 def _shown_path(source: str) -> str:
     """A data folder as the reader knows it: relative to the repository when inside it."""
-    from pathlib import Path
-
-    from . import paths
-
     try:
         return str(Path(source).resolve().relative_to(paths.ROOT))
     except ValueError:

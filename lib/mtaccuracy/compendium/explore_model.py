@@ -181,21 +181,9 @@ class MachineSetup:
 
 
 def _rong_half_ranges(machine, range_factor: float = 2.0) -> np.ndarray:
-    """Notebook 02's ranges: +- ``range_factor`` x the acceptance value of each error in
-    ``data/rong/error_ranges.csv`` (mm, rad)."""
-    import pandas as pd
-
-
-    path = paths.DATA / "rong" / "error_ranges.csv"
-    acc = pd.read_csv(path, dtype={"symbol": str}).set_index("symbol")
-    missing = [s for s in machine.error_names if s not in acc.index]
-    if missing:
-        raise ValueError(f"{path}: no range for {missing}")
-    acc = acc.loc[machine.error_names]
-    scale = acc.unit.map(_errors.UNIT_SCALE)
-    if scale.isna().any() or (acc.acceptance_value <= 0).any():
-        raise ValueError(f"{path}: units must be in {sorted(_errors.UNIT_SCALE)} and values > 0")
-    return range_factor * acc.acceptance_value.to_numpy(float) * scale.to_numpy(float)
+    """Notebook 02's ranges: +- ``range_factor`` x the acceptance band of each error in
+    ``data/rong/error_ranges.csv`` (mm, rad), read as the notebook reads it."""
+    return range_factor * _chain.read_ranges(paths.DATA / "rong" / "error_ranges.csv", machine)[1]
 
 
 def _guo_half_ranges(machine) -> np.ndarray:
@@ -428,11 +416,11 @@ def indices_at_pose(setup: MachineSetup, values: Mapping[str, float] | None = No
     sd = error_half_ranges(setup, position_um=position_um,
                            angular_arcsec=angular_arcsec) / np.sqrt(3.0)
     jac = setup.machine.jacobian(pose_of(setup, values))          # (1, q, d)
-    idx = S.linear_indices(jac, sd)[0]                                   # (q, d)
+    idx = S.linear_indices(jac, sd=sd)[0]                                   # (d, q)
     first = S.first_order_outputs(jac, sd**2)[0]
-    idx[~first] = 0.0
+    idx[:, ~first] = 0.0
     out_sd = np.sqrt((jac[0] ** 2 * sd**2).sum(-1))
-    return PoseIndices(idx.T.copy(), first, out_sd, setup.names, setup.outputs)
+    return PoseIndices(idx, first, out_sd, setup.names, setup.outputs)
 
 
 def top_errors(result: PoseIndices) -> list[tuple[str, str, float]]:
@@ -549,7 +537,7 @@ def dominant_map(setup: MachineSetup, values: Mapping[str, float] | None = None,
                             angular_arcsec=angular_arcsec) ** 2 / 3.0
     jac = setup.machine.jacobian(pose_of(setup, grid))            # (G, q, d)
     dom = S.dominant_errors(jac, var)                                    # (G, q)
-    idx = S.indices_at_poses(jac, var)                                   # (G, d, q)
+    idx = S.indices_at_poses(jac, var=var)                                   # (G, d, q)
     top = np.take_along_axis(idx, np.maximum(dom, 0)[:, None, :], axis=1)[:, 0, :]
     top = np.where(dom >= 0, top, 0.0)
     shape = (steps, steps, len(setup.outputs))

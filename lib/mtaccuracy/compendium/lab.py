@@ -49,6 +49,8 @@ written in Python are run by the check as jupyter runs them.
 The one way past the checks is the environment variable ``LAB_UNSAFE`` set to exactly ``yes``
 (``make lab LAB_UNSAFE=yes LAB_ARGS="--ip=0.0.0.0"``): the notebooks run code, so only do this
 on a network you trust.
+
+Local imports: JupyterLab's server classes are imported when ``make lab`` starts it.
 """
 
 from __future__ import annotations

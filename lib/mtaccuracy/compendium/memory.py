@@ -372,7 +372,7 @@ def limits(*, proc_root="/proc", cgroup_root="/sys/fs/cgroup") -> list[Limit]:
     """
     out = []
     try:
-        import psutil
+        import psutil  # optional here: without it the other limits still apply
 
         out.append(Limit(float(psutil.virtual_memory().available), "available memory"))
     except Exception:  # no psutil, or a platform it cannot read: that limit is unknown

@@ -179,7 +179,7 @@ def read(folder) -> dict:
 
 def from_png(path) -> dict:
     """The provenance record stamped into a PNG (or {})."""
-    from PIL import Image
+    from PIL import Image  # Pillow: only where a PNG is read or written
 
     with Image.open(path) as im:
         text = im.info.get("mtaccuracy:provenance")
@@ -219,7 +219,7 @@ def output_problem(path: Path, side: dict) -> str | None:
                 else "is missing")
     # Pillow here, not at the top: make's recovery step (commit.py) imports this module with
     # the system's Python, before .venv exists
-    from PIL import Image
+    from PIL import Image  # Pillow: only where a PNG is read or written
 
     try:
         if path.suffix == ".png":

@@ -123,7 +123,8 @@ def range_path_study(machine, half_a, half_b, ts, *, unit_rows, workspace_mm, to
     for t in np.asarray(ts, dtype=float):
         h = ha ** (1 - t) * hb ** t
         _, st = linear_sobol_indices(machine, np.vstack([-h, h]), pose=tool, pose_bounds=box)
-        sets = S.key_errors_by_output(ranked(st), names, list(outputs), threshold)
+        sets = S.key_errors_by_output(ranked(st), names=names, outputs=list(outputs),
+                                      threshold=threshold)
         union = S.union_key_set(sets, names)
         x = S.from_unit_uniform(np.asarray(unit_rows), np.hstack([np.vstack([-h, h]), pose_b]))
         full = model(x)
@@ -180,6 +181,76 @@ def check_sweeps(*, workspace_mm, tool_offset_mm, sweep_thresholds, tool_lengths
         raise ParameterError(f"sweep_thresholds gives {n_sweep} thresholds; at most 200 "
                              f"(raise the step)")
     return n_sweep
+
+
+def range_bracket_figure(path, *, outputs, n_key_pub: int, n_kept_by_rate: int, rate_pub: float,
+                         residual_mm_pub: float, full_mm_pub: float, residual_pct_text,
+                         threshold: float, published_colour: str, reproduced_colour: str):
+    """The figure of the key errors between two range sets (notebook 02, Section 8).
+
+    Two panels along the path of :func:`range_path_study`: the counts per output and their
+    union (the two sourced sets, its first and last rows, marked and annotated) beside the
+    published count and the count the published rate implies; and the relative residual of
+    the reduced model beside the published ratio (``residual_mm_pub / full_mm_pub``) and the
+    text's percentage.
+
+    Parameters
+    ----------
+    path : DataFrame (T, ...)
+        :func:`range_path_study`'s table: ``t``, ``n_key_<output>``, ``n_key`` and
+        ``residual_relative`` (a ratio).
+    outputs : list of str
+        The output names (``Ex Ey Ez``).
+    n_key_pub : int
+        The published number of key errors.
+    n_kept_by_rate : int
+        The number of key errors the published simplification rate implies.
+    rate_pub : float
+        The published simplification rate (%).
+    residual_mm_pub : float
+        The published bound of the reduced model's residual (mm).
+    full_mm_pub : float
+        The published largest absolute full-model prediction (mm).
+    residual_pct_text : str or float
+        The text's bound of the relative residual (%), drawn as printed.
+    threshold : float
+        The share of the 90 % rule (title).
+    published_colour, reproduced_colour : str
+        Colours of the published values and of the two sourced sets.
+
+    Returns
+    -------
+    matplotlib Figure
+    """
+    import matplotlib.pyplot as plt  # the compendium extra, an optional heavy dependency
+
+    ends = path.iloc[[0, -1]]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 3.8))
+    for o in outputs:
+        axes[0].step(path.t, path[f"n_key_{o}"], where="mid", lw=1, label=o)
+    axes[0].step(path.t, path.n_key, where="mid", color="k", lw=2, label="union")
+    axes[0].plot(ends.t, ends.n_key, "o", ms=8, color=reproduced_colour,
+                 label="the two sourced sets")
+    for t, n in zip(ends.t, ends.n_key, strict=True):
+        axes[0].annotate(f"{n}", (t, n), textcoords="offset points", xytext=(8 - 22 * t, 4))
+    axes[0].axhline(n_key_pub, color=published_colour, ls="--", lw=1,
+                    label=f"published: {n_key_pub}")
+    axes[0].axhline(n_kept_by_rate, color=published_colour, ls=":", lw=1,
+                    label=f"implied by the published {rate_pub:g} %: {n_kept_by_rate}")
+    axes[0].set_ylabel("number of key errors")
+    axes[1].plot(path.t, 100 * path.residual_relative, "-o", ms=3, color="k", label="ours")
+    axes[1].axhline(100 * (residual_mm_pub / full_mm_pub), color=published_colour, ls="--", lw=1,
+                    label=f"published {residual_mm_pub:g} / {full_mm_pub:g} mm")
+    axes[1].axhline(float(residual_pct_text), color=published_colour, ls=":", lw=1,
+                    label=f"text: within {residual_pct_text} %")
+    axes[1].set_ylabel("max |residual| / max |full model| (%)")
+    for ax in axes:
+        ax.set_xlabel("t: 0 = borrowed ranges (GB/T 20957.2), 1 = Zheng 2024's (±15 µm, ±10″)")
+        ax.legend(fontsize=7)
+    fig.suptitle(f"Key errors ({threshold:.0%} rule) and reduced-model residual between two "
+                 "defensible range sets (tool tip uniform over the workspace)")
+    fig.tight_layout()
+    return fig
 
 
 def tool_length_figure(t_len, tool_study, key_tool, *, names, outputs, no_effect,
@@ -327,7 +398,7 @@ def linear_sobol_indices_batch(machine, bounds, *, poses: Mapping | None = None,
         The output variance in mm^2, pooled over the box.
     """
     mean, var = S.uniform_moments(bounds, machine.n_errors)
-    return S.pose_box_indices(machine.jacobian, mean, var, poses=poses,
+    return S.pose_box_indices(machine.jacobian, mean=mean, var=var, poses=poses,
                               pose_bounds=pose_bounds, components=components, nodes=2,
                               names=machine.axes + machine.tool_offsets, required=machine.axes)
 
@@ -355,7 +426,7 @@ def linear_indices_at_poses(machine, bounds, *, poses: Mapping, components: int 
     array (P, 21, components)
     """
     _, var = S.uniform_moments(bounds, machine.n_errors)
-    return S.indices_at_poses(machine.jacobian(poses)[:, :components], var)
+    return S.indices_at_poses(machine.jacobian(poses)[:, :components], var=var)
 
 
 def tool_length_offsets(tool_lengths, base=(0.0, 0.0, 0.0)) -> dict[str, np.ndarray]:

@@ -36,6 +36,9 @@ takes a folder outside the repository and goes through the same checks, staging 
 
 ``all`` runs the notebooks two at a time on a machine with two cores or more (each kernel with
 one BLAS thread, so that they do not compete), the longest first.
+
+Local imports: papermill and nbformat (slow to import) are imported when a notebook runs,
+so that ``--check``, ``--list`` and Ctrl-C answer at once.
 """
 
 from __future__ import annotations

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
-__all__ = ["check_run", "experiment_genes", "experiment_inputs", "ga_settings_study",
-           "single_run_speedups"]
+__all__ = ["check_run", "eq17_sign_check", "experiment_genes", "experiment_inputs",
+           "ga_settings_study", "least_squares_vs_weighted", "mappings_and_conventions",
+           "noise_transfer_figure", "ranges_statement", "single_run_speedups",
+           "speed_curves_figure", "table1_consistency_texts"]
 
 import itertools
 
@@ -296,3 +298,295 @@ def single_run_speedups(improved, traditional):
     gt = np.asarray(traditional, float)
     gt = gt[gt > 0][None, :]
     return (100 * (1 - gi / gt)).ravel()
+
+
+def mappings_and_conventions(profile, delta, *, phi, weights, positions):
+    """Section 1.3's simulation under every mapping and first-harmonic convention: means, errors.
+
+    The printed set profile and scalar rotation error are turned into probe signals under each
+    mapping of :data:`~mtaccuracy.spindle.MAPPINGS` (the paper does not say which) and separated
+    under both first-harmonic conventions; the means the paper prints beside Figs. 6-7 and the
+    largest differences from the set curves, for every pair.
+
+    Parameters
+    ----------
+    profile : array (N,)
+        The set profile (um), sampled uniformly over one revolution.
+    delta : array (N,)
+        The set scalar rotation error (um).
+    phi : array (4,)
+        Probe angles (rad), the first 0.
+    weights : array (4,)
+        The weights a_0..a_3 (Eq. 5).
+    positions : sequence of 4 int
+        Probe sample positions p_0..p_3.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per mapping and convention (``mapping``, ``convention``): ``mean_set_profile``,
+        ``mean_separated`` (no first harmonic), ``mean_reconstructed``, ``mean_set_error``,
+        ``mean_separated_error``, ``max_profile_error`` and ``max_error_motion_error`` (um).
+    """
+    rows = []
+    for mp in sp.MAPPINGS:
+        dxm, dym, inv = sp.motion_from_scalar(delta, mp)
+        y_m = sp.probe_signals(profile, dxm, dym, positions)
+        for conv in ("radial", "eccentricity"):
+            s_m = sp.separate_details(y_m, phi, weights, first_harmonic=conv)
+            d_m = inv(s_m.dx, s_m.dy)
+            rows.append(dict(mapping=mp, convention=conv, mean_set_profile=profile.mean(),
+                             mean_separated=s_m.profile_no_first.mean(),
+                             mean_reconstructed=s_m.profile.mean(), mean_set_error=delta.mean(),
+                             mean_separated_error=d_m.mean(),
+                             max_profile_error=np.abs(s_m.profile - profile).max(),
+                             max_error_motion_error=np.abs(d_m - delta).max()))
+    return pd.DataFrame(rows)
+
+
+def eq17_sign_check(theta, phi, weights, *, k: int, a: float, b: float):
+    """Eq. 17 as printed, with its sign fixed, and the exact inverse, on one known harmonic.
+
+    The weighted signal of a profile ``a cos k theta + b sin k theta`` is built under Eq. 11's
+    convention ``r(theta + phi)`` and under the one Eq. 13's coefficients belong to,
+    ``r(theta - phi)``; its Fourier coefficients ``F_k, G_k`` (normalised as in Eq. 17,
+    ``2/N sum``) are inverted three ways: Eq. 17 as printed, ``-(lambda F + mu G)/|Lambda|^2``
+    and ``(mu F - lambda G)/|Lambda|^2``; with its sign fixed; and the exact inverse of each
+    convention (under Eq. 11's, ``mu`` changes sign).
+
+    Parameters
+    ----------
+    theta : array (N,)
+        Sample angles (rad), uniform over one revolution.
+    phi : array (4,)
+        Probe angles (rad).
+    weights : array (4,)
+        The weights a_0..a_3.
+    k : int
+        The harmonic order checked.
+    a, b : float
+        The profile's true cosine and sine coefficients A_k, B_k.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per convention (``model``): ``A_true``, ``B_true`` and the ``A_``/``B_``
+        estimates ``eq17_printed``, ``eq17_sign_fixed`` and ``inverse_of_this_model``.
+    """
+    n = len(theta)
+    lam_k = sp.eigenvalues(phi, weights, [k])[0]
+    l_, m_ = lam_k.real, lam_k.imag
+    den = l_ ** 2 + m_ ** 2
+    rows = []
+    for model, sgn in (("Eq. 11: r(theta + phi)", 1), ("Eq. 13: r(theta - phi)", -1)):
+        yk = sum(weights[j] * (a * np.cos(k * (theta + sgn * phi[j]))
+                               + b * np.sin(k * (theta + sgn * phi[j]))) for j in range(4))
+        f_k = 2 / n * (yk * np.cos(k * theta)).sum()
+        g_k = 2 / n * (yk * np.sin(k * theta)).sum()
+        fixed = ((l_ * f_k + m_ * g_k) / den, (l_ * g_k - m_ * f_k) / den)
+        exact = ((l_ * f_k - m_ * g_k) / den, (l_ * g_k + m_ * f_k) / den) if sgn == 1 else fixed
+        rows.append(dict(model=model, A_true=a, B_true=b,
+                         A_eq17_printed=-(l_ * f_k + m_ * g_k) / den,
+                         B_eq17_printed=(m_ * f_k - l_ * g_k) / den,
+                         A_eq17_sign_fixed=fixed[0], B_eq17_sign_fixed=fixed[1],
+                         A_inverse_of_this_model=exact[0], B_inverse_of_this_model=exact[1]))
+    return pd.DataFrame(rows)
+
+
+def noise_transfer_figure(harmonics, mc_var, q2, *, noise_um: float, n_samples: int, colours):
+    """Section 4's figure: each separated harmonic's noise variance against Eq. 18.
+
+    Parameters
+    ----------
+    harmonics : array (K,)
+        The harmonic orders k.
+    mc_var : array (K,)
+        Monte Carlo variance of the separated A_k, B_k (um^2).
+    q2 : array (K,)
+        The error transfer function q_k^2 at those orders.
+    noise_um : float
+        Probe noise standard deviation sigma (um).
+    n_samples : int
+        Samples per revolution N.
+    colours : tuple
+        (ours, published) colours.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The Monte Carlo points, ``2 q_k^2 sigma^2 / N`` and Eq. 18 as printed,
+        ``2 q_k^2 sigma^2``, on a log scale.
+    """
+    reproduced, published = colours
+    fig, ax = plt.subplots(figsize=(8, 3.4))
+    ax.semilogy(harmonics, mc_var, "o", ms=3, color=reproduced,
+                label="Monte Carlo var(A_k), var(B_k)")
+    ax.semilogy(harmonics, 2 * q2 * noise_um ** 2 / n_samples, "-", color="k", lw=1,
+                label="2 q_k^2 sigma^2 / N")
+    ax.semilogy(harmonics, 2 * q2 * noise_um ** 2, "--", color=published, lw=1,
+                label="Eq. 18 as printed: 2 q_k^2 sigma^2")
+    ax.set_xlabel("harmonic k")
+    ax.set_ylabel("variance (µm²)")
+    ax.set_title("Noise of each separated harmonic against the transfer function "
+                 f"(sigma = {noise_um} µm)")
+    ax.legend(fontsize=8)
+    return fig
+
+
+def table1_consistency_texts(row, printed_row):
+    """The scorecard texts of one Table 1 row's check: do the printed parameters give its H?
+
+    Parameters
+    ----------
+    row : pandas.Series
+        One row of :func:`table1_consistency`.
+    printed_row : pandas.Series
+        The same row of the published Table 1 (strings): ``H``, ``phi1_rad``..``phi3_rad``,
+        ``a1``..``a3``.
+
+    Returns
+    -------
+    printed : str
+        The printed H and parameters.
+    ours : str
+        What the printed parameters give: the weights-only bound where the printed H is below
+        it, else the range of H within the rounding of the printed angles and a3.
+    holds : bool
+        The printed H is possible for the printed weights, and the printed H and weights lie in
+        the ranges of Eqs. 15 and 20 within the printed rounding (a1 perhaps up to its sign).
+    note : str
+        Why, with the weights-only bound.
+    """
+    r, pr = row, printed_row
+    printed = (f"H = {pr.H} at phi = ({pr.phi1_rad}, {pr.phi2_rad}, {pr.phi3_rad}), "
+               f"a = (1, {pr.a1}, {pr.a2}, {pr.a3})")
+    bound_note = ("weights-only bound (1 + sum a^2) / (1 + sum |a|)^2 over every weight that "
+                  f"rounds to the printed ones: H >= {r.H_weights_only_bound:.4f} for every "
+                  "probe-angle choice")
+    if not r.H_possible_for_the_weights:
+        return (printed, "impossible: the printed weights force H >= "
+                         f"{r.H_weights_only_bound:.3f} at any angles", False, bound_note)
+    ok = bool(r.H_consistent) and (bool(r.a1_consistent) or bool(r.abs_a1_consistent)) \
+        and bool(r.a2_consistent)
+    ours = (f"H {r.H_min_within_rounding:.3f}..{r.H_max_within_rounding:.3f} within the "
+            "rounding of the printed angles and a3")
+    note = (("consistent" if ok else "not consistent")
+            + " with Eqs. 15 and 20 within the printed rounding")
+    if ok and not r.a1_consistent:
+        note += " once the sign of a1 is restored"
+    note += f"; the weights alone allow it ({bound_note})"
+    return printed, ours, ok, note
+
+
+def least_squares_vs_weighted(layouts, harmonics):
+    """The noise amplification of the paper's weighted sum against least squares over the probes.
+
+    Parameters
+    ----------
+    layouts : dict
+        Layout name -> genes ``(phi_1, phi_2, phi_3, a_3)`` (rad, rad, rad, 1); the weights
+        a_1, a_2 follow from Eq. 15.
+    harmonics : array (K,)
+        The harmonic orders compared (the protected band).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per layout, in the given order: ``layout``, the worst and the mean over
+        ``harmonics`` of q_k^2 (``worst_q2_weighted``, ``mean_q2_weighted``) and of the
+        least-squares amplification (``worst_q2_least_squares``, ``mean_q2_least_squares``).
+    """
+    rows = []
+    for name, x in layouts.items():
+        q2w = sp.transfer(x[:3], sp.full_weights(x[:3], x[3]), harmonics)
+        q2l = sp.least_squares_transfer(x[:3], harmonics)
+        rows.append(dict(layout=name, worst_q2_weighted=q2w.max(),
+                         worst_q2_least_squares=q2l.max(), mean_q2_weighted=q2w.mean(),
+                         mean_q2_least_squares=q2l.mean()))
+    return pd.DataFrame(rows)
+
+
+def speed_curves_figure(theta, curves, truth, *, offset: float, speeds, title: str, colours):
+    """Figs. 19-20 (simulated): one separated curve per speed beside the true one, in polar form.
+
+    Parameters
+    ----------
+    theta : array (N,)
+        Sample angles (rad).
+    curves : array (n_speeds, n_measurements, N)
+        The separated curves (um); the first measurement of each speed is drawn.
+    truth : array (N,)
+        The true curve (um).
+    offset : float
+        Added to every curve (um), to keep a polar plot's radii positive.
+    speeds : sequence of int
+        The spindle speeds (r/min), one per row of ``curves``.
+    title : str
+        The figure's title.
+    colours : callable
+        A colormap, ``colours(i)`` the colour of speed ``i``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The polar plot: the true curve in grey, then one curve per speed.
+    """
+    closed = np.r_[theta, theta[:1]]
+    fig = plt.figure(figsize=(4.4, 4.4))
+    ax = fig.add_subplot(projection="polar")
+    ax.plot(closed, np.r_[truth, truth[:1]] + offset, color="k", lw=2.5, alpha=0.3, label="true")
+    for i, speed in enumerate(speeds):
+        ax.plot(closed, np.r_[curves[i, 0], curves[i, 0, :1]] + offset, lw=0.8,
+                color=colours(i), label=f"{speed} r/min")
+    ax.tick_params(labelsize=6)
+    ax.set_title(title, fontsize=9, pad=14)
+    ax.legend(fontsize=6, loc="lower left", bbox_to_anchor=(-0.2, -0.18), ncol=3)
+    return fig
+
+
+def ranges_statement(sweep, k_lost, h_lost, *, k_tab: int, band_text: str):
+    """Section 3's recommended ranges against Fig. 10's band, at every order Table 1 covers.
+
+    The best known H in the ranges at the orders of the sweep from Table 1's smallest on and at
+    the orders of its lost second part, against the printed upper edge of Fig. 10's band (plus
+    half a unit of its last digit); the lower orders, which the paper does not tabulate, are
+    named in the note.
+
+    Parameters
+    ----------
+    sweep : pandas.DataFrame
+        The optimum per harmonic order: ``k``, ``H_best_known``.
+    k_lost : array of int
+        The orders of Table 1's second part, whose values are lost in the text.
+    h_lost : array, same length as ``k_lost``
+        The best known H at those orders.
+    k_tab : int
+        The smallest order Table 1 tabulates.
+    band_text : str
+        The upper edge of Fig. 10's band, as printed.
+
+    Returns
+    -------
+    ours : str
+        At how many orders the best known H lies within the band, and where it does not.
+    holds : bool
+        Within the band at every such order.
+    note : str
+        How close to 1/4, and the lower orders.
+    """
+    top = float(band_text) + half_unit(band_text)
+    ranges_k = np.r_[sweep.k[sweep.k >= k_tab], k_lost]
+    ranges_h = np.r_[sweep.H_best_known[sweep.k >= k_tab], h_lost]
+    above = ranges_k[ranges_h > top]
+    low = sweep[sweep.k < k_tab].set_index("k").H_best_known
+    ours = (f"best known H in the ranges within Fig. 10's band (<= {band_text}) at "
+            f"{len(ranges_k) - len(above)} of {len(ranges_k)} orders k = "
+            f"{k_tab}..{int(sweep.k.max())} and {' '.join(map(str, k_lost))}"
+            + (f"; above it at k = {' '.join(map(str, above))}" if len(above) else ""))
+    note = (f"within {100 * (ranges_h / 0.25 - 1).max():.1f} % of 1/4 there; below Table 1's "
+            f"smallest order the ranges give up to {low.max():.3f} (k = {int(low.idxmax())}; "
+            f"above the band at k = {' '.join(map(str, low.index[low > top])) or 'none'}); "
+            f"Table 1's second part (k = {min(k_lost)}..{max(k_lost)}) is lost in the text, so "
+            "its H are ours only; the ranges exclude the pair layouts that reach 1/4 at even k "
+            "on the full circle; every Table 1 layout lies inside them")
+    return ours, bool(above.size == 0), note

@@ -37,10 +37,12 @@ from ..validate import integer
 
 __all__ = ["POSE_SYMMETRIES", "pose_orbit", "canonical_pose", "rank_poses",
            "fit_pose_to_indices", "fit_pose_average_to_indices", "index_invariants",
-           "ratio_interval", "diagonal_test_points",
+           "ratio_interval", "diagonal_test_points", "table_indices",
            "tidy", "fmt", "normalise", "sobol_reference", "pce_indices", "group_label",
            "fixed_ratio_checks", "group_head", "converged_at", "bars_figure",
-           "fig04_figure", "group_shares", "relative_scatter"]
+           "fig04_figure", "group_shares", "relative_scatter", "pce_fit_quality",
+           "key_relative_difference", "published_relative_difference", "READINGS",
+           "both_sizes", "convergence_text", "fluctuation_text"]
 
 
 # --------------------------------------------------------------------------------------
@@ -298,8 +300,8 @@ def fit_pose_to_indices(machine: ACDoubleTurntable, sd, target, *, rows, cols, s
         raise ValueError(f"free {free} and fixed {tuple(fixed)} must split the axes {AXES}")
     bounds = (np.array([TRAVELS[a][0] if a != "C" else -np.inf for a in free]),
               np.array([TRAVELS[a][1] if a != "C" else np.inf for a in free]))
-    fits = S.fit_pose(lambda pose: S.linear_indices(machine.jacobian(pose), sd), target,
-                      (rows, cols), starts, free, fixed=fixed, bounds=bounds,
+    fits = S.fit_pose(lambda pose: S.linear_indices(machine.jacobian(pose), sd=sd), target,
+                      (cols, rows), starts=starts, free=free, fixed=fixed, bounds=bounds,
                       scale=np.array([100.0 if a in "xyz" else 1.0 for a in free]),
                       ftol=ftol, xtol=xtol, max_nfev=max_nfev)
     for a in fixed:
@@ -355,7 +357,7 @@ def fit_pose_average_to_indices(machine: ACDoubleTurntable, sd, target, *, rows,
     def residuals(v):  # v: (B, 5 m) -> (B, entries)
         p = v.reshape(-1, 5)
         pose = {a: p[:, i] for i, a in enumerate(AXES)}
-        s = S.linear_indices(machine.jacobian(pose), sd)[:, rows, cols]
+        s = S.linear_indices(machine.jacobian(pose), sd=sd)[:, cols, rows]
         return s.reshape(v.shape[0], m, -1).mean(axis=1) - target
 
     out = []
@@ -413,7 +415,7 @@ def index_invariants(machine: ACDoubleTurntable, sd, *, rows, cols, poses: Mappi
         ``(S_num_k / S_den_k) / (S_num_l / S_den_l)`` of their heads.
     """
     rows, cols = np.asarray(rows), np.asarray(cols)
-    s = S.linear_indices(machine.jacobian(poses), sd)[:, rows, cols]   # (P, entries)
+    s = S.linear_indices(machine.jacobian(poses), sd=sd)[:, cols, rows]   # (P, entries)
     if s.shape[0] < 3:
         raise ValueError("index_invariants needs at least 3 poses to tell a fixed ratio")
     ok = (s > 0).all(axis=0)
@@ -487,6 +489,27 @@ def fmt(v: float) -> str:
     return f"{v:.1f}" if abs(v) > 0.1 else f"{v:.4f}"
 
 
+def table_indices(jacobian, *, sd) -> np.ndarray:
+    """Closed-form indices as the paper's Table 2 lays them out: components by errors.
+
+    The library's index arrays are input by output, ``(..., d, q)``
+    (:func:`mtaccuracy.sensitivity.linear_indices`); the paper's tables, this notebook's
+    ``rows, cols`` and its figures read a component's row of 41 errors.
+
+    Parameters
+    ----------
+    jacobian : array (..., 6, 41)
+        ``machine.jacobian(pose)``.
+    sd : array (41,)
+        Standard deviations of the errors (mm, rad).
+
+    Returns
+    -------
+    array (..., 6, 41)
+    """
+    return np.swapaxes(S.linear_indices(jacobian, sd=sd), -1, -2)
+
+
 def normalise(st):
     """Table 2's normalised total indices: ``st`` (..., d) clipped at 0, over their sum."""
     st = np.clip(st, 0, None)
@@ -499,7 +522,8 @@ def sobol_reference(machine, pose, sd, method: str, n: int, rng_seed: int, progr
     Errors normal with standard deviations ``sd`` (41,): ``method`` "mc" or "lhs" designs of
     ``n`` base rows, streamed (``sensitivity.sobol_indices`` on a ``SobolDesign``).  With
     ``progress`` a line per quarter of the runs."""
-    design = S.SobolDesign(n, 41, method, rng_seed, to_inputs=lambda u: S.from_unit_normal(u, sd))
+    design = S.SobolDesign(n, 41, method=method, seed=rng_seed,
+                           to_inputs=lambda u: S.from_unit_normal(u, sd))
     marks = set()
 
     def report(done, total):
@@ -520,7 +544,7 @@ def pce_indices(machine, pose, sd, n: int, degree: int, rng_seed: int, q_norm: f
 
     ``sensitivity.fit_pce_outputs`` on a Latin hypercube of ``n`` standard normals (errors =
     xi * sd)."""
-    u = S.base_samples(n, 41, "lhs", rng_seed)[0]
+    u = S.base_samples(n, 41, method="lhs", seed=rng_seed)[0]
     xi = S.from_unit_normal(u, np.ones(41))
     y = machine.pose_error(xi * sd, pose)
     fits = S.fit_pce_outputs(xi, y[:, list(comps)], degree=degree, q_norm=q_norm)
@@ -659,6 +683,160 @@ def relative_scatter(estimate, exact, threshold: float = 0.05) -> float:
     if not key.any():
         raise ValueError(f"no exact index above {threshold}")
     return float(np.sqrt(np.mean((estimate[key] / exact[key] - 1) ** 2)))
+
+
+def pce_fit_quality(fits, comps) -> pd.DataFrame:
+    """How sparse each component's PCE came out: terms kept of the basis, and its corrected LOO.
+
+    Parameters
+    ----------
+    fits : mapping of int to PCE fit
+        ``{component index: fit}`` (:func:`pce_indices`); a fit has ``coef``, ``n_candidates``
+        and ``loo``.
+    comps : sequence of str
+        Names of the components, in the order of ``range(len(comps))``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per component: ``component``, ``terms_kept`` (terms the OMP path chose),
+        ``basis_size`` (terms of the full basis) and ``corrected_LOO`` (relative error).
+    """
+    k = range(len(comps))
+    return pd.DataFrame({"component": list(comps), "terms_kept": [len(fits[i].coef) for i in k],
+                         "basis_size": [fits[i].n_candidates for i in k],
+                         "corrected_LOO": [fits[i].loo for i in k]})
+
+
+def key_relative_difference(st, *, keys, comps, names, of: str = "PCE",
+                            against=("MCS", "LHS")) -> float:
+    """Section 3.3's check on our estimates: the largest relative difference over the key errors.
+
+    ``|st[of] / st[m] - 1|`` over the entries ``keys`` and the methods ``m`` of ``against``:
+    relative to the sampled value, as the paper states its "< 5 %".
+
+    Parameters
+    ----------
+    st : mapping of str to array (len(comps), len(names))
+        Normalised total indices by method, components by errors (as Table 2).
+    keys : iterable of (str, str)
+        The (component, error symbol) entries compared: the key errors.
+    comps : sequence of str
+        Component names, the rows of each array.
+    names : sequence of str
+        Error symbols, the columns of each array.
+    of : str
+        The method compared (the paper's PCE).
+    against : sequence of str
+        The methods it is compared with, each value the reference of its ratio.
+
+    Returns
+    -------
+    float
+        The largest relative difference (a fraction, not percent).
+    """
+    rows, cols = np.array([[comps.index(c), names.index(s)] for c, s in sorted(keys)],
+                          dtype=int).reshape(-1, 2).T
+    if rows.size == 0:
+        raise ValueError("key_relative_difference needs at least one key error")
+    return max(np.abs(np.asarray(st[of])[rows, cols] / np.asarray(st[m])[rows, cols] - 1).max()
+               for m in against)
+
+
+def published_relative_difference(t2: pd.DataFrame) -> tuple[pd.Series, int]:
+    """The same check on the paper's own Table 2: each row's PCE value against MCS and LHS.
+
+    Parameters
+    ----------
+    t2 : pandas.DataFrame
+        Table 2 with float columns ``pce``, ``mcs`` and ``lhs`` (normalised total indices).
+
+    Returns
+    -------
+    rel : pandas.Series
+        Per row, the larger of ``|pce / mcs - 1|`` and ``|pce / lhs - 1|`` (a fraction).
+    worst : int
+        Position of the row where it is largest (the first of equal ones).
+    """
+    rel = np.maximum(np.abs(t2.pce / t2.mcs - 1), np.abs(t2.pce / t2.lhs - 1))
+    return rel, int(np.argmax(rel.to_numpy()))
+
+
+#: The two readings of a sample size in Fig. 7: base samples N, or model runs 43 N.
+READINGS = ("base samples", "model runs")
+
+
+def both_sizes(larger, smaller) -> str:
+    """A Fig. 7 result under both readings of Eq. 24: R given to the larger or the smaller size.
+
+    Parameters
+    ----------
+    larger, smaller : str
+        The result with R given to the larger of the two sizes, and to the smaller.
+
+    Returns
+    -------
+    str
+        ``"<larger> (R at the larger size), <smaller> (at the smaller)"``.
+    """
+    return f"{larger} (R at the larger size), {smaller} (at the smaller)"
+
+
+def convergence_text(conv_txt: pd.DataFrame, *, method: str, symbol: str,
+                     readings=READINGS) -> str:
+    """Where a sampled method converged in Fig. 7, under each reading of the sample size.
+
+    Parameters
+    ----------
+    conv_txt : pandas.DataFrame
+        Indexed by (method, reading, symbol), two columns: the converged size as text with R
+        given to the larger size, then to the smaller (:func:`converged_at`).
+    method : str
+        "MCS" or "LHS".
+    symbol : str
+        The error whose index converges.
+    readings : sequence of str
+        Readings of a sample size, each a level of the index (:data:`READINGS`).
+
+    Returns
+    -------
+    str
+        ``"<reading>: <both sizes>"`` per reading (:func:`both_sizes`), joined by ``"; "``.
+    """
+    return "; ".join(f"{rd}: {both_sizes(*conv_txt.loc[(method, rd, symbol)])}"
+                     for rd in readings)
+
+
+def fluctuation_text(r_steps: pd.DataFrame, *, method: str, sizes=(1000, 2000),
+                     readings=READINGS) -> str:
+    """The range of Fig. 7's fluctuation R (percent) over the errors at one sample size.
+
+    R at a size is read both ways (Eq. 24): the step that ends there (R at the larger size,
+    column ``sizes[0]``) and the step that starts there (R at the smaller, column
+    ``sizes[1]``, the next size).
+
+    Parameters
+    ----------
+    r_steps : pandas.DataFrame
+        R (percent) indexed by (method, reading, symbol), one column per sample size.
+    method : str
+        "MCS" or "LHS".
+    sizes : (int, int)
+        The size and the next one run.
+    readings : sequence of str
+        Readings of a sample size, each a level of the index (:data:`READINGS`).
+
+    Returns
+    -------
+    str
+        ``"<reading>: <min> to <max> % (R at the larger size), <min> to <max> % (at the
+        smaller)"`` per reading, one decimal, joined by ``"; "``.
+    """
+    def span(v):
+        return f"{v.min():.1f} to {v.max():.1f} %"
+
+    return "; ".join(f"{rd}: " + both_sizes(*(span(r_steps.loc[(method, rd)][n]) for n in sizes))
+                     for rd in readings)
 
 
 def bars_figure(st, comps, all_comps, names, t2, key_threshold: float, title: str,

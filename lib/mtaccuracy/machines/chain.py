@@ -1040,7 +1040,7 @@ class ChainMachine:
 def _motion_specs(axis: str) -> list[tuple[_errors.ErrorSpec, Placement]]:
     out = []
     for c, comp in enumerate(COMPONENTS):
-        code = f"E{comp}{axis}"
+        code = _errors.iso_code(comp, axis)
         translational = c < 3
         if axis in LINEAR:
             kind = ("positioning" if c == DIRECTION[axis] else "straightness") if c < 3 \
@@ -1081,10 +1081,9 @@ def iso_catalogue(topology: str):
         specs += _motion_specs(a)
     linear = [a for a in LINEAR if a in topo.axes]
     for rank, a in enumerate(linear):
-        others = [b for b in linear[:rank]]
-        for b in others:
+        for b in linear[:rank]:
             about = 3 - DIRECTION[a] - DIRECTION[b]            # the normal of the a-b plane
-            code = f"E{COMPONENTS[3 + about]}0{a}"
+            code = _errors.squareness_code(b, a)
             spec = _errors.ErrorSpec(code, code, "squareness", f"{b}{a}", "xyz"[about], False,
                                      False, "urad")
             specs.append((spec, Placement(a, "tilt", 3 + about)))
@@ -1093,11 +1092,11 @@ def iso_catalogue(topology: str):
             continue
         perp = [c for c in range(3) if c != DIRECTION[a]]
         for c in perp:
-            code = f"E{COMPONENTS[c]}0{a}"
+            code = _errors.iso_code(COMPONENTS[c], a, zero=True)
             specs.append((_errors.ErrorSpec(code, code, "location", a, "xyz"[c], True, False,
                                             "um"), Placement(a, "pre", c)))
         for c in perp:
-            code = f"E{COMPONENTS[3 + c]}0{a}"
+            code = _errors.iso_code(COMPONENTS[3 + c], a, zero=True)
             specs.append((_errors.ErrorSpec(code, code, "location", a, "xyz"[c], False, False,
                                             "urad"), Placement(a, "pre", 3 + c)))
     return tuple(s for s, _ in specs), {s.symbol: p for s, p in specs}
@@ -1479,7 +1478,7 @@ def _in_unit(lim: _units.Limits, v, unit: str) -> str:
         return ""
     if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
         return ""
-    text = _units.in_unit(lim, lo, hi, unit)
+    text = _units.in_unit(lim, lo, hi, unit=unit)
     return f"; {text}" if text else ""
 
 
@@ -1581,10 +1580,10 @@ def read_axis_table(path, topology: str) -> tuple[dict, dict]:
         if max(-lo, hi) > bound:
             why = ("no machine axis travels more than 100 m" if a in LINEAR
                    else "a rotary axis repeats every turn; ten turns either way at most")
-            hint = _units.suggest(lim, lo, hi, unit, sure=False)
+            hint = _units.suggest(lim, lo, hi, unit=unit, sure=False)
             raise ValueError(f"{line}: the travel ({lo:g}, {hi:g}) {unit} goes beyond "
                              f"+-{bound:g} {unit} ({why})" + (f"; {hint}" if hint else ""))
-        found = _units.check(lim, lo, hi, unit)
+        found = _units.check(lim, lo, hi, unit=unit)
         if found is not None and found.refuse:
             raise ValueError(f"{line}: {found.message}")
         if found is not None:
@@ -1705,7 +1704,7 @@ def read_ranges(path, machine: ChainMachine) -> np.ndarray:
                              f"{_excerpt(v['low'], 20)}, {_excerpt(v['high'], 20)}") from None
         if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
             raise ValueError(f"{line}: the range must be finite with high > low, got ({lo}, {hi})")
-        found = _units.check(lim, lo, hi, unit)
+        found = _units.check(lim, lo, hi, unit=unit)
         if found is not None and found.refuse:
             raise ValueError(f"{line}: {found.message}")
         if found is not None:

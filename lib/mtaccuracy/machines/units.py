@@ -32,8 +32,9 @@ from dataclasses import dataclass, field
 
 
 class SuspectUnitWarning(UserWarning):
-    """A value of a machine file only a rare machine has in the unit written: it may have
-    been meant in another unit (the message names it); the value is used as written."""
+    """A value of a machine file that is rare in the unit written (the value is used as written).
+
+    It may have been meant in another unit; the message names it."""
 
 
 @dataclass(frozen=True)
@@ -269,7 +270,7 @@ def _likely(lim: Limits, lo: float, hi: float, unit: str) -> list[tuple[str, str
     return out
 
 
-def check(lim: Limits, low: float, high: float, unit: str) -> Finding | None:
+def check(lim: Limits, low: float, high: float, *, unit: str) -> Finding | None:
     """Whether a travel or an error range is plausible for a machine tool in the unit written.
 
     Parameters
@@ -294,18 +295,18 @@ def check(lim: Limits, low: float, high: float, unit: str) -> Finding | None:
 
     Examples
     --------
-    >>> check(LINEAR_TRAVEL, -400, 400, "mm") is None
+    >>> check(LINEAR_TRAVEL, -400, 400, unit="mm") is None
     True
-    >>> f = check(LINEAR_TRAVEL, -0.4, 0.4, "mm")
+    >>> f = check(LINEAR_TRAVEL, -0.4, 0.4, unit="mm")
     >>> f.refuse, f.likely
     (True, ('m',))
     >>> f.message.split("; ")[-1]
     'likely in m (write -400, 400 mm)'
-    >>> check(ROTARY_TRAVEL, -1.92, 1.92, "deg").message.split("; ")[-1]
+    >>> check(ROTARY_TRAVEL, -1.92, 1.92, unit="deg").message.split("; ")[-1]
     'likely in rad (write -110, 110 deg)'
-    >>> check(ANGULAR_ERROR, -15, 15, "rad").likely
+    >>> check(ANGULAR_ERROR, -15, 15, unit="rad").likely
     ('urad', 'arcsec')
-    >>> check(TRANSLATION_ERROR, -6, 6, "mm").refuse            # a warning: 6 um as mm?
+    >>> check(TRANSLATION_ERROR, -6, 6, unit="mm").refuse            # a warning: 6 um as mm?
     False
     """
     size = lim.units[unit]
@@ -341,9 +342,10 @@ def _said(likely, refuse: bool = True) -> str:
     return "; ".join(f"if it is in {u}, write {w}" for u, w in likely)
 
 
-def suggest(lim: Limits, low: float, high: float, unit: str, sure: bool = True) -> str:
-    """The unit(s) in which numbers given in ``unit`` would be a typical value, with the
-    numbers to write: ``"likely in m (write -400, 400 mm)"``, or ``""`` when no unit does.
+def suggest(lim: Limits, low: float, high: float, *, unit: str, sure: bool = True) -> str:
+    """The unit(s) in which numbers given in ``unit`` would be typical, with the numbers to write.
+
+    ``"likely in m (write -400, 400 mm)"``, or ``""`` when no unit does.
 
     Parameters
     ----------
@@ -366,7 +368,7 @@ def suggest(lim: Limits, low: float, high: float, unit: str, sure: bool = True) 
     return _said(likely, sure) if likely else ""
 
 
-def in_unit(lim: Limits, low: float, high: float, unit: str) -> str:
+def in_unit(lim: Limits, low: float, high: float, *, unit: str) -> str:
     """What numbers written in a unit a file does not take are in the one it does.
 
     Parameters
@@ -392,7 +394,7 @@ def in_unit(lim: Limits, low: float, high: float, unit: str) -> str:
         return f"{written!r} is written {unit!r}"
     if unit not in lim.units:
         return ""
-    found = check(lim, low, high, unit)
+    found = check(lim, low, high, unit=unit)
     if found is not None:
         return f"read in {unit}, {found.message}"
     write = lim.accepted[0]

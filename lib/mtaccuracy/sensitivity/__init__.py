@@ -5,6 +5,8 @@ One submodule per method; everything is re-exported here, so notebooks write
 
 | submodule | what |
 | --- | --- |
+| ``inputs`` | :class:`Inputs`: names and marginal laws of independent inputs, their samples (MC,
+  Latin hypercube, Sobol'), moments and standard variables; what every estimator takes |
 | ``spearman`` | Latin hypercube sampling (scipy.qmc), Spearman ranking (Guo et al. 2016) |
 | ``sobol`` | Sobol first-order and total indices (Saltelli/Jansen), designs drawn and run in
   blocks of base rows (memory flat in N) |
@@ -19,10 +21,20 @@ One submodule per method; everything is re-exported here, so notebooks write
   margin) and reduced models (Rong et al.); imports ``sobol``, never the reverse |
 | ``posefit`` | which pose explains a published table: candidate screening and least-squares or
   Powell refinement for any statistic (notebooks 01 and 03) |
+
+Conventions.  The inputs are one :class:`Inputs` (or, where a function still takes bare
+arrays, ``sd=`` or ``var=`` by keyword: never one for the other).  Randomness is one argument,
+``seed``: None, an int or a ``numpy.random.Generator`` (``mtaccuracy.validate.rng``).  Index
+arrays put inputs before outputs, ``(..., d, q)``, with any leading axis (poses, bootstrap
+resamples) first: ``sobol_indices``, ``sobol_estimate``, ``linear_indices``,
+``indices_at_poses``, ``pose_box_indices`` and the key-set rules of ``screening`` (a Jacobian
+is ``(..., q, d)``, outputs by inputs, as a derivative is written); :func:`pce_sobol` is one
+output's ``(d,)``.  Labelled tables: ``SobolIndices.to_df()`` and ``SparsePCE.to_df()``.
 """
 
 from . import benchmarks  # noqa: F401
 from .checks import *  # noqa: F403
+from .inputs import *  # noqa: F403
 from .linear import *  # noqa: F403
 from .pce import *  # noqa: F403
 from .posefit import *  # noqa: F403

@@ -2,8 +2,9 @@
 
 Used by the tests (a PCE or a sampling estimator must recover these indices within a stated
 tolerance), by ``make bench`` (ours beside OpenTURNS on the same samples) and by notebook 01 (the
-sparse PCE at work on a nonlinear model).  Each benchmark gives the model, its input laws and its
-exact first-order and total indices.
+sparse PCE at work on a nonlinear model).  Each benchmark gives the model, its inputs (an
+:class:`~mtaccuracy.sensitivity.Inputs`: names and laws) and its exact first-order and total
+indices.
 
 | function | inputs | reference |
 | --- | --- | --- |
@@ -22,23 +23,25 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from .inputs import Inputs
+
 
 @dataclass(frozen=True)
 class Benchmark:
     """A model with independent inputs and its exact Sobol indices.
 
-    ``model`` maps (n, d) inputs to (n,) outputs; ``marginals`` are the d input laws (frozen
-    scipy distributions, as :class:`~mtaccuracy.sensitivity.pce.ChaosInputs` takes them);
-    ``s1``, ``st`` (d,) the exact first-order and total indices; ``variance`` the exact output
-    variance.
+    ``model`` maps (n, d) inputs to (n,) outputs; ``inputs`` names the d inputs and gives their
+    laws; ``s1``, ``st`` (d,) the exact first-order and total indices; ``variance`` the exact
+    output variance.
 
     Attributes
     ----------
     name : str
+        What the benchmark is, with its coefficients.
     model : callable
         ``(n, d) -> (n,)``.
-    marginals : tuple
-        The d input laws (frozen scipy distributions).
+    inputs : Inputs
+        The d inputs (names ``x1`` ... ``xd`` and uniform laws).
     s1, st : arrays (d,)
         Exact first-order and total indices.
     variance : float
@@ -47,7 +50,7 @@ class Benchmark:
 
     name: str
     model: Callable[[np.ndarray], np.ndarray]
-    marginals: tuple
+    inputs: Inputs
     s1: np.ndarray
     st: np.ndarray
     variance: float
@@ -55,32 +58,26 @@ class Benchmark:
     @property
     def dim(self) -> int:
         """int: the number of inputs d."""
-        return len(self.marginals)
+        return self.inputs.dim
 
     def sample(self, n: int, seed, method: str = "lhs") -> np.ndarray:
-        """``n`` input points: a Latin hypercube or independent uniforms, through the laws.
+        """``n`` input points from :meth:`Inputs.sample`, a Latin hypercube by default.
 
         Parameters
         ----------
         n : int
             Number of points.
-        seed : int, numpy.random.Generator or None
-            Seed of the random stream (``numpy.random.default_rng``).
-        method : {"lhs", "mc"}
-            A Latin hypercube (``lhs``) or independent uniforms (any other value) on the
-            unit cube, mapped through each input's inverse CDF.
+        seed : None, int or numpy.random.Generator
+            The randomness (:func:`mtaccuracy.validate.rng`).
+        method : {"lhs", "mc", "sobol"}
+            The design on the unit cube, mapped through each input's inverse CDF.
 
         Returns
         -------
         (n, d) ndarray
             The input points.
         """
-        from scipy.stats import qmc
-
-        rng = np.random.default_rng(seed)
-        u = (qmc.LatinHypercube(d=self.dim, rng=rng).random(n) if method == "lhs"
-             else rng.random((n, self.dim)))
-        return np.column_stack([m.ppf(u[:, i]) for i, m in enumerate(self.marginals)])
+        return self.inputs.sample(n, method=method, seed=seed)
 
 
 def ishigami(a: float = 7.0, b: float = 0.1) -> Benchmark:
@@ -109,7 +106,7 @@ def ishigami(a: float = 7.0, b: float = 0.1) -> Benchmark:
     v13 = b**2 * np.pi**8 * (1 / 18 - 1 / 50)
     v = v1 + v2 + v13
     law = stats.uniform(-np.pi, 2 * np.pi)
-    return Benchmark(f"Ishigami (a={a:g}, b={b:g})", model, (law,) * 3,
+    return Benchmark(f"Ishigami (a={a:g}, b={b:g})", model, Inputs((law,) * 3),
                      np.array([v1, v2, 0.0]) / v, np.array([v1 + v13, v2, v13]) / v, float(v))
 
 
@@ -142,7 +139,7 @@ def g_function(a) -> Benchmark:
     vi = 1 / (3 * (1 + a) ** 2)
     v = float(np.prod(1 + vi) - 1)
     st = vi * np.prod(1 + vi) / (1 + vi) / v
-    return Benchmark(f"G function (d={a.size})", model, (stats.uniform(0, 1),) * a.size,
+    return Benchmark(f"G function (d={a.size})", model, Inputs((stats.uniform(0, 1),) * a.size),
                      vi / v, st, v)
 
 
@@ -185,7 +182,7 @@ def interaction_polynomial(linear, pairs) -> Benchmark:
         vt[i] += w**2 / 9
         vt[j] += w**2 / 9
     v = float(v1.sum() + sum(w**2 / 9 for w in pairs.values()))
-    return Benchmark(f"interaction polynomial (d={d})", model, (stats.uniform(-1, 2),) * d,
+    return Benchmark(f"interaction polynomial (d={d})", model, Inputs((stats.uniform(-1, 2),) * d),
                      v1 / v, vt / v, v)
 
 

@@ -20,13 +20,16 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 from scipy import stats
 
+from mtaccuracy import validate
+
 from .linear import indices_at_poses, nonlinear_remainder, uniform_moments
+from .screening import merge_ties
 from .sobol import (
     base_samples,
     from_unit_uniform,
-    merge_ties,
     sobol_bootstrap,
     sobol_estimate,
     sobol_evaluate,
@@ -38,21 +41,24 @@ FIRST_ORDER_FLOOR = 1e-12
 
 
 def first_order_outputs(jacobian: np.ndarray, var: np.ndarray) -> np.ndarray:
-    """(..., q) True where the output has a first-order term: its linear variance
-    ``sum_i J_ki^2 var_i`` above :data:`FIRST_ORDER_FLOOR` of the largest among the outputs of
-    its kind at that pose (outputs in triples of one unit, positions then orientations, when q
-    is a multiple of 3; else all together).
+    """(..., q) True where the output has a first-order term (a closed form exists there).
+
+    An output has one when its linear variance ``sum_i J_ki^2 var_i`` is above
+    :data:`FIRST_ORDER_FLOOR` of the largest among the outputs of its kind at that pose
+    (outputs in triples of one unit, positions then orientations, when q is a multiple of 3;
+    else all together).
 
     Parameters
     ----------
     jacobian : array (..., q, d)
-        Jacobians.
+        First-order Jacobians of the q outputs in the d errors, at each pose.
     var : array (d,)
-        Error variances.
+        Error variances (mm^2, rad^2).
 
     Returns
     -------
     array of bool (..., q)
+        True where the output has a first-order term.
     """
     v = (np.asarray(jacobian) ** 2 * var).sum(-1)                    # (..., q)
     q = v.shape[-1]
@@ -60,34 +66,32 @@ def first_order_outputs(jacobian: np.ndarray, var: np.ndarray) -> np.ndarray:
     return (g > FIRST_ORDER_FLOOR * g.max(axis=-1, keepdims=True)).reshape(v.shape)
 
 
-def atlas_table(indices: np.ndarray, names: Sequence[str], outputs: Sequence[str],
-                key_share: float):
-    """Per error and output, over P poses: the share of the poses where the error is key
-    (index >= ``key_share``), its mean and its largest index.  ``indices`` (P, d, q) as
-    :func:`~mtaccuracy.sensitivity.indices_at_poses` returns.  A pandas DataFrame with the
-    columns ``symbol, output, key_share, mean_index, max_index``, outputs outermost.
+def atlas_table(indices: np.ndarray, *, names: Sequence[str], outputs: Sequence[str],
+                key_share: float) -> pd.DataFrame:
+    """Per error and output over P poses: the share of poses where it is key, mean and max index.
 
     Parameters
     ----------
     indices : array (P, d, q)
-        Indices at P poses.
+        Closed-form indices at P poses, as :func:`~mtaccuracy.sensitivity.indices_at_poses`
+        returns.
     names : sequence of str (d,)
-        Error names.
+        Error names, in the order of axis 1.
     outputs : sequence of str (q,)
-        Output names.
+        Output names, in the order of axis 2.
     key_share : float
-        The index from which an error counts as key.
+        The index from which an error counts as key at a pose, in (0, 1).
 
     Returns
     -------
     DataFrame (q d, 5)
+        Columns ``symbol, output, key_share`` (the share of the poses where the error is key),
+        ``mean_index, max_index``; outputs outermost.
     """
-    import pandas as pd
-
     idx = np.asarray(indices, dtype=float)
     if idx.ndim != 3 or idx.shape[1:] != (len(names), len(outputs)):
         raise ValueError(f"indices must be (P, {len(names)}, {len(outputs)}), got {idx.shape}")
-    if not 0 < key_share < 1:
+    if not 0 < key_share < 1:  # an open interval: validate.probability allows 0 and 1
         raise ValueError(f"key_share must be in (0, 1), got {key_share!r}")
     key = (idx >= key_share).mean(0)
     return pd.DataFrame([dict(symbol=s, output=o, key_share=key[i, k],
@@ -96,25 +100,27 @@ def atlas_table(indices: np.ndarray, names: Sequence[str], outputs: Sequence[str
 
 
 def dominant_errors(jacobian: np.ndarray, var) -> np.ndarray:
-    """(P, q) the column of the error with the largest closed-form index at each pose and
-    output, -1 where the output has no first-order term.  Errors whose indices are equal within
-    the tie tolerance of :func:`~mtaccuracy.sensitivity.merge_ties` (errors that enter
-    identically) go to the first in the catalogue, so the answer does not depend on rounding.
+    """(P, q) the error with the largest closed-form index at each pose and output.
+
+    Errors whose indices tie within :func:`~mtaccuracy.sensitivity.merge_ties`' tolerance
+    (errors that enter identically) go to the first in the catalogue, so the answer does not
+    depend on rounding.
 
     Parameters
     ----------
     jacobian : array (P, q, d)
-        Jacobians at P poses.
+        First-order Jacobians at P poses.
     var : array (d,)
         Error variances (mm^2, rad^2).
 
     Returns
     -------
     array of int (P, q)
+        The error's column, -1 where the output has no first-order term.
     """
     jac = np.asarray(jacobian, dtype=float)
     var = np.asarray(var, dtype=float)
-    idx = indices_at_poses(jac, var)                                  # (P, d, q)
+    idx = indices_at_poses(jac, var=var)                                  # (P, d, q)
     p, d, q = idx.shape
     merged = merge_ties(idx.transpose(1, 0, 2).reshape(d, -1)).reshape(d, p, q)
     dom = np.argmax(merged, axis=0)
@@ -147,58 +153,65 @@ class SampledIndices:
     first_order: np.ndarray       # (q,) the output has a first-order term
 
 
-def sample_at_pose(model: Callable[[np.ndarray], np.ndarray], jacobian: np.ndarray, bounds,
+def sample_at_pose(model: Callable[[np.ndarray], np.ndarray], jacobian: np.ndarray, *, bounds,
                    n: int, n_boot: int, seed) -> SampledIndices:
-    """Saltelli estimates of the total indices of ``model`` (errors (m, d) -> (m, q), the exact
-    model at one pose) with independent uniform errors on ``bounds`` (2, d), N = ``n`` ("mc"
-    design, ``seed``), their bootstrap half-widths (``n_boot`` resamples, ``seed + 10``), the
-    closed form from ``jacobian`` (q, d) and the nonlinear remainder on the A design.
+    """Sampled total indices of the exact model at one pose, beside the closed form.
+
+    Saltelli/Jansen estimates with independent uniform errors (an "mc" design), their
+    bootstrap half-widths, the closed form from ``jacobian`` and the nonlinear remainder on the
+    A design.
 
     Parameters
     ----------
     model : callable
-        ``(m, d) -> (m, q)``, the exact model at the pose.
+        ``(m, d) -> (m, q)``, the exact model at the pose; must not modify its input.
     jacobian : array (q, d)
         Its first-order Jacobian there.
     bounds : array (2, d)
-        Uniform error ranges (mm, rad).
+        Lower and upper bounds of the uniform errors (mm, rad).
     n : int
-        Base rows N.
+        Base rows N of the design (the model sees N (d + 2) rows).
     n_boot : int
-        Bootstrap resamples.
+        Bootstrap resamples of the half-widths.
     seed : int
-        Seed of the design (the bootstrap uses ``seed + 10``).
+        Seed of the design; the bootstrap uses ``seed + 10``.
 
     Returns
     -------
     SampledIndices
+        The estimates, half-widths, closed form, remainder and first-order flags.
     """
+    n = validate.integer(n, "n", low=2)
+    n_boot = validate.integer(n_boot, "n_boot", low=1)
     bounds = np.asarray(bounds, dtype=float)
     d = bounds.shape[1]
-    ua, ub = base_samples(n, d, "mc", seed)
+    ua, ub = base_samples(n, d, method="mc", seed=seed)
     a, b = from_unit_uniform(ua, bounds), from_unit_uniform(ub, bounds)
     ya, yb, yab = sobol_evaluate(model, a, b)
     _, st = sobol_estimate(ya, yb, yab)
-    _, half = sobol_bootstrap(ya, yb, yab, n_boot, seed + 10)
+    _, half = sobol_bootstrap(ya, yb, yab, n_boot=n_boot, seed=seed + 10)
     _, var = uniform_moments(bounds)
     jac = np.asarray(jacobian, dtype=float)
     rem = nonlinear_remainder(model, jac, a)
-    return SampledIndices(st, half, indices_at_poses(jac[None], var)[0], rem.centred_ratio,
+    return SampledIndices(st, half, indices_at_poses(jac[None], var=var)[0], rem.centred_ratio,
                           first_order_outputs(jac, var))
 
 
-def compare_with_sampling(checks: Sequence[SampledIndices], names: Sequence[str],
-                          outputs: Sequence[str], level: float = 0.95):
+def compare_with_sampling(checks: Sequence[SampledIndices], *, names: Sequence[str],
+                          outputs: Sequence[str], level: float = 0.95
+                          ) -> tuple[pd.DataFrame, pd.DataFrame, float, int]:
     """Compare every sampled total index with the closed form, all at once.
 
     Parameters
     ----------
     checks : sequence of :class:`SampledIndices`
         One per pose (:func:`sample_at_pose`).
-    names, outputs : sequences of str
-        The inputs (d) and outputs (q), for the tables.
+    names : sequence of str (d,)
+        Error names, the ``symbol`` column of the tables.
+    outputs : sequence of str (q,)
+        Output names, the ``output`` column.
     level : float
-        The family-wise confidence level.
+        The family-wise confidence level, in (0, 1), of all compared indices at once.
 
     Returns
     -------
@@ -222,9 +235,7 @@ def compare_with_sampling(checks: Sequence[SampledIndices], names: Sequence[str]
     twice the centred remainder of its output, the first-order bound on what the linear model
     misses.  Outputs without a first-order term at a pose are not compared.
     """
-    import pandas as pd
-
-    if not 0 < level < 1:
+    if not 0 < level < 1:  # an open interval: validate.probability allows 0 and 1
         raise ValueError(f"level must be in (0, 1), got {level!r}")
     m = len(names) * sum(int(c.first_order.sum()) for c in checks)
     widen = stats.norm.ppf(1 - (1 - level) / 2 / max(m, 1)) / stats.norm.ppf(0.975)

@@ -20,6 +20,14 @@ on the paper's own model (no library computes Sobol indices from a Jacobian).
 Layout: Jacobians are (P, q, d) with a leading pose axis; indices are returned (P, d, q)
 (inputs by outputs, as the sampling estimators), except :func:`linear_indices`, which keeps
 the Jacobian's (..., q, d).
+
+The inputs' spread: an :class:`~mtaccuracy.sensitivity.Inputs` (its moments), or bare arrays
+named by keyword, ``sd=`` (standard deviations) or ``var=`` (variances), so that one can never
+be taken for the other.  The arithmetic follows what was given: ``(J sd)^2`` from standard
+deviations, ``J^2 var`` from variances (equal to rounding); an ``Inputs`` gives its standard
+deviations to :func:`linear_indices` and its variances to :func:`indices_at_poses` and
+:func:`pose_box_indices` (the forms their callers have always passed, so the numbers are the
+same to the bit).
 """
 
 from __future__ import annotations
@@ -32,6 +40,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..validate import integer
+from .inputs import Inputs
+
 
 def _shares(v: np.ndarray) -> np.ndarray:
     """``v / v.sum(-1)``, with zeros where the sum is zero."""
@@ -39,36 +50,78 @@ def _shares(v: np.ndarray) -> np.ndarray:
     return np.divide(v, tot, out=np.zeros_like(v), where=tot > 0)
 
 
-def linear_indices(jacobian: np.ndarray, sd: np.ndarray) -> np.ndarray:
-    """Sobol indices of a linear model with independent inputs: for output k and input i,
-    ``J_ki^2 sd_i^2 / sum_j J_kj^2 sd_j^2`` (first-order = total; any distribution).
+def _spread(inputs, sd, var, d, prefer: str) -> tuple[str, np.ndarray]:
+    """``("sd", sd)`` or ``("var", var)``, (d,), from an :class:`Inputs` or one keyword array."""
+    given = [k for k, v in (("inputs", inputs), ("sd", sd), ("var", var)) if v is not None]
+    if len(given) != 1:
+        raise ValueError("give the inputs' spread once: an Inputs, or sd= (standard "
+                         f"deviations), or var= (variances); got {given or 'none'}")
+    if inputs is not None:
+        if not isinstance(inputs, Inputs):
+            raise TypeError(f"inputs must be an Inputs (bare arrays go by keyword, sd= or "
+                            f"var=), got {type(inputs).__name__}")
+        kind, v = prefer, (inputs.sd if prefer == "sd" else inputs.var)
+    else:
+        kind, v = ("sd", sd) if sd is not None else ("var", var)
+    v = np.asarray(v, dtype=float)
+    if v.shape != (d,):
+        raise ValueError(f"{kind} must be ({d},) for {d} inputs, got {v.shape}")
+    if np.any(v < 0) or not np.all(np.isfinite(v)):
+        raise ValueError(f"{kind} must be finite and >= 0")
+    return kind, v
 
-    ``jacobian`` (..., q, d), ``sd`` (d,).  An output with zero variance gets zeros.
+
+def _squares(c: np.ndarray, kind: str, v: np.ndarray) -> np.ndarray:
+    """``(c sd)^2`` or ``c^2 var``: each input's share of the variance, unnormalised."""
+    return (c * v) ** 2 if kind == "sd" else c**2 * v
+
+
+def linear_indices(jacobian: np.ndarray, inputs: Inputs | None = None, *, sd=None, var=None
+                   ) -> np.ndarray:
+    """Sobol indices of a linear model with independent inputs (first-order = total).
+
+    For input i and output k, ``J_ki^2 sd_i^2 / sum_j J_kj^2 sd_j^2`` (any distribution).
+    ``jacobian`` (..., q, d); the spread of the inputs as an :class:`Inputs` or, by keyword,
+    ``sd=`` or ``var=`` (d,).  An output with zero variance gets zeros.  The indices come
+    input by output, ``(..., d, q)``, as every index array of this package.
 
     Parameters
     ----------
     jacobian : array (..., q, d)
         Output sensitivities (e.g. ``machine.jacobian(pose)``: mm or rad per error unit).
-    sd : array (d,)
-        Standard deviations of the inputs (mm, rad).
+    inputs : Inputs, optional
+        The inputs (their standard deviations are used).
+    sd : array (d,), optional
+        Standard deviations of the inputs (mm, rad), instead of ``inputs``.
+    var : array (d,), optional
+        Variances of the inputs (mm^2, rad^2), instead of ``inputs``.
 
     Returns
     -------
-    array (..., q, d)
-        Indices; each output's row sums to 1 (0 for a zero-variance output).
+    array (..., d, q)
+        Indices; each output's column sums to 1 (0 for a zero-variance output).
+
+    Raises
+    ------
+    ValueError
+        Unless exactly one of ``inputs``, ``sd``, ``var`` is given, (d,), finite, >= 0.
 
     Examples
     --------
     >>> import numpy as np
-    >>> linear_indices(np.array([[1.0, 2.0]]), np.array([2.0, 1.0])).tolist()
-    [[0.5, 0.5]]
+    >>> linear_indices(np.array([[1.0, 2.0]]), sd=np.array([2.0, 1.0])).tolist()
+    [[0.5], [0.5]]
     """
-    return _shares((np.asarray(jacobian, dtype=float) * np.asarray(sd, dtype=float)) ** 2)
+    c = np.asarray(jacobian, dtype=float)
+    kind, v = _spread(inputs, sd, var, c.shape[-1], "sd")
+    return np.ascontiguousarray(np.swapaxes(_shares(_squares(c, kind, v)), -1, -2))
 
 
 def uniform_moments(bounds, d: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Means and variances ``((low + high) / 2, (high - low)^2 / 12)``, each (d,), of
-    independent uniforms on ``bounds`` (2, d).  ``d``, when given, is the required width.
+    """Means and variances ``((low + high) / 2, (high - low)^2 / 12)``, each (d,), of uniforms.
+
+    Of independent uniforms on ``bounds`` (2, d) (the moments of ``Inputs.from_bounds(bounds)``
+    for symmetric bounds, to the bit).  ``d``, when given, is the required width.
 
     Raises ValueError unless ``bounds`` is (2, d), finite, with high > low in every column.
 
@@ -108,8 +161,7 @@ def gauss_legendre_unit(nodes: int) -> tuple[np.ndarray, np.ndarray]:
     -------
     points, weights : arrays (nodes,)
     """
-    if isinstance(nodes, bool) or not isinstance(nodes, int | np.integer) or nodes < 1:
-        raise ValueError(f"nodes must be an integer >= 1, got {nodes!r}")
+    nodes = integer(nodes, "nodes", low=1)
     if nodes == 2:
         return 0.5 + np.array([-1.0, 1.0]) / (2.0 * np.sqrt(3.0)), np.array([0.5, 0.5])
     x, w = np.polynomial.legendre.leggauss(int(nodes))
@@ -145,7 +197,8 @@ def _rows(jac: np.ndarray, components) -> np.ndarray:
     return jac[:, list(components)]
 
 
-def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray], mean, var,
+def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
+                     inputs: Inputs | None = None, *, mean=None, var=None,
                      poses: Mapping | None = None, pose_bounds: Mapping | None = None,
                      components: int | Sequence[int] | None = None, nodes: int = 2,
                      names: Iterable[str] | None = None, required: Iterable[str] = ()
@@ -153,8 +206,9 @@ def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
     """Exact Sobol indices of the first-order model with part of the pose uniform in a box.
 
     ``jacobian_fn(flat_poses)``: the (M, q_all, d) Jacobians at M poses given as a mapping of
-    names to (M,) arrays (e.g. ``machine.jacobian``).  ``mean``, ``var`` (d,): the
-    inputs' means and variances (:func:`uniform_moments` for uniforms; any independent laws).
+    names to (M,) arrays (e.g. ``machine.jacobian``).  ``inputs``: the inputs (their means
+    and variances), or by keyword ``mean=``, ``var=`` (d,) (:func:`uniform_moments` for
+    uniforms; any independent laws).
     ``poses`` maps pose names to scalars or (T,) arrays: T cases (e.g. T tool lengths).
     ``pose_bounds`` maps some pose names to ``(low, high)``: those coordinates are independent
     uniforms on the box (the same for every case; a name in both takes the box), independent
@@ -182,8 +236,10 @@ def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
     ----------
     jacobian_fn : callable
         ``flat_poses -> (M, q_all, d)`` Jacobians.
-    mean, var : arrays (d,)
-        Means and variances of the inputs (mm, rad and their squares).
+    inputs : Inputs, optional
+        The inputs (their means and variances are used).
+    mean, var : arrays (d,), optional
+        Means and variances of the inputs (mm, rad and their squares), instead of ``inputs``.
     poses : mapping, optional
         Pose name -> scalar or (T,) array (mm, rad).
     pose_bounds : mapping, optional
@@ -204,6 +260,13 @@ def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
     V : array (T, q)
         Output variance, pooled over the box.
     """
+    if inputs is not None and mean is not None:
+        raise ValueError("give the inputs once: an Inputs, or mean= and var=")
+    if inputs is None and (mean is None or var is None):
+        raise ValueError("give the inputs: an Inputs, or both mean= and var=")
+    if inputs is not None:
+        _, var = _spread(inputs, None, None, inputs.dim, "var")
+        mean = inputs.mean
     mean, var = _moments(mean, var)
     u, w = gauss_legendre_unit(nodes)
     base = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in (poses or {}).items()}
@@ -251,15 +314,20 @@ def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
     return np.swapaxes(s1, 1, 2), np.swapaxes(st, 1, 2), v
 
 
-def indices_at_poses(jacobian: np.ndarray, var) -> np.ndarray:
+def indices_at_poses(jacobian: np.ndarray, inputs: Inputs | None = None, *, sd=None, var=None
+                     ) -> np.ndarray:
     """Sobol indices (first order = total) of the first-order model at each of P poses.
 
     Parameters
     ----------
     jacobian : (P, q, d) array
         d(outputs)/d(inputs) at zero inputs, per pose (e.g. ``machine.jacobian``).
-    var : (d,) array
-        The variances of the independent inputs (any laws).
+    inputs : Inputs, optional
+        The independent inputs (any laws; their variances are used).
+    sd : (d,) array, optional
+        Standard deviations of the inputs, instead of ``inputs``.
+    var : (d,) array, optional
+        Variances of the inputs, instead of ``inputs``.
 
     Returns
     -------
@@ -268,10 +336,10 @@ def indices_at_poses(jacobian: np.ndarray, var) -> np.ndarray:
         The kernel of a pose atlas: one batched expression, no loop over poses.
     """
     c = np.asarray(jacobian, dtype=float)
-    var = np.asarray(var, dtype=float)
-    if c.ndim != 3 or var.shape != c.shape[-1:]:
-        raise ValueError(f"jacobian must be (P, q, d) and var (d,), got {c.shape}, {var.shape}")
-    return np.swapaxes(_shares(c**2 * var), 1, 2)
+    if c.ndim != 3:
+        raise ValueError(f"jacobian must be (P, q, d), got {c.shape}")
+    kind, v = _spread(inputs, sd, var, c.shape[-1], "var")
+    return np.swapaxes(_shares(_squares(c, kind, v)), 1, 2)
 
 
 class Remainder(NamedTuple):

@@ -5,10 +5,10 @@ matching pursuit (OMP) in UQLab and read Sobol indices off the coefficients.  Th
 that, and what UQLab and OpenTURNS do around it (Blatman & Sudret 2011; the UQLab PCE manual,
 Sec. 1.3-1.5):
 
-* **Bases by input law** (:class:`ChaosInputs`).  Each input's law picks its orthonormal
-  family (Wiener-Askey): Legendre for a uniform input (mapped to [-1, 1]), Hermite for a normal
-  one (standardised), and for any other law the isoprobabilistic transform to a standard normal
-  (z = Phi^-1(F(x))) with Hermite.  The one-dimensional families are chaospy's
+* **Bases by input law** (:class:`~mtaccuracy.sensitivity.Inputs`).  Each input's law picks its
+  orthonormal family (Wiener-Askey): Legendre for a uniform input (mapped to [-1, 1]), Hermite
+  for a normal one (standardised), and for any other law the isoprobabilistic transform to a
+  standard normal (z = Phi^-1(F(x))) with Hermite.  The one-dimensional families are chaospy's
   (``chaospy.expansion.hermite`` / ``legendre``, ``normed=True``); the multi-indices are
   chaospy's ``glexindex`` (total degree with hyperbolic q-norm truncation); the design matrix is
   built in numpy from them (chaospy's multivariate polynomial objects are far too slow in 41
@@ -33,7 +33,7 @@ third of the time of the scikit-learn path.  A test checks that both pick the sa
 
 from __future__ import annotations
 
-__all__ = ["ChaosInputs", "multi_indices", "hermite_table", "poly_table", "design_matrix",
+__all__ = ["multi_indices", "hermite_table", "poly_table", "design_matrix",
            "loo_error", "loo_path", "column_norms", "omp_path", "lars_order",
            "validation_curve", "PCEFit", "fit_pce",
            "fit_pce_outputs", "LOO_RTOL", "TARGET", "POOR_FIT", "PoorFitWarning",
@@ -44,9 +44,11 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats
+import pandas as pd
 from threadpoolctl import threadpool_limits
 
+from ..validate import integer, rng
+from .inputs import Inputs
 from .screening import rank_with_ties
 
 #: Corrected leave-one-out errors closer than this (relative) are ties in model selection:
@@ -70,173 +72,17 @@ class PoorFitWarning(UserWarning):
 
 
 # ------------------------------------------------------------------------------------------
-# Inputs: the law of each input picks its polynomial family.
-# ------------------------------------------------------------------------------------------
-
-class ChaosInputs:
-    """Independent inputs and the orthonormal family each one calls for.
-
-    ``marginals``: one frozen ``scipy.stats`` distribution per input.  A uniform input
-    (``stats.uniform(lo, hi - lo)``) gets Legendre polynomials on z = 2 (x - lo)/(hi - lo) - 1,
-    a normal one (``stats.norm(mu, sd)``) Hermite polynomials on z = (x - mu)/sd, and any other
-    law Hermite polynomials on z = Phi^-1(F(x)) (the isoprobabilistic transform; for laws
-    with a Wiener-Askey family of their own, e.g. Laguerre for the gamma law, this converges
-    more slowly, but it is always valid).
-
-    >>> inp = ChaosInputs([stats.uniform(-1, 2), stats.norm(0, 2)])
-    >>> inp.families
-    ('legendre', 'hermite')
-
-    Parameters
-    ----------
-    marginals : sequence of frozen scipy distributions (d,)
-        The input laws.
-    """
-
-    def __init__(self, marginals):
-        self.marginals = tuple(marginals)
-        if not self.marginals:
-            raise ValueError("need at least one input law")
-        fam = []
-        for i, m in enumerate(self.marginals):
-            if not hasattr(m, "ppf") or not hasattr(m, "cdf"):
-                raise TypeError(f"input {i}: {m!r} is not a frozen scipy.stats distribution")
-            name = getattr(getattr(m, "dist", None), "name", "")
-            fam.append("legendre" if name == "uniform" else "hermite")
-        self.families = tuple(fam)
-        self._kind = tuple(getattr(getattr(m, "dist", None), "name", "") for m in self.marginals)
-
-    @classmethod
-    def uniform(cls, lower, upper) -> ChaosInputs:
-        """Independent uniforms on [lower_i, upper_i] (Legendre families).
-
-        Parameters
-        ----------
-        lower, upper : float or (d,) array_like
-            The bounds, broadcast together; finite with ``lower < upper``.
-
-        Returns
-        -------
-        ChaosInputs
-            One uniform input per (flattened) bound.
-
-        Raises
-        ------
-        ValueError
-            If a bound is not finite or ``lower >= upper``.
-        """
-        lo, hi = np.broadcast_arrays(np.asarray(lower, float), np.asarray(upper, float))
-        if np.any(~np.isfinite(lo) | ~np.isfinite(hi) | (hi <= lo)):
-            raise ValueError("uniform bounds must be finite with lower < upper")
-        return cls([stats.uniform(a, b - a) for a, b in zip(lo.ravel(), hi.ravel(), strict=True)])
-
-    @classmethod
-    def normal(cls, mean, sd) -> ChaosInputs:
-        """Independent normals N(mean_i, sd_i^2) (Hermite families).
-
-        Parameters
-        ----------
-        mean, sd : float or (d,) array_like
-            Means and standard deviations, broadcast together; finite with ``sd > 0``.
-
-        Returns
-        -------
-        ChaosInputs
-            One normal input per (flattened) value.
-
-        Raises
-        ------
-        ValueError
-            If a value is not finite or ``sd <= 0``.
-        """
-        mu, s = np.broadcast_arrays(np.asarray(mean, float), np.asarray(sd, float))
-        if np.any(~np.isfinite(mu) | ~np.isfinite(s) | (s <= 0)):
-            raise ValueError("normal means and standard deviations must be finite, sd > 0")
-        return cls([stats.norm(a, b) for a, b in zip(mu.ravel(), s.ravel(), strict=True)])
-
-    @property
-    def dim(self) -> int:
-        """int: the number of inputs d."""
-        return len(self.marginals)
-
-    def _check(self, x):
-        x = np.asarray(x, dtype=float)
-        if x.ndim != 2 or x.shape[1] != self.dim:
-            raise ValueError(f"inputs must be (n, {self.dim}), got {x.shape}")
-        return x
-
-    def to_standard(self, x) -> np.ndarray:
-        """Physical inputs to the standard variables of the families.
-
-        Uniform: ``z = 2 (x - lo)/(hi - lo) - 1``; normal: ``z = (x - mu)/sd``; any other
-        law: ``z = Phi^-1(F(x))``.
-
-        Parameters
-        ----------
-        x : (n, d) array
-            Inputs in their physical units.
-
-        Returns
-        -------
-        (n, d) ndarray
-            The standard variables.
-
-        Raises
-        ------
-        ValueError
-            If ``x`` is not of shape ``(n, d)``.
-        """
-        x = self._check(x)
-        z = np.empty_like(x)
-        for i, (m, kind) in enumerate(zip(self.marginals, self._kind, strict=True)):
-            if kind == "uniform":
-                lo, hi = m.support()
-                z[:, i] = 2 * (x[:, i] - lo) / (hi - lo) - 1
-            elif kind == "norm":
-                z[:, i] = (x[:, i] - m.mean()) / m.std()
-            else:
-                z[:, i] = stats.norm.ppf(m.cdf(x[:, i]))
-        return z
-
-    def from_standard(self, z) -> np.ndarray:
-        """The inverse of :meth:`to_standard`.
-
-        Parameters
-        ----------
-        z : (n, d) array
-            Standard variables.
-
-        Returns
-        -------
-        (n, d) ndarray
-            The inputs in their physical units.
-
-        Raises
-        ------
-        ValueError
-            If ``z`` is not of shape ``(n, d)``.
-        """
-        z = self._check(z)
-        x = np.empty_like(z)
-        for i, (m, kind) in enumerate(zip(self.marginals, self._kind, strict=True)):
-            if kind == "uniform":
-                lo, hi = m.support()
-                x[:, i] = lo + (z[:, i] + 1) * (hi - lo) / 2
-            elif kind == "norm":
-                x[:, i] = m.mean() + m.std() * z[:, i]
-            else:
-                x[:, i] = m.ppf(stats.norm.cdf(z[:, i]))
-        return x
-
-
-# ------------------------------------------------------------------------------------------
 # Basis and design matrix.
 # ------------------------------------------------------------------------------------------
 
 def multi_indices(dim: int, degree: int, q_norm: float = 1.0) -> np.ndarray:
-    """All multi-indices of total degree <= ``degree`` with q-norm <= degree, (P, dim)
-    (hyperbolic truncation, Blatman & Sudret 2011: (sum_i a_i^q)^(1/q) <= degree; a fresh copy
-    of a cached table: chaospy takes a quarter of a second for 41 dimensions at degree 3).
+    """All multi-indices of total degree <= ``degree`` with q-norm <= degree, (P, dim).
+
+    Hyperbolic truncation (Blatman & Sudret 2011): (sum_i a_i^q)^(1/q) <= degree.  A fresh
+    copy of a cached table: chaospy takes a quarter of a second for 41 dimensions at degree 3.
+
+    >>> multi_indices(2, 2).tolist()
+    [[0, 0], [1, 0], [2, 0], [0, 1], [1, 1], [0, 2]]
 
     Parameters
     ----------
@@ -259,7 +105,7 @@ def multi_indices(dim: int, degree: int, q_norm: float = 1.0) -> np.ndarray:
 
 @functools.lru_cache(maxsize=32)
 def _multi_indices(dim: int, degree: int, q_norm: float) -> np.ndarray:
-    import chaospy
+    import chaospy  # local: chaospy (numpoly) takes a second to import, only bases need it
 
     return np.asarray(chaospy.glexindex(start=0, stop=degree + 1, dimensions=dim,
                                         cross_truncation=q_norm), dtype=np.int64)
@@ -267,7 +113,7 @@ def _multi_indices(dim: int, degree: int, q_norm: float) -> np.ndarray:
 
 @functools.lru_cache(maxsize=16)
 def _family(name: str, degree: int):
-    import chaospy
+    import chaospy  # local: chaospy (numpoly) takes a second to import, only bases need it
 
     if name == "hermite":
         return chaospy.expansion.hermite(degree, normed=True)
@@ -277,22 +123,25 @@ def _family(name: str, degree: int):
 
 
 def poly_table(z: np.ndarray, degree: int, families="hermite") -> np.ndarray:
-    """Orthonormal one-dimensional polynomials of every column of ``z`` (n, d), k = 0..degree:
-    (degree + 1, n, d).  ``families``: one name for all columns or one per column
-    (``hermite``: He_k/sqrt(k!), orthonormal for the standard normal; ``legendre``:
-    sqrt(2k+1) P_k, orthonormal for the uniform law on [-1, 1]); chaospy's families.
+    """Orthonormal one-dimensional polynomials of every column of ``z``, degrees 0..degree.
+
+    ``families``: one name for all columns or one per column (``hermite``: He_k/sqrt(k!),
+    orthonormal for the standard normal; ``legendre``: sqrt(2k+1) P_k, orthonormal for the
+    uniform law on [-1, 1]); chaospy's families.
 
     Parameters
     ----------
     z : array (n, d)
         Standard variables.
     degree : int
+        Highest degree k.
     families : str or tuple of str
         Family per column.
 
     Returns
     -------
     array (degree + 1, n, d)
+        Entry [k, j, i]: the degree-k polynomial of input i at point j.
     """
     z = np.asarray(z, dtype=float)
     if z.ndim != 2:
@@ -309,27 +158,32 @@ def poly_table(z: np.ndarray, degree: int, families="hermite") -> np.ndarray:
 
 
 def hermite_table(xi: np.ndarray, degree: int) -> np.ndarray:
-    """Orthonormal (probabilists') Hermite polynomials He_k(x)/sqrt(k!) of every column,
-    k = 0..degree: (degree + 1, n, d), from chaospy's one-dimensional family.
+    """Orthonormal (probabilists') Hermite polynomials He_k(x)/sqrt(k!) of every column.
+
+    k = 0..degree, from chaospy's one-dimensional family (:func:`poly_table` with
+    ``hermite``).
 
     Parameters
     ----------
     xi : array (n, d)
         Standard normal variables.
     degree : int
+        Highest degree k.
 
     Returns
     -------
     array (degree + 1, n, d)
+        Entry [k, j, i]: He_k/sqrt(k!) of input i at point j.
     """
     return poly_table(xi, degree, "hermite")
 
 
-def design_matrix(z: np.ndarray, alphas: np.ndarray, families="hermite",
+def design_matrix(z: np.ndarray, alphas: np.ndarray, *, families="hermite",
                   block: int = 256) -> np.ndarray:
-    """(n, P) matrix of the multivariate orthonormal polynomials ``alphas`` (P, d) at the
-    standard variables ``z`` (n, d); Fortran-ordered (each column contiguous, as the solvers
-    read it).
+    """(n, P) matrix of the multivariate orthonormal polynomials ``alphas`` at the points ``z``.
+
+    ``alphas`` (P, d) multi-indices, ``z`` (n, d) standard variables; Fortran-ordered (each
+    column contiguous, as the solvers read it).
 
     Each column is a product over the non-zero entries of its multi-index, gathered from the
     one-dimensional table ``block`` terms at a time (cache-sized pieces): the cost is
@@ -377,8 +231,9 @@ def design_matrix(z: np.ndarray, alphas: np.ndarray, families="hermite",
 # ------------------------------------------------------------------------------------------
 
 def loo_error(psi: np.ndarray, y: np.ndarray, corrected: bool = True) -> tuple[float, np.ndarray]:
-    """Relative leave-one-out error of the least-squares fit of ``y`` on ``psi`` (n, k), from
-    the hat matrix (no refits), and the coefficients.  ``corrected`` applies Chapelle's factor
+    """Relative leave-one-out error of the least-squares fit of ``y`` on ``psi``, and coefficients.
+
+    From the hat matrix (no refits).  ``corrected`` applies Chapelle's factor
     T(k, n) = n/(n-k) (1 + tr((psi^T psi / n)^-1)/n), as UQLab does.
 
     Parameters
@@ -409,8 +264,9 @@ def loo_error(psi: np.ndarray, y: np.ndarray, corrected: bool = True) -> tuple[f
 
 
 def loo_path(psi: np.ndarray, y: np.ndarray, corrected: bool = True) -> np.ndarray:
-    """:func:`loo_error` of the fits of ``y`` on every leading block ``psi[:, :k]``,
-    k = 1..K, from one QR factorisation: the QR of a leading block is the leading part of the
+    """:func:`loo_error` of the fits of ``y`` on every leading block ``psi[:, :k]``, k = 1..K.
+
+    From one QR factorisation: the QR of a leading block is the leading part of the
     QR of the whole, so hat-matrix diagonals, residuals and the trace of the inverse Gram
     matrix are cumulative sums over the columns of Q and R^-1.  Returns (K,) errors; equal to
     :func:`loo_error` on each block up to rounding (a test checks it).
@@ -465,10 +321,12 @@ def column_norms(psi: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     psi : array (n, P)
+        A design matrix: n samples of P basis polynomials.
 
     Returns
     -------
     array (P,)
+        The norms, 1 for an all-zero column (so that dividing by them leaves it zero).
     """
     t = psi.T if psi.flags.f_contiguous else np.ascontiguousarray(psi.T)
     norms = np.sqrt(np.einsum("ij,ij->i", t, t))
@@ -476,12 +334,13 @@ def column_norms(psi: np.ndarray) -> np.ndarray:
     return norms
 
 
-def omp_path(psi: np.ndarray, y: np.ndarray, max_terms: int | None = None,
+def omp_path(psi: np.ndarray, y: np.ndarray, *, max_terms: int | None = None,
              patience: int | None = 8, target: float = 0.0, norms: np.ndarray | None = None,
              rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Orthogonal matching pursuit on the non-constant columns ``psi[:, 1:]`` with the constant
-    column ``psi[:, 0]`` always in the model, and the corrected LOO error of the least-squares
-    fit on every prefix of the path.
+    """Orthogonal matching pursuit with the constant always in, and the LOO error of every prefix.
+
+    OMP on the non-constant columns ``psi[:, 1:]``, the constant column ``psi[:, 0]`` always in
+    the model, with the corrected LOO error of the least-squares fit on every prefix of the path.
 
     Each step takes the column of largest ``|correlation|`` with the residual (columns compared
     at unit norm; ties go to the first), orthogonalises it against the columns taken (classical
@@ -596,11 +455,12 @@ def omp_path(psi: np.ndarray, y: np.ndarray, max_terms: int | None = None,
     return np.asarray(order, dtype=np.int64), np.asarray(loo)
 
 
-def lars_order(psi: np.ndarray, y: np.ndarray, max_terms: int,
+def lars_order(psi: np.ndarray, y: np.ndarray, *, max_terms: int,
                rows: np.ndarray | None = None) -> np.ndarray:
-    """The non-constant columns of ``psi`` in the order least-angle regression
-    (``sklearn.linear_model.lars_path``, method ``lar``: columns only enter) activates them,
-    on centred columns at unit norm; at most ``max_terms``.  The least-squares fits on its
+    """The non-constant columns of ``psi`` in the order least-angle regression activates them.
+
+    ``sklearn.linear_model.lars_path``, method ``lar`` (columns only enter), on centred
+    columns at unit norm; at most ``max_terms``.  The least-squares fits on its
     prefixes ("hybrid LARS", Blatman & Sudret 2011) are evaluated as for OMP.
 
     Parameters
@@ -619,6 +479,7 @@ def lars_order(psi: np.ndarray, y: np.ndarray, max_terms: int,
     array of int
         Column indices in activation order.
     """
+    # local: scikit-learn's import takes half a second, and only the LARS solver needs it
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.linear_model import lars_path
 
@@ -639,7 +500,8 @@ def _solver_path(psi, y, method, max_terms, patience, target, norms, rows=None):
     """``(order, loo)`` of :func:`omp_path` for OMP, or of LARS's order with :func:`loo_path`
     (grown by doubling until ``patience`` steps past the best LOO or the cap)."""
     if method == "omp":
-        return omp_path(psi, y, max_terms, patience, target, norms, rows)
+        return omp_path(psi, y, max_terms=max_terms, patience=patience, target=target,
+                        norms=norms, rows=rows)
     if method != "lars":
         raise ValueError(f"unknown sparse solver {method!r}; allowed: omp, lars")
     n = psi.shape[0] if rows is None else len(rows)
@@ -647,7 +509,7 @@ def _solver_path(psi, y, method, max_terms, patience, target, norms, rows=None):
     length = min(32, cap)
     yy = y if rows is None else y[rows]
     while True:
-        order = lars_order(psi, y, length, rows)
+        order = lars_order(psi, y, max_terms=length, rows=rows)
         sub = psi[:, [0, *order]] if rows is None else psi[np.ix_(rows, [0, *order])]
         loo = loo_path(sub, yy)
         best = int(np.argmin(loo))
@@ -670,7 +532,7 @@ class PCEFit:
     """A sparse PCE of one output: multi-indices and coefficients of the kept terms.
 
     ``alphas`` (k, d), ``coef`` (k,) in the orthonormal basis of ``families`` (one name per
-    input; the inputs are the standard variables of :class:`ChaosInputs`), ``loo`` the corrected
+    input; the inputs are the standard variables of :class:`Inputs`), ``loo`` the corrected
     leave-one-out error of the kept model, ``validation`` the k-fold validation error of the
     selection procedure (NaN when not computed), ``n_candidates`` the size of the truncated
     basis the solver chose from.
@@ -711,7 +573,7 @@ class PCEFit:
         Parameters
         ----------
         z : (n, d) array
-            Standard variables of the inputs (:meth:`ChaosInputs.to_standard`).
+            Standard variables of the inputs (:meth:`Inputs.to_standard`).
 
         Returns
         -------
@@ -721,13 +583,14 @@ class PCEFit:
         return design_matrix(z, self.alphas, self.families) @ self.coef
 
 
-def fit_pce(xi: np.ndarray, y: np.ndarray, degree: int = 3, q_norm: float = 1.0,
+def fit_pce(xi: np.ndarray, y: np.ndarray, *, degree: int = 3, q_norm: float = 1.0,
             max_terms: int | None = None, patience: int = 8, psi: np.ndarray | None = None,
             alphas: np.ndarray | None = None, target: float = TARGET,
             families="hermite", method: str = "omp") -> PCEFit:
-    """Sparse PCE of one output by OMP (or LARS) on a fixed basis; the number of terms is chosen
-    by corrected LOO along the path (UQLab's rule; for a validated choice see
-    :func:`fit_sparse_pce`).
+    """Sparse PCE of one output by OMP (or LARS) on a fixed basis, its length by corrected LOO.
+
+    The number of terms is chosen by corrected LOO along the path (UQLab's rule; for a
+    validated choice see :func:`fit_sparse_pce`).
 
     The path stops ``patience`` steps after the best LOO error, or as soon as the relative LOO
     error reaches ``target`` (the variance is then explained to about eight digits; further
@@ -766,17 +629,20 @@ def fit_pce(xi: np.ndarray, y: np.ndarray, degree: int = 3, q_norm: float = 1.0,
     PCEFit
     """
     y = np.asarray(y, dtype=float)
-    return fit_pce_outputs(xi, y[:, None], degree, q_norm, max_terms, patience, psi, alphas,
-                           target, families, method)[0]
+    return fit_pce_outputs(xi, y[:, None], degree=degree, q_norm=q_norm, max_terms=max_terms,
+                           patience=patience, psi=psi, alphas=alphas, target=target,
+                           families=families, method=method)[0]
 
 
-def fit_pce_outputs(xi: np.ndarray, y: np.ndarray, degree: int = 3, q_norm: float = 1.0,
+def fit_pce_outputs(xi: np.ndarray, y: np.ndarray, *, degree: int = 3, q_norm: float = 1.0,
                     max_terms: int | None = None, patience: int = 8,
                     psi: np.ndarray | None = None, alphas: np.ndarray | None = None,
                     target: float = TARGET, families="hermite",
                     method: str = "omp") -> list[PCEFit]:
-    """:func:`fit_pce` for every column of ``y`` (n, q) on one design: the basis, the design
-    matrix and its column norms are built once.  BLAS runs single-threaded here: the result is
+    """:func:`fit_pce` for every column of ``y`` (n, q) on one design, built once.
+
+    The basis, the design matrix and its column norms are built once.  BLAS runs
+    single-threaded here: the result is
     then the same for any thread count, and the many small BLAS calls of the path do not stall
     when another process shares the cores.
 
@@ -817,7 +683,7 @@ def fit_pce_outputs(xi: np.ndarray, y: np.ndarray, degree: int = 3, q_norm: floa
         if alphas is None:
             alphas = multi_indices(xi.shape[1], degree, q_norm)
         if psi is None:
-            psi = design_matrix(xi, alphas, families)
+            psi = design_matrix(xi, alphas, families=families)
         norms = column_norms(psi)
         fits = []
         for col in y.T:
@@ -847,7 +713,7 @@ def _final_fit(psi, y, alphas, order, loo, degree, q_norm, families, method, len
                   method, fam)
 
 
-def pce_selection_order(loo, basis, terms, degree, q_norm, rtol: float = LOO_RTOL,
+def pce_selection_order(loo, basis, terms, degree, q_norm, *, rtol: float = LOO_RTOL,
                         floor: float = 0.0) -> np.ndarray:
     """Canonical ranking of candidate PCEs (one entry per fit) for model selection.
 
@@ -876,11 +742,12 @@ def pce_selection_order(loo, basis, terms, degree, q_norm, rtol: float = LOO_RTO
     return rank_with_ties(np.maximum(loo, floor), keys, rtol=rtol)
 
 
-def select_pce(xi, y, degrees=(1, 2, 3), q_norms=(0.5, 0.75, 1.0), rtol: float = LOO_RTOL,
+def select_pce(xi, y, *, degrees=(1, 2, 3), q_norms=(0.5, 0.75, 1.0), rtol: float = LOO_RTOL,
                **kw) -> tuple[PCEFit, list]:
-    """Fit every (degree, q-norm) and keep the best by corrected LOO error, differences
-    below ``rtol`` (relative) and LOO errors below the fits' target accuracy (``target``,
-    see :func:`fit_pce`) being ties that go to the smallest basis
+    """Fit every (degree, q-norm) and keep the best by corrected LOO error.
+
+    Differences below ``rtol`` (relative) and LOO errors below the fits' target accuracy
+    (``target``, see :func:`fit_pce`) are ties that go to the smallest basis
     (:func:`pce_selection_order`).  Returns the chosen fit and a list of (degree, q_norm,
     basis size, kept terms, LOO) in grid order.
 
@@ -891,7 +758,9 @@ def select_pce(xi, y, degrees=(1, 2, 3), q_norms=(0.5, 0.75, 1.0), rtol: float =
     y : array (n,)
         The output.
     degrees : sequence of int
+        Total degrees tried.
     q_norms : sequence of float
+        q-norms tried at each degree.
     rtol : float
         Relative tie window.
     **kw
@@ -910,7 +779,8 @@ def select_pce(xi, y, degrees=(1, 2, 3), q_norms=(0.5, 0.75, 1.0), rtol: float =
             table.append((p, q, f.n_candidates, len(f.coef), f.loo))
     t = np.array(table, dtype=float)
     floor = kw.get("target", TARGET)
-    order = pce_selection_order(t[:, 4], t[:, 2], t[:, 3], t[:, 0], t[:, 1], rtol, floor)
+    order = pce_selection_order(t[:, 4], t[:, 2], t[:, 3], t[:, 0], t[:, 1], rtol=rtol,
+                                floor=floor)
     return fits[order[0]], table
 
 
@@ -926,7 +796,7 @@ class SparsePCE:
     (degree, q_norm, basis, terms, loo) in the order tried; ``validation_curve``: the k-fold
     validation error of the chosen basis against the number of non-constant terms (index k =
     k terms); ``s1``, ``st``: the Sobol indices from the coefficients; ``reliable``: the
-    validation error is at most ``poor_fit``.
+    validation error is at most ``poor_fit``; :meth:`to_df` the indices labelled by input.
 
     Attributes
     ----------
@@ -938,12 +808,15 @@ class SparsePCE:
         Validation error of the chosen basis against the number of terms.
     poor_fit : float
         Validation error above which the fit is flagged unreliable.
+    names : tuple of str (d,)
+        The input names (:attr:`Inputs.names`; empty: ``x1`` ... ``xd``).
     """
 
     fit: PCEFit
     candidates: list = field(default_factory=list)
     validation_curve: np.ndarray = field(default_factory=lambda: np.zeros(0))
     poor_fit: float = POOR_FIT
+    names: tuple = ()
 
     @property
     def s1(self) -> np.ndarray:
@@ -960,22 +833,68 @@ class SparsePCE:
         """bool: the k-fold validation error is at most ``poor_fit``."""
         return bool(self.fit.validation <= self.poor_fit)
 
+    def to_df(self, output: str = "y") -> pd.DataFrame:
+        """The indices as a long table, one row per input, labelled by output and input name.
+
+        A PCE's indices are read off its coefficients and carry no sampling interval; the
+        table says how far to trust them instead, in the columns ``validation`` (the k-fold
+        validation error of the fit) and ``reliable``.
+
+        Parameters
+        ----------
+        output : str
+            The name of the fitted output (the ``output`` column).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``output``, ``input``, ``S1``, ``ST``, ``validation``, ``reliable``; d rows
+            in input order.
+        """
+        s1, st = pce_sobol(self.fit)
+        names = self.names or tuple(f"x{i + 1}" for i in range(s1.size))
+        return pd.DataFrame({"output": output, "input": list(names), "S1": s1, "ST": st,
+                             "validation": self.fit.validation, "reliable": self.reliable})
+
 
 def _folds(n: int, k: int, seed) -> list[np.ndarray]:
     """``k`` disjoint validation parts of ``range(n)`` (a seeded permutation cut in k), sorted."""
-    perm = np.random.default_rng(seed).permutation(n)
+    perm = rng(seed).permutation(n)
     return [np.sort(perm[i::k]) for i in range(k)]
 
 
-def validation_curve(psi: np.ndarray, y: np.ndarray, method: str = "omp", length: int = 100,
+def _check_folds(folds, n: int) -> int:
+    """``folds`` as an int in [2, n // 2], the one bound of the k-fold validation.
+
+    What the code needs is a held-out part of at least one point per fold (k <= n).  The
+    bound asks for two: a held-out part of one point makes every fold a leave-one-out
+    refit of the whole path (n path runs, the cost k-fold validation is there to avoid), and
+    ``n // 2`` is the largest k whose parts all hold two points or more.  (``fit_sparse_pce``
+    used to stop at n/4 and ``validation_curve`` at n/2: nothing in either needs n/4.)
+
+    Parameters
+    ----------
+    folds : int
+        The number of folds asked for.
+    n : int
+        The number of points cut into folds.
+
+    Returns ``folds`` as a Python int; a ValueError unless it is an integer in [2, n // 2].
+    """
+    return integer(folds, "folds", low=2, high=n // 2)
+
+
+def validation_curve(psi: np.ndarray, y: np.ndarray, *, method: str = "omp", length: int = 100,
                      folds: int = 5, norms: np.ndarray | None = None, seed=0
                      ) -> tuple[np.ndarray, np.ndarray]:
-    """k-fold validation error of the path against its length: for each fold the solver path
-    is run on the other parts (to ``length`` terms, no early stop), the least-squares fits on
-    its prefixes predict the held-out part, and the squared errors are pooled over folds.
-    Returns ``curve`` (length + 1,): mean squared error / Var(y) (index k: the constant plus
-    k terms; lengths a fold's path did not reach are infinite) and ``se`` (length + 1,): its
-    standard error (standard deviation of the n pooled squared errors / sqrt(n), / Var(y)).
+    """k-fold validation error of the solver path against its length, and its standard error.
+
+    For each fold the solver path is run on the other parts (to ``length`` terms, no early
+    stop), the least-squares fits on its prefixes predict the held-out part, and the squared
+    errors are pooled over folds.  Returns ``curve`` (length + 1,): mean squared error /
+    Var(y) (index k: the constant plus k terms; lengths a fold's path did not reach are
+    infinite) and ``se`` (length + 1,): its standard error (standard deviation of the n pooled
+    squared errors / sqrt(n), / Var(y)).
 
     Parameters
     ----------
@@ -986,33 +905,37 @@ def validation_curve(psi: np.ndarray, y: np.ndarray, method: str = "omp", length
     method : {"omp", "lars"}
         The solver.
     length : int
-        Path length.
+        Path length (>= 0).
     folds : int
-        Folds, 2..n/2.
+        Folds, 2..n/2 (:func:`check_folds`).
     norms : array (P,), optional
         :func:`column_norms` of ``psi``.
-    seed : int
-        Seed of the folds.
+    seed : None, int or numpy.random.Generator
+        Randomness of the folds (:func:`mtaccuracy.validate.rng`).
 
     Returns
     -------
     curve : array (length + 1,)
+        Validation error over Var(y) per path length.
     se : array (length + 1,)
+        Its standard error.
     """
     if method not in ("omp", "lars"):
         raise ValueError(f"unknown sparse solver {method!r}; allowed: omp, lars")
     n = psi.shape[0]
-    if int(folds) != folds or not 2 <= folds <= n // 2:
-        raise ValueError(f"folds must be an integer from 2 to n/2 = {n // 2}, got {folds!r}")
+    folds = _check_folds(folds, n)
+    length = integer(length, "length", low=0)
     norms = column_norms(psi) if norms is None else norms
     sq = np.zeros((n, length + 1))
     reached = length
     for test in _folds(n, folds, seed):
         train = np.setdiff1d(np.arange(n), test, assume_unique=True)
         if method == "omp":
-            order, _ = omp_path(psi, y, length, None, 0.0, norms, train)
+            order, _ = omp_path(psi, y, max_terms=length, patience=None, norms=norms,
+                                rows=train)
         else:
-            order = lars_order(psi, y, min(length, len(train) - 2, psi.shape[1] - 1), train)
+            order = lars_order(psi, y, max_terms=min(length, len(train) - 2, psi.shape[1] - 1),
+                               rows=train)
         cols = [0, *order]
         coefs = _prefix_coefficients(psi[np.ix_(train, cols)], y[train])     # (K+1, K+1)
         pred = psi[np.ix_(test, cols)] @ coefs                               # (n_test, K+1)
@@ -1041,21 +964,24 @@ def _pick(cands, target) -> int | None:
 
 
 def _validated_length(psi, y, method, folds, norms, seed, patience, target, start=16):
-    """The k-fold validation curve of the path on ``psi`` (:func:`validation_curve`), its
-    length doubled from ``start`` while the smallest error lies within ``patience`` steps of the
-    end (and the end is not the cap n_train - 2 or P - 1); returns (curve, se, best length)."""
+    """The k-fold validation curve of the path on ``psi``, its length grown until it turns.
+
+    :func:`validation_curve`, its length doubled from ``start`` while the smallest error lies
+    within ``patience`` steps of the end (and the end is not the cap n_train - 2 or P - 1);
+    returns (curve, se, best length)."""
     n = psi.shape[0]
     cap = min(psi.shape[1] - 1, n - -(-n // folds) - 2)
     length = min(cap, start)
     while True:
-        curve, se = validation_curve(psi, y, method, length, folds, norms, seed)
+        curve, se = validation_curve(psi, y, method=method, length=length, folds=folds,
+                                     norms=norms, seed=seed)
         k = _best_length(curve, floor=target)
         if k <= length - patience or length >= cap or curve[k] <= target:
             return curve, se, k
         length = min(cap, 2 * length)
 
 
-def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = None,
+def fit_sparse_pce(x: np.ndarray, y: np.ndarray, *, inputs: Inputs | None = None,
                    degrees=(1, 2, 3), q_norms=(0.5, 0.75, 1.0), method: str = "omp",
                    folds: int = 5, seed=0, degree_patience: int = 2, patience: int = 10,
                    target: float = TARGET, poor_fit: float = POOR_FIT,
@@ -1063,7 +989,7 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
     """Basis-adaptive sparse PCE of one output, every choice made on a validation error.
 
     1. **Basis**: the standard variables of ``inputs`` (``x`` physical inputs (n, d); None:
-       ``x`` are already standard normal) and their families (:class:`ChaosInputs`).
+       ``x`` are already standard normal) and their families (:class:`Inputs`).
     2. **Validation error of a basis**: ``folds``-fold cross validation of the whole solver
        path (:func:`validation_curve`: the path, ``omp`` or ``lars``, is re-run on every
        training part, so the choice of the terms is validated and not only their
@@ -1094,8 +1020,8 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
         Inputs (physical, or standard normal when ``inputs`` is None).
     y : array (n,)
         The output.
-    inputs : ChaosInputs, optional
-        The input laws.
+    inputs : Inputs, optional
+        The input laws and names (None: ``x`` standard normal, named ``x1`` ... ``xd``).
     degrees : sequence of int
         Degrees tried, ascending.
     q_norms : sequence of float
@@ -1103,9 +1029,10 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
     method : {"omp", "lars"}
         The sparse solver.
     folds : int
-        Folds of the validation.
-    seed : int
-        Seed of the folds.
+        Folds of the validation, 2..n/2 (:func:`check_folds`).
+    seed : None, int or numpy.random.Generator
+        Randomness of the folds (:func:`mtaccuracy.validate.rng`); a Generator is read once
+        per candidate basis, so pass an int for folds that are the same for every basis.
     degree_patience : int
         Degrees without improvement before stopping.
     patience : int
@@ -1128,19 +1055,18 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
         raise ValueError("x and y must be finite")
     n, d = x.shape
-    if int(folds) != folds or not 2 <= folds <= n // 4:
-        raise ValueError(f"folds must be an integer in [2, n/4] (n = {n}), got {folds!r}")
+    folds = _check_folds(folds, n)
     if method not in ("omp", "lars"):
         raise ValueError(f"unknown sparse solver {method!r}; allowed: omp, lars")
     degrees = sorted({int(p) for p in degrees})
     if not degrees or degrees[0] < 1:
         raise ValueError(f"degrees must be integers >= 1, got {degrees!r}")
     if inputs is None:
-        z, families = x, "hermite"
+        z, families, names = x, "hermite", tuple(f"x{i + 1}" for i in range(d))
     else:
         if inputs.dim != d:
             raise ValueError(f"{inputs.dim} input laws for {d} input columns")
-        z, families = inputs.to_standard(x), inputs.families
+        z, families, names = inputs.to_standard(x), inputs.families, inputs.names
     with threadpool_limits(limits=1, user_api="blas"):
         cands, kept, seen, worse, lowest = [], [], set(), 0, np.inf
         for p in degrees:
@@ -1154,7 +1080,7 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
                 if alphas.shape[0] > max_basis:
                     raise ValueError(f"degree {p}, q-norm {q:g}: {alphas.shape[0]} terms, above "
                                      f"max_basis = {max_basis}")
-                psi = design_matrix(z, alphas, families)
+                psi = design_matrix(z, alphas, families=families)
                 norms = column_norms(psi)
                 curve, se, k = _validated_length(psi, y, method, folds, norms, seed, patience,
                                                  target)
@@ -1169,7 +1095,7 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
         curve, k = kept[i]
         pick = cands[i]
         alphas = multi_indices(d, pick["degree"], pick["q_norm"])
-        psi = design_matrix(z, alphas, families)  # rebuilt: cheaper than keeping every one
+        psi = design_matrix(z, alphas, families=families)  # rebuilt: cheaper than keeping every one
         norms = column_norms(psi)
         order, loo = _solver_path(psi, y, method, max(k, 1), None, 0.0, norms)
         fit = _final_fit(psi, y, alphas, order, loo, pick["degree"], pick["q_norm"], families,
@@ -1177,7 +1103,7 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
         for j, c in enumerate(cands):
             c["chosen"] = j == i
             c["loo"] = fit.loo if j == i else float("nan")
-    res = SparsePCE(fit, cands, curve, poor_fit)
+    res = SparsePCE(fit, cands, curve, poor_fit, names)
     if not res.reliable:
         warnings.warn(f"sparse PCE: validation error {fit.validation:.3g} (share of the variance "
                       f"not explained, {folds}-fold) is above {poor_fit:g}; its Sobol indices "
@@ -1187,18 +1113,21 @@ def fit_sparse_pce(x: np.ndarray, y: np.ndarray, inputs: ChaosInputs | None = No
 
 
 def pce_sobol(fit: PCEFit) -> tuple[np.ndarray, np.ndarray]:
-    """First-order and total Sobol indices (d,) from the coefficients (Zheng et al. Eq. 23;
-    Sudret 2008): the variance of an orthonormal PCE is the sum of its squared non-constant
-    coefficients, and an index sums those of the terms that hold only (S1) or also (ST) the
-    input.
+    """First-order and total Sobol indices (d,) from the coefficients of a PCE.
+
+    Zheng et al. Eq. 23; Sudret 2008: the variance of an orthonormal PCE is the sum of its
+    squared non-constant coefficients, and an index sums those of the terms that hold only
+    (S1) or also (ST) the input.
 
     Parameters
     ----------
     fit : PCEFit
+        A fit in an orthonormal basis (constant term included).
 
     Returns
     -------
     s1, st : arrays (d,)
+        First-order and total indices, in input order.
     """
     a = fit.alphas
     c2 = fit.coef**2

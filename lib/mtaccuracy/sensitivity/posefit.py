@@ -26,28 +26,32 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import least_squares, minimize
+from threadpoolctl import threadpool_limits
+
+from mtaccuracy import validate
 
 __all__ = ["pose_residuals", "screen_poses", "fit_pose", "least_squares_starts"]
 
 
-def pose_residuals(statistic: Callable[[dict], np.ndarray], published, entries: Sequence,
+def pose_residuals(statistic: Callable[[dict], np.ndarray], published, entries: Sequence, *,
                    free: Sequence[str], fixed: Mapping | None = None
                    ) -> Callable[[np.ndarray], np.ndarray]:
-    """The residual function of a pose search.
+    """The residual function of a pose search: free-axis vectors to model minus published.
 
     Parameters
     ----------
     statistic : callable
         ``statistic(pose) -> (B, ...)`` for ``pose = {axis: (B,) array}`` (mm, rad).
     published : array (m,)
-        The published values.
+        The published values the statistic is compared with.
     entries : sequence of arrays (m,)
         One index array per trailing axis of the statistic: published value ``j`` sits at
         ``statistic(pose)[:, entries[0][j], entries[1][j], ...]``.
     free : sequence of str
         The axes the search moves, in the order of the vectors it passes.
     fixed : mapping, optional
-        The other axes' values, the same for every pose.
+        The other axes' values (mm, rad), the same for every pose; none both free and fixed.
 
     Returns
     -------
@@ -72,7 +76,7 @@ def pose_residuals(statistic: Callable[[dict], np.ndarray], published, entries: 
     return residuals
 
 
-def screen_poses(statistic: Callable[[dict], np.ndarray], published, entries: Sequence,
+def screen_poses(statistic: Callable[[dict], np.ndarray], published, entries: Sequence, *,
                  poses: Mapping) -> tuple[np.ndarray, np.ndarray]:
     """RMS misfit of many candidate poses, evaluated in one call of ``statistic``.
 
@@ -81,11 +85,11 @@ def screen_poses(statistic: Callable[[dict], np.ndarray], published, entries: Se
     statistic : callable
         ``statistic(pose) -> (P, ...)`` (see :func:`pose_residuals`).
     published : array (m,)
-        The published values.
+        The published values the statistic is compared with.
     entries : sequence of arrays (m,)
         Where each published value sits in the statistic's trailing axes.
     poses : mapping
-        ``{axis: (P,) array}`` (mm, rad): the candidates.
+        ``{axis: (P,) array}`` (mm, rad): the candidates, every axis the statistic needs.
 
     Returns
     -------
@@ -101,8 +105,9 @@ def screen_poses(statistic: Callable[[dict], np.ndarray], published, entries: Se
     return np.sqrt(((values - published) ** 2).mean(axis=-1)), full
 
 
-def least_squares_starts(residuals: Callable[[np.ndarray], np.ndarray], starts, lo, hi, scale,
-                         ftol: float = 1e-15, xtol: float = 1e-15, max_nfev: int = 500) -> list:
+def least_squares_starts(residuals: Callable[[np.ndarray], np.ndarray], starts, *, lo, hi,
+                         scale, ftol: float = 1e-15, xtol: float = 1e-15,
+                         max_nfev: int = 500) -> list:
     """scipy's ``least_squares`` from each start, with a batched central-difference Jacobian.
 
     Trust-region reflective within ``lo``/``hi``; the Jacobian's steps are ``1e-6 * scale`` and
@@ -112,26 +117,25 @@ def least_squares_starts(residuals: Callable[[np.ndarray], np.ndarray], starts, 
     Parameters
     ----------
     residuals : callable
-        ``(B, k)`` parameter vectors to ``(B, m)`` residuals.
+        ``(B, k)`` parameter vectors to ``(B, m)`` residuals, batched.
     starts : array (s, k)
-        Start vectors (clipped into the bounds).
+        Start vectors, one fit each (clipped into the bounds).
     lo, hi : arrays (k,)
-        Bounds (``-inf``/``inf`` for none).
+        Lower and upper bounds of the parameters (``-inf``/``inf`` for none).
     scale : array (k,)
-        Typical size of each parameter (``x_scale``).
+        Typical size of each parameter (``x_scale``; the Jacobian's steps are 1e-6 of it).
     ftol, xtol : float
         Stop when the relative change of the cost or of the step falls below them.
     max_nfev : int
-        Evaluations allowed per start.
+        Evaluations allowed per start (>= 1).
 
     Returns
     -------
     list of (array (k,), float, int)
         Per start: the optimum, the RMS of its residuals and the optimiser's status.
     """
-    from scipy.optimize import least_squares
-    from threadpoolctl import threadpool_limits
-
+    max_nfev = validate.integer(max_nfev, "max_nfev", low=1)
+    scale = np.asarray(scale, dtype=float)
     n, step = len(scale), 1e-6 * scale
 
     def fun(v):
@@ -153,8 +157,6 @@ def least_squares_starts(residuals: Callable[[np.ndarray], np.ndarray], starts, 
 
 
 def _powell(residuals, starts, options) -> list:
-    from scipy.optimize import minimize
-
     def objective(v):
         return float(np.sqrt((residuals(v[None])[0] ** 2).mean()))
 
@@ -165,8 +167,8 @@ def _powell(residuals, starts, options) -> list:
     return out
 
 
-def fit_pose(statistic: Callable[[dict], np.ndarray], published, entries: Sequence, starts,
-             free: Sequence[str], *, fixed: Mapping | None = None, bounds=None, scale=None,
+def fit_pose(statistic: Callable[[dict], np.ndarray], published, entries: Sequence, *, starts,
+             free: Sequence[str], fixed: Mapping | None = None, bounds=None, scale=None,
              method: str = "least_squares", ftol: float = 1e-15, xtol: float = 1e-15,
              max_nfev: int = 500, options: Mapping | None = None) -> pd.DataFrame:
     """Fit the pose whose statistic best matches the published values, from each start.
@@ -176,15 +178,15 @@ def fit_pose(statistic: Callable[[dict], np.ndarray], published, entries: Sequen
     statistic : callable
         ``statistic(pose) -> (B, ...)`` for ``pose = {axis: (B,) array}`` (mm, rad).
     published : array (m,)
-        The published values.
+        The published values the statistic is fitted to.
     entries : sequence of arrays (m,)
         Where each published value sits in the statistic's trailing axes.
     starts : array (s, len(free))
-        Start values of the free axes (mm, rad).
+        Start values of the free axes (mm, rad), one fit each.
     free : sequence of str
-        The axes fitted.
+        The axes fitted, in the order of the columns of ``starts``.
     fixed : mapping, optional
-        The other axes' values.
+        The other axes' values (mm, rad), the same for every fit.
     bounds : (lo, hi), optional
         Arrays (len(free),) of bounds (``-inf``/``inf`` for none; least squares only).
     scale : array (len(free),), optional
@@ -194,8 +196,10 @@ def fit_pose(statistic: Callable[[dict], np.ndarray], published, entries: Sequen
         Trust-region reflective least squares (a smooth statistic), run until the relative
         change of the cost falls below ``ftol`` or of the step below ``xtol``; or Powell's
         method on the RMS misfit with ``options`` (a piecewise-constant statistic).
-    ftol, xtol, max_nfev
-        Stopping rules of ``least_squares``.
+    ftol, xtol : float
+        Relative changes of the cost and of the step below which ``least_squares`` stops.
+    max_nfev : int
+        Evaluations per start allowed to ``least_squares``.
     options : mapping, optional
         ``scipy.optimize.minimize`` options of Powell's method.
 
@@ -209,12 +213,13 @@ def fit_pose(statistic: Callable[[dict], np.ndarray], published, entries: Sequen
     starts = np.atleast_2d(np.asarray(starts, dtype=float))
     if starts.shape[1] != len(free):
         raise ValueError(f"starts must have {len(free)} columns ({free}), got {starts.shape}")
-    residuals = pose_residuals(statistic, published, entries, free, fixed)
+    residuals = pose_residuals(statistic, published, entries, free=free, fixed=fixed)
     if method == "least_squares":
         scale = np.ones(len(free)) if scale is None else np.asarray(scale, dtype=float)
         lo, hi = ((np.full(len(free), -np.inf), np.full(len(free), np.inf)) if bounds is None
                   else (np.asarray(bounds[0], dtype=float), np.asarray(bounds[1], dtype=float)))
-        fits = least_squares_starts(residuals, starts, lo, hi, scale, ftol, xtol, max_nfev)
+        fits = least_squares_starts(residuals, starts, lo=lo, hi=hi, scale=scale, ftol=ftol,
+                                    xtol=xtol, max_nfev=max_nfev)
     elif method == "powell":
         fits = _powell(residuals, starts, options or {})
     else:

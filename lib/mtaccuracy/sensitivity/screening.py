@@ -16,15 +16,15 @@ indices therefore leaves an RMS residual of ``sqrt(1 - s)`` of the full model's 
 Written by hand because the rule is the paper's own (a few lines); the indices come from
 :mod:`.sobol` (this module imports it, never the reverse).
 
-Ties: every rule here that ranks estimated indices (:func:`key_set_bootstrap`,
-:func:`cumulative_share_margin`) first merges values equal within the floating-point resolution
-of the estimates (:func:`mtaccuracy.sensitivity.merge_ties`), so that errors entering the model
-identically are ordered by catalogue position, on every machine.  :func:`key_errors` itself
-breaks exact ties by catalogue order (a stable sort) and takes the values as given.
-
-:func:`rank_with_ties` is the ranking every selection here and elsewhere in the compendium
-uses when candidates can be equal up to rounding (optimiser minima, competing models): values
-within a stated tolerance are ties, broken by a canonical key, never by noise.
+Ties: one rule, :func:`ties`, says when two values are equal (within a relative and an absolute
+tolerance); every ranking in the compendium is built on it.  :func:`merge_ties` applies it to
+estimated indices at their floating-point resolution (:data:`TIE_REL`, :data:`TIE_ABS`), so that
+errors entering the model identically are ordered by catalogue position on every machine (the
+90 % rule's bootstrap, :func:`key_set_bootstrap`, and its margin,
+:func:`cumulative_share_margin`, merge first); :func:`rank_with_ties` applies it with a
+tolerance the caller states (optimiser minima, competing models) and breaks ties by a canonical
+key.  :func:`key_errors` itself breaks exact ties by catalogue order (a stable sort) and takes
+the values as given.
 """
 
 from __future__ import annotations
@@ -32,44 +32,146 @@ from __future__ import annotations
 __all__ = ["KeySet", "key_errors", "key_errors_by_output", "union_key_set",
            "simplification_rate", "pooled_indices", "zero_non_key", "reduced_model",
            "residual_summary", "expected_rms_ratio", "threshold_sweep", "key_set_bootstrap",
-           "cumulative_share_margin", "rank_with_ties"]
+           "cumulative_share_margin", "TIE_REL", "TIE_ABS", "ties", "merge_ties",
+           "rank_with_ties"]
 
 import functools
+import numbers
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from .sobol import merge_ties
+from mtaccuracy import validate
+
+from .sobol import FLOAT_NOISE
 
 #: A share counts as exceeding the threshold only if it is larger by more than this (so that a
 #: share equal to the threshold up to rounding, e.g. 0.6 + 0.3 against 0.9, does not count).
 EXCEED_TOL = 1e-12
 
 
-def rank_with_ties(values, keys=None, rtol: float = 0.0, atol: float = 0.0,
-                   key_tol=0.0) -> np.ndarray:
-    """Order of candidates by ascending ``values`` in which values that differ by less than a
-    stated tolerance are ties, broken by ``keys``: the canonical ranking of, e.g., the local
-    minima of an optimiser or competing models, independent of rounding noise.
+#: Values within ``max(TIE_ABS, TIE_REL * max(|a|, |b|))`` of each other are ties for a
+#: ranking of estimated indices (:func:`merge_ties`): far above their floating-point resolution
+#: (:data:`~mtaccuracy.sensitivity.FLOAT_NOISE`, 1e-9 of an index of 0.01), far below any
+#: difference the sampling can resolve (1e-4 and more).
+TIE_REL = 1e-9
+TIE_ABS = FLOAT_NOISE
 
-    The smallest remaining value ``v0`` leads a group of every remaining candidate with a
-    value ``<= v0 + max(atol, rtol * |v0|)``; the group is ordered by ``keys`` (m, p),
-    compared lexicographically, two key entries counting as equal when they differ by at
-    most ``key_tol`` (scalar or (p,)); then the original order.  Then the next group.  Returns
-    the indices of the candidates in rank order.  NaN values are refused.
+
+def _check_tolerance(value, name: str) -> float:
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
+    if not ok or not (np.isfinite(value) and value >= 0):
+        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    return float(value)
+
+
+def ties(a, b, *, rtol: float = TIE_REL, atol: float = TIE_ABS) -> np.ndarray:
+    """True where ``a`` and ``b`` tie: ``|a - b| <= max(atol, rtol * max(|a|, |b|))``.
+
+    The compendium's one tie rule, and the canonical one: :func:`merge_ties` (estimated
+    indices) and :func:`rank_with_ties` (misfits, model-selection errors) group values with it
+    and nothing else, so they cannot disagree on whether two values tie.  The rule is symmetric
+    in ``a`` and ``b`` (the relative tolerance scales with the larger magnitude).  A group of
+    ties is anchored at its first value in rank order: a value joins the group when it ties with
+    that value, so a chain of small steps never merges values further apart than the tolerance.
+
+    Parameters
+    ----------
+    a, b : arrays (broadcastable)
+        The values compared, element by element.
+    rtol : float
+        Relative tolerance, a share of the larger magnitude (default :data:`TIE_REL`, the
+        floating-point resolution of estimated indices).
+    atol : float
+        Absolute tolerance, in the values' unit; it decides near zero (default
+        :data:`TIE_ABS`).
+
+    Returns
+    -------
+    array of bool (broadcast shape)
+        True where the two values count as equal.
+    """
+    rtol, atol = _check_tolerance(rtol, "rtol"), _check_tolerance(atol, "atol")
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return np.abs(a - b) <= np.maximum(atol, rtol * np.maximum(np.abs(a), np.abs(b)))
+
+
+def _group_starts(s: np.ndarray, rtol: float, atol: float) -> np.ndarray:
+    """(..., m, q) True where an entry of ``s``, sorted along axis -2 in rank order, starts a
+    group of ties: it does not tie (:func:`ties`) with the first entry of the group before."""
+    start = np.ones(s.shape, dtype=bool)
+    if s.shape[-2] == 0:
+        return start
+    lead = s[..., 0, :]
+    for j in range(1, s.shape[-2]):  # sequential along the ranking, batched over other axes
+        new = ~ties(s[..., j, :], lead, rtol=rtol, atol=atol)
+        start[..., j, :] = new
+        lead = np.where(new, s[..., j, :], lead)
+    return start
+
+
+def merge_ties(values, *, rtol: float = TIE_REL, atol: float = TIE_ABS) -> np.ndarray:
+    """A copy of ``values`` in which every group of ties takes its largest value.
+
+    Along axis -2 (per column, per leading index): sort descending; each group of values that
+    tie (:func:`ties`) with the group's largest takes that value, so that a stable descending
+    sort orders the group by position (catalogue order) instead of by rounding noise.  Errors
+    that enter the model identically have equal indices in exact arithmetic; this makes equal
+    mean equal within the floating-point resolution of the estimates, so the 90 % rule and the
+    rankings are the same on every machine.
+
+    Parameters
+    ----------
+    values : array (D,), (D, q) or (..., D, q)
+        Indices, candidates along axis 0 of a 1-D array or along axis -2 (leading axes, e.g.
+        bootstrap resamples, are handled independently).
+    rtol, atol : float
+        The tie tolerances of :func:`ties` (default: the floating-point resolution of
+        estimated indices, :data:`TIE_REL` and :data:`TIE_ABS`).
+
+    Returns
+    -------
+    array, the shape of ``values``
+        Each value replaced by the largest value of its group of ties.
+    """
+    rtol, atol = _check_tolerance(rtol, "rtol"), _check_tolerance(atol, "atol")
+    a = np.array(values, dtype=float)
+    flat = a.ndim == 1
+    if flat:
+        a = a[:, None]
+    order = np.argsort(-a, axis=-2, kind="stable")
+    s = np.take_along_axis(a, order, axis=-2)
+    leader = np.where(_group_starts(s, rtol, atol), np.arange(s.shape[-2])[:, None], 0)
+    merged = np.take_along_axis(s, np.maximum.accumulate(leader, axis=-2), axis=-2)
+    out = np.empty_like(a)
+    np.put_along_axis(out, order, merged, axis=-2)
+    return out[:, 0] if flat else out
+
+
+def rank_with_ties(values, keys=None, *, rtol: float = 0.0, atol: float = 0.0,
+                   key_tol=0.0) -> np.ndarray:
+    """Candidate indices by ascending ``values``, ties (:func:`ties`) broken by ``keys``.
+
+    The canonical ranking of, e.g., the local minima of an optimiser or competing models,
+    independent of rounding noise.  Sorted ascending, the smallest value leads a group of every
+    value that ties with it (:func:`ties` with ``rtol``, ``atol``); the group is ordered by
+    ``keys``, compared lexicographically, two key entries counting as equal when they differ by
+    at most ``key_tol``; then by the original order.  Then the next group.  NaN values are
+    refused.
 
     Parameters
     ----------
     values : array (m,)
-        What is ranked (e.g. misfits), ascending.
-    keys : array (m, p), optional
-        Tie-breaking keys, compared lexicographically.
+        What is ranked (e.g. misfits), smallest first.
+    keys : array (m,) or (m, p), optional
+        Tie-breaking keys, compared lexicographically, smallest first (default: the original
+        order breaks every tie).
     rtol, atol : float
-        Values within ``max(atol, rtol |v0|)`` of the group's smallest are ties.
+        The tolerances of :func:`ties`; both 0 (the default) make only equal values ties.
     key_tol : float or array (p,)
-        Key entries this close count as equal.
+        Key entries that differ by at most this count as equal (per key column).
 
     Returns
     -------
@@ -81,9 +183,7 @@ def rank_with_ties(values, keys=None, rtol: float = 0.0, atol: float = 0.0,
         raise ValueError(f"values must be one-dimensional, got shape {v.shape}")
     if not np.all(np.isfinite(v)):
         raise ValueError("values contain NaN or infinite entries: nothing to rank them by")
-    for name, t in (("rtol", rtol), ("atol", atol)):
-        if not (np.isfinite(t) and t >= 0):
-            raise ValueError(f"{name} must be finite and >= 0, got {t!r}")
+    rtol, atol = _check_tolerance(rtol, "rtol"), _check_tolerance(atol, "atol")
     m = v.size
     k = np.zeros((m, 0)) if keys is None else np.asarray(keys, dtype=float)
     k = k[:, None] if k.ndim == 1 else k
@@ -97,14 +197,11 @@ def rank_with_ties(values, keys=None, rtol: float = 0.0, atol: float = 0.0,
                 return -1 if a < b else 1
         return (i > j) - (i < j)
 
-    left = [int(i) for i in np.argsort(v, kind="stable")]
+    ascending = np.argsort(v, kind="stable")
+    starts = np.flatnonzero(_group_starts(v[ascending][:, None], rtol, atol)[:, 0])
     order = []
-    while left:
-        v0 = v[left[0]]
-        limit = v0 + max(atol, rtol * abs(v0))
-        group = [i for i in left if v[i] <= limit]
-        order += sorted(group, key=functools.cmp_to_key(cmp))
-        left = [i for i in left if v[i] > limit]
+    for members in np.split(ascending, starts[1:]):  # per group of ties: order by the keys
+        order += sorted((int(i) for i in members), key=functools.cmp_to_key(cmp))
     return np.asarray(order, dtype=int)
 
 
@@ -178,31 +275,33 @@ def _names(names, d: int) -> list[str]:
     return names
 
 
-def key_errors(st, names: Sequence[str] | None = None, threshold: float = 0.9,
+def key_errors(st, *, names: Sequence[str] | None = None, threshold: float = 0.9,
                tie_tol: float | None = None) -> KeySet:
     """The smallest top set of errors whose share of ``sum(st)`` exceeds ``threshold``.
 
-    ``st`` (D,) are total indices (>= 0); ties are broken by the original order (a stable
-    sort), so the result is deterministic.  ``tie_tol`` (not in the paper): also keep every
-    further error whose index is within this relative distance of the last one kept, so that
-    errors that enter the model identically are kept or dropped together (``share`` is then the
-    share of the enlarged set).  Raises ValueError for indices that sum to zero, a threshold
-    outside (0, 1) or names that do not match.
+    Rong et al.'s rule (Section 3).  Ties are broken by the original order (a stable sort), so
+    the result is deterministic; indices equal only up to rounding should be merged first
+    (:func:`merge_ties`).  Raises ValueError for indices that sum to zero, a threshold outside
+    (0, 1) or names that do not match.
 
     Parameters
     ----------
     st : array (D,)
-        Total indices.
-    names : sequence of str, optional
-        Error names (default ``"0"``, ``"1"``, ...).
+        Total indices (>= 0), in catalogue order.
+    names : sequence of str (D,), optional
+        Error names, unique (default ``"0"``, ``"1"``, ...).
     threshold : float
-        The share the key set must exceed (0.9: Rong et al.'s 90 % rule).
+        The share of ``sum(st)`` the key set must exceed, strictly, in (0, 1) (0.9: Rong et
+        al.'s 90 % rule).
     tie_tol : float, optional
-        Relative tolerance of indices kept together.
+        Not in the paper: also keep every further error whose index is within this relative
+        distance, in [0, 1), of the last one kept, so that errors that enter the model
+        identically are kept or dropped together (``share`` is then the enlarged set's).
 
     Returns
     -------
     KeySet
+        The key errors in descending order of the index, with their share.
     """
     a = _check_indices(st, 1)
     t = _check_threshold(threshold)
@@ -214,7 +313,7 @@ def key_errors(st, names: Sequence[str] | None = None, threshold: float = 0.9,
     share = np.cumsum(a[order]) / total
     k = int(np.argmax(share > t + EXCEED_TOL)) + 1 if np.any(share > t + EXCEED_TOL) else a.size
     if tie_tol is not None:
-        if not 0 <= tie_tol < 1:
+        if not 0 <= tie_tol < 1:  # a half-open share: validate.probability allows 1
             raise ValueError(f"tie_tol must be in [0, 1), got {tie_tol!r}")
         last = a[order[k - 1]]
         while k < a.size and a[order[k]] > 0 and a[order[k]] >= (1 - tie_tol) * last:
@@ -224,7 +323,7 @@ def key_errors(st, names: Sequence[str] | None = None, threshold: float = 0.9,
                   float(share[k - 1]), t, a.size)
 
 
-def key_errors_by_output(st, names: Sequence[str] | None = None,
+def key_errors_by_output(st, *, names: Sequence[str] | None = None,
                          outputs: Sequence[str] | None = None,
                          threshold: float = 0.9, tie_tol: float | None = None
                          ) -> dict[str, KeySet]:
@@ -233,23 +332,25 @@ def key_errors_by_output(st, names: Sequence[str] | None = None,
     Parameters
     ----------
     st : array (D, q)
-        Total indices per output.
-    names : sequence of str, optional
-        Error names.
-    outputs : sequence of str, optional
-        Output names (default ``y0``, ...).
-    threshold, tie_tol
-        As :func:`key_errors`.
+        Total indices (>= 0), one column per output.
+    names : sequence of str (D,), optional
+        Error names, unique (default ``"0"``, ``"1"``, ...).
+    outputs : sequence of str (q,), optional
+        Output names, the keys of the result (default ``y0``, ``y1``, ...).
+    threshold, tie_tol : float
+        The rule's share and the optional relative tie tolerance, as in :func:`key_errors`.
 
     Returns
     -------
     dict of str to KeySet
+        One key set per output, in the order of ``outputs``.
     """
     a = _check_indices(st, 2)
     outputs = list(outputs) if outputs is not None else [f"y{k}" for k in range(a.shape[1])]
     if len(outputs) != a.shape[1]:
         raise ValueError(f"{len(outputs)} output names for {a.shape[1]} columns")
-    return {o: key_errors(a[:, k], names, threshold, tie_tol) for k, o in enumerate(outputs)}
+    return {o: key_errors(a[:, k], names=names, threshold=threshold, tie_tol=tie_tol)
+            for k, o in enumerate(outputs)}
 
 
 def union_key_set(sets, names: Sequence[str]) -> tuple[str, ...]:
@@ -257,14 +358,15 @@ def union_key_set(sets, names: Sequence[str]) -> tuple[str, ...]:
 
     Parameters
     ----------
-    sets : dict of str to KeySet
-        Key sets per output.
-    names : sequence of str
-        Catalogue order.
+    sets : dict of str to KeySet, or sequence of KeySet
+        Key sets per output (:func:`key_errors_by_output`).
+    names : sequence of str (D,)
+        Every error name, in catalogue order: the order of the result.
 
     Returns
     -------
     tuple of str
+        The union, in catalogue order.
     """
     sets = list(sets.values()) if isinstance(sets, dict) else list(sets)
     chosen = {n for s in sets for n in s.names}
@@ -280,19 +382,17 @@ def simplification_rate(n_key: int, n_total: int) -> float:
     Parameters
     ----------
     n_key : int
-        Errors kept.
+        Errors kept (key errors), in [0, n_total].
     n_total : int
-        Errors in the model.
+        Errors in the full model, >= 1.
 
     Returns
     -------
     float
-        In [0, 1].
+        In [0, 1]: 0 when every error is kept.
     """
-    if int(n_total) != n_total or n_total < 1:
-        raise ValueError(f"n_total must be a positive integer, got {n_total!r}")
-    if int(n_key) != n_key or not 0 <= n_key <= n_total:
-        raise ValueError(f"n_key must be an integer in [0, {n_total}], got {n_key!r}")
+    n_total = validate.integer(n_total, "n_total", low=1)
+    n_key = validate.integer(n_key, "n_key", low=0, high=n_total)
     return (n_total - n_key) / n_total
 
 
@@ -307,13 +407,14 @@ def pooled_indices(indices, variances) -> np.ndarray:
     Parameters
     ----------
     indices : array (..., D, m)
-        Indices per output or pose.
+        Indices of D errors at m outputs or poses.
     variances : array (..., m)
-        Their output variances.
+        The output variance at each of the m (>= 0, positive sum): the weights.
 
     Returns
     -------
     array (..., D)
+        The pooled indices.
     """
     s = np.asarray(indices, dtype=float)
     v = np.asarray(variances, dtype=float)
@@ -345,20 +446,19 @@ def _keep_index(keep, d: int, names: Sequence[str] | None) -> np.ndarray:
 def zero_non_key(x, keep, names: Sequence[str] | None = None) -> np.ndarray:
     """A copy of the samples ``x`` (n, D) with every column not in ``keep`` set to zero.
 
-    ``keep``: a :class:`KeySet`, column indices, or error names (then ``names`` is needed).
-
     Parameters
     ----------
     x : array (n, D)
-        Samples.
+        Samples of the errors (mm, rad); not modified.
     keep : KeySet, sequence of int or of str
-        The columns kept.
-    names : sequence of str, optional
-        Needed when ``keep`` names errors.
+        The columns kept: a key set, column indices, or error names.
+    names : sequence of str (D,), optional
+        The column names; needed when ``keep`` names errors.
 
     Returns
     -------
     array (n, D)
+        ``x`` with the other columns zero.
     """
     x = np.asarray(x, dtype=float)
     if x.ndim != 2:
@@ -376,16 +476,16 @@ def reduced_model(model: Callable[[np.ndarray], np.ndarray], keep,
     Parameters
     ----------
     model : callable
-        ``(n, D) -> (n, q)``.
+        The full model, ``(n, D) -> (n, q)``.
     keep : KeySet, sequence of int or of str
-        The errors kept.
-    names : sequence of str, optional
-        Needed when ``keep`` names errors.
+        The errors kept: a key set, column indices, or error names.
+    names : sequence of str (D,), optional
+        The column names; needed when ``keep`` names errors.
 
     Returns
     -------
     callable
-        ``(n, D) -> (n, q)``.
+        The reduced model, ``(n, D) -> (n, q)``.
     """
     def reduced(x):
         return model(zero_non_key(x, keep, names))
@@ -393,20 +493,23 @@ def reduced_model(model: Callable[[np.ndarray], np.ndarray], keep,
 
 
 def residual_summary(full, reduced, outputs: Sequence[str] | None = None) -> pd.DataFrame:
-    """Per output: ranges of the full and reduced predictions and of the residual
-    ``full - reduced``, its RMS, and the RMS and max-abs ratios to the full model.
+    """Per output: the ranges of full, reduced and residual predictions, and the residual's size.
+
+    The residual is ``full - reduced``; its RMS and its RMS and max-abs ratios to the full
+    model say how much the reduced model misses.
 
     Parameters
     ----------
-    full, reduced : arrays (n, q)
-        Predictions of the full and the reduced model.
-    outputs : sequence of str, optional
-        Output names.
+    full, reduced : arrays (n, q) or (n,)
+        Predictions of the full and the reduced model on the same n >= 2 samples.
+    outputs : sequence of str (q,), optional
+        Output names (default ``y0``, ``y1``, ...).
 
     Returns
     -------
-    DataFrame (q, ...)
-        One row per output.
+    DataFrame (q, 11)
+        One row per output: output, min and max of full, reduced and residual, residual_rms,
+        rms_ratio and maxabs_ratio (NaN where the full model is identically zero).
     """
     f = np.asarray(full, dtype=float)
     r = np.asarray(reduced, dtype=float)
@@ -434,18 +537,20 @@ def residual_summary(full, reduced, outputs: Sequence[str] | None = None) -> pd.
 
 
 def expected_rms_ratio(share) -> np.ndarray:
-    """``sqrt(1 - share)``: the RMS of the reduced model's residual relative to the full model
-    for a model additive in zero-mean errors, when the kept errors carry ``share`` of the sum of
-    the total indices (see the module docstring).
+    """``sqrt(1 - share)``: the reduced model's residual RMS over the full model's RMS.
+
+    For a model additive in zero-mean errors, when the kept errors carry ``share`` of the sum
+    of the total indices (see the module docstring).
 
     Parameters
     ----------
     share : float or array
-        Share of the summed total indices the kept errors carry.
+        Share of the summed total indices the kept errors carry, in [0, 1].
 
     Returns
     -------
-    array
+    array, the shape of ``share``
+        The expected ratio of RMS values.
     """
     s = np.asarray(share, dtype=float)
     if np.any((s < 0) | (s > 1 + 1e-9)):
@@ -453,36 +558,38 @@ def expected_rms_ratio(share) -> np.ndarray:
     return np.sqrt(np.clip(1.0 - s, 0.0, None))
 
 
-def threshold_sweep(st, thresholds, x, model: Callable[[np.ndarray], np.ndarray],
+def threshold_sweep(st, x, model: Callable[[np.ndarray], np.ndarray], *, thresholds,
                     names: Sequence[str], outputs: Sequence[str] | None = None,
                     full=None) -> pd.DataFrame:
-    """Key sets and reduced-model residuals as the threshold varies.
+    """Key sets and reduced-model residuals as the threshold of the 90 % rule varies.
 
-    For each threshold: the key set of every output (``st`` (D, q)) and their union; the reduced
-    model (non-union errors set to zero) on the samples ``x`` (n, D); per output the residual's
-    ``max |.|`` and RMS, also relative to the full model.  ``full`` (n, q) may pass the full-model
-    predictions if already computed.  One row per (threshold, output).
+    For each threshold: the key set of every output (:func:`key_errors_by_output`) and their
+    union; the reduced model (non-union errors set to zero) on the samples ``x``; per output
+    the residual's ``max |.|`` and RMS, also relative to the full model.  One row per
+    (threshold, output).
 
     Parameters
     ----------
     st : array (D, q)
-        Total indices.
-    thresholds : array (t,)
-        Shares in (0, 1).
+        Total indices (>= 0), one column per output.
     x : array (n, D)
-        Samples of the errors.
+        Samples of the errors (mm, rad) on which the full and reduced models are compared.
     model : callable
-        ``(n, D) -> (n, q)``.
+        ``(n, D) -> (n, q)``, the full model.
+    thresholds : array (t,)
+        The rule's shares, each in (0, 1).
     names : sequence of str (D,)
-        Error names.
-    outputs : sequence of str, optional
-        Output names.
+        Error names, unique.
+    outputs : sequence of str (q,), optional
+        Output names (default ``y0``, ``y1``, ...).
     full : array (n, q), optional
-        ``model(x)`` if already computed.
+        ``model(x)`` if already computed (saves one model call).
 
     Returns
     -------
-    DataFrame (t q, ...)
+    DataFrame (t q, 11)
+        threshold, output, the key errors of that output and of the union (counts, shares,
+        names), the simplification rate and the residual's max-abs and RMS, also as ratios.
     """
     a = _check_indices(st, 2)
     names = _names(names, a.shape[0])
@@ -496,7 +603,7 @@ def threshold_sweep(st, thresholds, x, model: Callable[[np.ndarray], np.ndarray]
     rows = []
     cache: dict[tuple[str, ...], pd.DataFrame] = {}
     for t in ts:
-        sets = key_errors_by_output(a, names, outputs, t)
+        sets = key_errors_by_output(a, names=names, outputs=outputs, threshold=t)
         union = union_key_set(sets, names)
         if union not in cache:
             cache[union] = residual_summary(f, np.asarray(model(zero_non_key(x, union, names)))
@@ -517,7 +624,7 @@ def cumulative_share_margin(values, threshold: float) -> np.ndarray:
     """How far the 90 %-type rule is from changing its decision, per output.
 
     Per column of ``values`` (D, q) (e.g. total indices), clipped at 0 with ties merged
-    (:func:`mtaccuracy.sensitivity.merge_ties`): sort descending and take the cumulative
+    (:func:`merge_ties`): sort descending and take the cumulative
     shares; the rule stops at the first share above ``threshold``; the margin is the distance
     of the threshold from the nearer of that share and the one before.  A margin far above the
     floating-point resolution of the shares means rounding cannot change the key set.
@@ -525,14 +632,16 @@ def cumulative_share_margin(values, threshold: float) -> np.ndarray:
     Parameters
     ----------
     values : array (D, q) or (D,)
-        Non-negative values (total indices).
+        Total indices (negative estimates count as 0), one column per output.
     threshold : float
-        The rule's share (0.9 in Rong et al.).
+        The rule's share, in (0, 1) (0.9 in Rong et al.).
 
     Returns
     -------
     array (q,)
+        The margin per output, a share of the summed indices.
     """
+    threshold = _check_threshold(threshold)
     a = merge_ties(np.clip(np.asarray(values, dtype=float), 0, None))
     a = a[:, None] if a.ndim == 1 else a
     s = -np.sort(-a, axis=0)
@@ -544,29 +653,29 @@ def cumulative_share_margin(values, threshold: float) -> np.ndarray:
     return np.minimum(above, below)
 
 
-def key_set_bootstrap(st_samples, names: Sequence[str], outputs: Sequence[str] | None = None,
+def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str] | None = None,
                       threshold: float = 0.9) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """How stable is the key set?  :func:`key_errors` applied to each bootstrap re-estimate.
+    """How stable is the key set: :func:`key_errors` applied to each bootstrap re-estimate.
 
     ``st_samples`` (n_boot, >= D, q) are total indices re-estimated on resamples of the base
     rows, e.g. the second array of :func:`mtaccuracy.sensitivity.sobol_bootstrap_samples`, so
     that the key-set frequencies come from the very resamples of the confidence intervals.
     Only the first ``len(names)`` inputs are candidates (further inputs, e.g. the pose, are left
     out of the rule).  Each resample is clipped at 0 and its ties merged
-    (:func:`mtaccuracy.sensitivity.merge_ties`: indices within the floating-point resolution
-    are equal, and equal indices go in catalogue order), then :func:`key_errors_by_output` and
+    (:func:`merge_ties`: indices within the floating-point resolution are equal, and equal
+    indices go in catalogue order), then :func:`key_errors_by_output` and
     :func:`union_key_set` decide.
 
     Parameters
     ----------
     st_samples : array (n_boot, >= D, q)
-        Re-estimated total indices.
+        Re-estimated total indices, one (D, q) table per resample.
     names : sequence of str (D,)
-        The candidate inputs (the first ``len(names)``).
+        The candidate inputs (the first ``len(names)`` of axis 1), unique.
     outputs : sequence of str (q,), optional
-        Output names (default ``y0``, ...).
+        Output names (default ``y0``, ``y1``, ...).
     threshold : float
-        The rule's share.
+        The rule's share, in (0, 1) (0.9: Rong et al.'s 90 % rule).
 
     Returns
     -------
@@ -588,7 +697,7 @@ def key_set_bootstrap(st_samples, names: Sequence[str], outputs: Sequence[str] |
     hits = {o: np.zeros(len(names)) for o in [*outputs, "union"]}
     counts = []
     for b in range(st.shape[0]):  # the rule per resample: a sort of D values, cheap
-        sets = key_errors_by_output(st[b], names, outputs, threshold)
+        sets = key_errors_by_output(st[b], names=names, outputs=outputs, threshold=threshold)
         for o, ks in sets.items():
             hits[o][list(ks.index)] += 1
         union = union_key_set(sets, names)
@@ -596,3 +705,4 @@ def key_set_bootstrap(st_samples, names: Sequence[str], outputs: Sequence[str] |
         counts.append({**{o: ks.n_key for o, ks in sets.items()}, "union": len(union)})
     freq = pd.DataFrame({"symbol": names, **{o: h / st.shape[0] for o, h in hits.items()}})
     return freq, pd.DataFrame(counts)
+

@@ -11,26 +11,34 @@ one batched call per chunk and memory is flat in N.  A test checks these numbers
 SALib's at small N.
 
 Layout: ``ya``, ``yb`` are (N, q); ``yab`` is (D, N, q) with ``yab[i]`` the model on AB_i (A
-with column i taken from B).
+with column i taken from B); indices are (D, q), inputs by outputs.  Given an
+:class:`~mtaccuracy.sensitivity.Inputs` (``SobolDesign(n, inputs, ...)``), the designs are
+drawn through its laws and :func:`sobol_indices` labels its result (:class:`SobolIndices`,
+``.to_df()``) with the input names.
 """
 
 from __future__ import annotations
 
-__all__ = ["base_samples", "base_blocks", "BASE_ROWS", "SobolDesign", "from_unit_uniform",
+__all__ = ["base_samples", "base_blocks", "BASE_ROWS", "SobolDesign", "SobolIndices",
+           "from_unit_uniform",
            "from_unit_normal", "sobol_evaluate", "sobol_estimate", "bootstrap_counts",
            "sobol_bootstrap_samples", "ci_half_width", "sobol_bootstrap", "sobol_indices",
-           "linear_indices", "FLOAT_NOISE", "TIE_REL", "TIE_ABS", "merge_ties"]
+           "linear_indices", "FLOAT_NOISE"]
 
 import copy
 import warnings
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import KW_ONLY, dataclass
 
 import numpy as np
+import pandas as pd
 from scipy import stats
 from scipy.special import ndtri
 from scipy.stats import qmc
 
+from ..validate import integer
+from ..validate import rng as _rng
+from .inputs import Inputs
 from .linear import linear_indices  # it lives in .linear; kept here for old callers
 
 #: Base rows (of A and of B) drawn and run at a time by :func:`sobol_indices`.  Peak memory
@@ -44,11 +52,17 @@ _SOBOL_BALANCE = "The balance properties of Sobol' points require n to be a powe
 
 
 def _check_method(n, method):
-    if int(n) != n or n < 2:
-        raise ValueError(f"n must be an integer >= 2, got {n!r}")
+    n = integer(n, "n", low=2)
     if method not in ("mc", "lhs", "sobol"):
         raise ValueError(f"unknown sampling method {method!r}; allowed: mc, lhs, sobol")
-    return int(n)
+    return n
+
+
+def _dim(d) -> tuple[int, Inputs | None]:
+    """(D, inputs) of a ``d`` given as a number of inputs or as an :class:`Inputs`."""
+    if isinstance(d, Inputs):
+        return d.dim, d
+    return integer(d, "d", low=1), None
 
 
 def _skip_ahead(rng: np.random.Generator, draws: int) -> np.random.Generator:
@@ -70,7 +84,7 @@ def _skip_ahead(rng: np.random.Generator, draws: int) -> np.random.Generator:
     return out
 
 
-def base_blocks(n: int, d: int, method: str, seed, *, rows: int = BASE_ROWS
+def base_blocks(n: int, d: int | Inputs, *, method: str, seed, rows: int = BASE_ROWS
                 ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
     """The A and B of :func:`base_samples`, drawn ``rows`` base rows at a time.
 
@@ -84,30 +98,33 @@ def base_blocks(n: int, d: int, method: str, seed, *, rows: int = BASE_ROWS
     hypercube is not a stream: each column is one random permutation of all n strata, so no
     row is known before the whole permutation is drawn; both designs are drawn whole (2 n d
     floats, 16 d bytes per row) and handed out in blocks.  A generator passed as ``seed`` ends
-    where :func:`base_samples` leaves it once every block is drawn.
+    where :func:`base_samples` leaves it once every block is drawn.  Given an
+    :class:`Inputs` for ``d``, every block is mapped through its laws (:meth:`Inputs.from_unit`).
 
     Parameters
     ----------
     n : int
-        Base rows N.
-    d : int
-        Inputs.
+        Base rows N (>= 2).
+    d : int or Inputs
+        The number of inputs D, or the inputs themselves (blocks in their units).
     method : {"mc", "lhs", "sobol"}
         The design.
-    seed : int, SeedSequence or Generator
-        Seed of ``numpy.random.default_rng``.
+    seed : None, int, SeedSequence or numpy.random.Generator
+        The randomness (:func:`mtaccuracy.validate.rng`).
     rows : int
-        Rows per block.
+        Rows per block (>= 1).
 
     Yields
     ------
-    a, b : arrays (m, d)
-        In [0, 1).
+    a, b : arrays (m, D)
+        In [0, 1) (or the inputs' units, given an :class:`Inputs`).
     """
     n = _check_method(n, method)
-    if int(rows) != rows or rows < 1:
-        raise ValueError(f"rows must be a positive integer, got {rows!r}")
-    return _blocks(n, int(d), method, np.random.default_rng(seed), int(rows))
+    rows = integer(rows, "rows", low=1)
+    d, inputs = _dim(d)
+    blocks = _blocks(n, d, method, _rng(seed), rows)
+    return blocks if inputs is None else ((inputs.from_unit(a), inputs.from_unit(b))
+                                          for a, b in blocks)
 
 
 def _blocks(n, d, method, rng, rows):
@@ -139,32 +156,33 @@ def _sobol_halves(seq, m, d, quiet):
     return u[:, :d], u[:, d:]
 
 
-def base_samples(n: int, d: int, method: str, seed) -> tuple[np.ndarray, np.ndarray]:
-    """Two independent (n, d) designs on the unit hypercube: the A and B matrices.
+def base_samples(n: int, d: int | Inputs, *, method: str, seed) -> tuple[np.ndarray, np.ndarray]:
+    """Two independent (n, d) designs on the unit hypercube (or of the inputs): A and B.
 
     method ``mc``: independent uniforms; ``lhs``: two independent Latin hypercubes
     (scipy.qmc); ``sobol``: one scrambled 2d-dimensional Sobol' sequence split in halves, as
     SALib's Saltelli sampler does (n should be a power of 2).  :func:`base_blocks` draws the
-    same numbers a block of rows at a time.
+    same numbers a block of rows at a time.  Given an :class:`Inputs` for ``d``, A and B are
+    mapped through its laws (the same unit-cube points, :meth:`Inputs.from_unit`).
 
     Parameters
     ----------
     n : int
-        Base rows N.
-    d : int
-        Inputs.
+        Base rows N (>= 2).
+    d : int or Inputs
+        The number of inputs D, or the inputs themselves (designs in their units).
     method : {"mc", "lhs", "sobol"}
         The design.
-    seed : int, SeedSequence or Generator
-        Seed of ``numpy.random.default_rng``.
+    seed : None, int, SeedSequence or numpy.random.Generator
+        The randomness (:func:`mtaccuracy.validate.rng`).
 
     Returns
     -------
-    a, b : arrays (n, d)
-        In [0, 1).
+    a, b : arrays (n, D)
+        In [0, 1) (or the inputs' units, given an :class:`Inputs`).
     """
     n = _check_method(n, method)
-    (a, b), = base_blocks(n, d, method, seed, rows=n)   # drawn to the end: a Generator too
+    (a, b), = base_blocks(n, d, method=method, seed=seed, rows=n)   # to the end: a Generator too
     return a, b
 
 
@@ -175,26 +193,50 @@ class SobolDesign:
     :func:`sobol_indices` draws them a block of base rows at a time (:func:`base_blocks`), so
     its memory does not grow with N.
 
+    ``SobolDesign(n, inputs, method=, seed=)`` with an :class:`Inputs` draws the designs through
+    its laws and names the inputs of the result; ``SobolDesign(n, d, ..., to_inputs=f)`` maps
+    the unit cube with any row-by-row ``f`` (the two are the same numbers when ``f`` is
+    :meth:`Inputs.from_unit`).
+
     Attributes
     ----------
     n : int
         Base rows N (N (D + 2) model runs).
-    d : int
-        Inputs D.
+    d : int or Inputs
+        Inputs D, or the inputs themselves (then ``d`` becomes D and :attr:`inputs` holds them).
     method : {"mc", "lhs", "sobol"}
         The design on the unit cube (``lhs`` is held whole: see :func:`base_blocks`).
-    seed : int, SeedSequence or Generator
-        Seed of ``numpy.random.default_rng``.
+    seed : None, int, SeedSequence or numpy.random.Generator
+        The randomness (:func:`mtaccuracy.validate.rng`).
     to_inputs : callable, optional
         Unit-cube rows (m, d) to model inputs (m, d), row by row (e.g.
-        ``lambda u: from_unit_normal(u, sd)``); default: the unit cube itself.
+        ``lambda u: from_unit_normal(u, sd)``); default: through :attr:`inputs`, else the
+        unit cube itself.
+    inputs : Inputs, optional
+        The inputs (set from ``d``); their names label :func:`sobol_indices`' result.
     """
 
     n: int
     d: int
+    _: KW_ONLY
     method: str = "sobol"
     seed: object = None
     to_inputs: Callable[[np.ndarray], np.ndarray] | None = None
+    inputs: Inputs | None = None
+
+    def __post_init__(self):
+        d, inputs = _dim(self.d)
+        if inputs is not None and self.inputs is not None:
+            raise ValueError("give the inputs once (as d or as inputs=)")
+        inputs = inputs if inputs is not None else self.inputs
+        if inputs is not None:
+            if inputs.dim != d and not isinstance(self.d, Inputs):
+                raise ValueError(f"d = {d} but {inputs.dim} inputs")
+            if self.to_inputs is not None:
+                raise ValueError("give either inputs or to_inputs, not both")
+            d = inputs.dim
+        object.__setattr__(self, "d", d)
+        object.__setattr__(self, "inputs", inputs)
 
     def blocks(self, rows: int = BASE_ROWS) -> Iterator[tuple[np.ndarray, np.ndarray]]:
         """``(a, b)`` blocks of at most ``rows`` rows, mapped to the model's inputs.
@@ -208,8 +250,8 @@ class SobolDesign:
         ------
         a, b : arrays (m, d)
         """
-        f = self.to_inputs or (lambda u: u)
-        for ua, ub in base_blocks(self.n, self.d, self.method, self.seed, rows=rows):
+        f = self.to_inputs or (self.inputs.from_unit if self.inputs is not None else lambda u: u)
+        for ua, ub in base_blocks(self.n, self.d, method=self.method, seed=self.seed, rows=rows):
             a = np.asarray(f(ua), dtype=float)
             del ua              # the unit-cube block is not kept beside the inputs
             b = np.asarray(f(ub), dtype=float)
@@ -231,6 +273,9 @@ class SobolDesign:
 def from_unit_uniform(u: np.ndarray, bounds: np.ndarray) -> np.ndarray:
     """Map unit-cube samples to independent uniforms on ``bounds`` (2, d).
 
+    ``bounds[0] + u (bounds[1] - bounds[0])``: the numbers of
+    :meth:`Inputs.from_unit` of ``Inputs.from_bounds(bounds)``.
+
     Parameters
     ----------
     u : array (n, d)
@@ -250,7 +295,8 @@ def from_unit_normal(u: np.ndarray, sd: np.ndarray, mean: np.ndarray | float = 0
     """Map unit-cube samples to independent normals (inverse CDF), ``sd`` per column.
 
     ``scipy.special.ndtri`` is the function ``scipy.stats.norm.ppf`` evaluates, called
-    without the distribution machinery (five times faster; the same numbers).
+    without the distribution machinery (five times faster; the same numbers, as those of
+    :meth:`Inputs.from_unit` of ``Inputs.normal(mean, sd)``).
 
     Parameters
     ----------
@@ -321,10 +367,9 @@ def _check_ab(a, b):
 
 
 def sobol_evaluate(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | None = None,
-                   chunk: int = 200_000, progress: Callable[[int, int], None] | None = None
+                   *, chunk: int = 200_000, progress: Callable[[int, int], None] | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Run ``model`` on A, B and every AB_i; returns ``ya`` (N, q), ``yb`` (N, q), ``yab``
-    (D, N, q).
+    """Run ``model`` on A, B and every AB_i: ``ya`` (N, q), ``yb`` (N, q) and ``yab`` (D, N, q).
 
     ``model`` maps an (m, D) array to (m, q) (or (m,)) outputs, and must not modify its
     input.  Runs are batched ``chunk`` rows at a time: N(D+2) model runs in about
@@ -341,15 +386,18 @@ def sobol_evaluate(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray |
     b : array (N, D), optional
         The design B.
     chunk : int
-        Model runs per call.
+        Model runs per call (>= 1).
     progress : callable, optional
         ``progress(done, total)`` after each call.
 
     Returns
     -------
     ya, yb : arrays (N, q)
+        The outputs on A and on B.
     yab : array (D, N, q)
+        The outputs on every AB_i.
     """
+    chunk = integer(chunk, "chunk", low=1)
     a, b = _check_ab(a, b)
     n, d = a.shape
     run = _model_runs(model, n, d, chunk, progress)
@@ -366,9 +414,10 @@ _ESTIMATE_BLOCK = 2**21
 
 def sobol_estimate(ya: np.ndarray, yb: np.ndarray, yab: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray]:
-    """First-order (Saltelli 2010) and total (Jansen) indices, each (D, q), on outputs
-    standardised over all runs as SALib does.  Works on leading bootstrap axes too: ``ya``
-    (..., N, q), ``yab`` (..., D, N, q).
+    """First-order (Saltelli 2010) and total (Jansen) indices, each (D, q), as SALib computes them.
+
+    On outputs standardised over all runs as SALib does.  Works on leading bootstrap axes
+    too: ``ya`` (..., N, q), ``yab`` (..., D, N, q).
 
     The inputs are taken a few at a time, so the temporaries stay near ``_ESTIMATE_BLOCK``
     floats whatever D and N (the estimate of every input is the same expression).
@@ -383,6 +432,7 @@ def sobol_estimate(ya: np.ndarray, yb: np.ndarray, yab: np.ndarray
     Returns
     -------
     s1, st : arrays (..., D, q)
+        First-order and total indices, inputs by outputs.
     """
     ya, yb, yab = (np.asarray(v, dtype=float) for v in (ya, yb, yab))
     n, d = ya.shape[-2], yab.shape[-3]
@@ -400,27 +450,28 @@ def sobol_estimate(ya: np.ndarray, yb: np.ndarray, yab: np.ndarray
     return s1 / var, st / var
 
 
-def bootstrap_counts(n: int, n_boot: int, seed, chunk: int = 20, block: int = 2**21):
-    """The ``n_boot`` bootstrap resamples of ``n`` rows as counts: yields (k, n) float arrays
-    ``w`` with ``w[b, i]`` = how often row i is drawn in resample b, about ``block / n``
-    resamples at a time (one matrix product each; many small products are slow when a
-    multi-threaded BLAS shares a busy machine).
+def bootstrap_counts(n: int, n_boot: int, *, seed, chunk: int = 20, block: int = 2**21):
+    """The ``n_boot`` bootstrap resamples of ``n`` rows as counts, a few resamples at a time.
+
+    Yields (k, n) float arrays ``w`` with ``w[b, i]`` = how often row i is drawn in resample
+    b, about ``block / n`` resamples at a time (one matrix product each; many small products
+    are slow when a multi-threaded BLAS shares a busy machine).
 
     The draws are ``rng.integers(0, n, size=(k, n))`` for successive chunks of ``k <= chunk``
-    resamples of one ``numpy.random.default_rng(seed)``: the resamples that
+    resamples of one generator ``mtaccuracy.validate.rng(seed)``: the resamples that
     :func:`sobol_bootstrap` has always used (and the key-set frequencies of
     ``screening.key_set_bootstrap``, which take its re-estimates).
 
     Parameters
     ----------
     n : int
-        Rows.
+        Rows (>= 1).
     n_boot : int
-        Resamples.
-    seed : int
-        Seed of ``numpy.random.default_rng``.
+        Resamples (>= 1).
+    seed : None, int, SeedSequence or numpy.random.Generator
+        The randomness (:func:`mtaccuracy.validate.rng`).
     chunk : int
-        Resamples per draw.
+        Resamples per draw (>= 1).
     block : int
         Counts held at a time.
 
@@ -429,9 +480,10 @@ def bootstrap_counts(n: int, n_boot: int, seed, chunk: int = 20, block: int = 2*
     array (k, n)
         Counts of k resamples.
     """
-    if int(n_boot) != n_boot or n_boot < 1:
-        raise ValueError(f"n_boot must be a positive integer, got {n_boot!r}")
-    rng = np.random.default_rng(seed)
+    n = integer(n, "n", low=1)
+    n_boot = integer(n_boot, "n_boot", low=1)
+    chunk = integer(chunk, "chunk", low=1)
+    rng = _rng(seed)
     per_block = max(chunk, block // max(n, 1))
     drawn = []
     for start in range(0, int(n_boot), chunk):
@@ -444,8 +496,8 @@ def bootstrap_counts(n: int, n_boot: int, seed, chunk: int = 20, block: int = 2*
             yield np.bincount(flat, minlength=k * n).reshape(k, n).astype(float)
 
 
-def sobol_bootstrap_samples(ya, yb, yab, n_boot: int, seed, chunk: int = 20, block: int = 2**21
-                            ) -> tuple[np.ndarray, np.ndarray]:
+def sobol_bootstrap_samples(ya, yb, yab, *, n_boot: int, seed, chunk: int = 20,
+                            block: int = 2**21) -> tuple[np.ndarray, np.ndarray]:
     """S1 and ST re-estimated on ``n_boot`` resamples of the N base rows: (n_boot, D, q) each.
 
     The same estimates as :func:`sobol_estimate` on ``ya[idx], yb[idx], yab[:, idx]`` for the
@@ -462,18 +514,20 @@ def sobol_bootstrap_samples(ya, yb, yab, n_boot: int, seed, chunk: int = 20, blo
     Parameters
     ----------
     ya, yb : arrays (N, q)
+        The outputs on A and on B.
     yab : array (D, N, q)
         As :func:`sobol_evaluate` returns them.
     n_boot : int
         Resamples.
-    seed : int
-        Seed of the resampling.
+    seed : None, int, SeedSequence or numpy.random.Generator
+        The randomness of the resampling (:func:`mtaccuracy.validate.rng`).
     chunk, block : int
         As :func:`bootstrap_counts`.
 
     Returns
     -------
     s1, st : arrays (n_boot, D, q)
+        The re-estimates, one per resample.
     """
     ya, yb, yab = (np.asarray(v, dtype=float) for v in (ya, yb, yab))
     n, q = ya.shape
@@ -485,7 +539,7 @@ def sobol_bootstrap_samples(ya, yb, yab, n_boot: int, seed, chunk: int = 20, blo
     rows = np.concatenate([ya + yb, ya**2 + yb**2, yab.sum(0) + ya + yb, diff, ybd, diff**2],
                           axis=1)
     s1s, sts = [], []
-    for w in bootstrap_counts(n, n_boot, seed, chunk, block):
+    for w in bootstrap_counts(n, n_boot, seed=seed, chunk=chunk, block=block):
         m = (w @ rows) / n                                                  # (k, 3q + 3Dq)
         mean_y = m[:, :q] / 2
         var = m[:, q:2 * q] / 2 - mean_y**2                                 # (k, q)
@@ -498,38 +552,42 @@ def sobol_bootstrap_samples(ya, yb, yab, n_boot: int, seed, chunk: int = 20, blo
 
 
 def ci_half_width(samples: np.ndarray, conf: float = 0.95) -> np.ndarray:
-    """Half-width of the ``conf`` interval from bootstrap ``samples`` (leading axis): the
-    normal quantile times their standard deviation (ddof 1), as SALib reports it.
+    """Half-width of the ``conf`` interval from bootstrap ``samples`` (leading axis), as SALib's.
+
+    The normal quantile times their standard deviation (ddof 1), as SALib reports it.
 
     Parameters
     ----------
     samples : array (n_boot, ...)
         Bootstrap estimates.
     conf : float
-        Confidence level.
+        Confidence level, in (0, 1).
 
     Returns
     -------
     array (...)
+        The half-widths, one per estimate.
     """
     z = stats.norm.ppf(0.5 + conf / 2)
     return z * np.asarray(samples).std(axis=0, ddof=1)
 
 
-def sobol_bootstrap(ya, yb, yab, n_boot: int, seed, conf: float = 0.95, chunk: int = 20):
-    """Bootstrap half-widths of the ``conf`` confidence intervals of S1 and ST (D, q) each,
-    from ``n_boot`` resamples of the N base rows (as SALib: normal quantile times the
+def sobol_bootstrap(ya, yb, yab, *, n_boot: int, seed, conf: float = 0.95, chunk: int = 20):
+    """Bootstrap half-widths of the ``conf`` confidence intervals of S1 and ST, (D, q) each.
+
+    From ``n_boot`` resamples of the N base rows (as SALib: normal quantile times the
     bootstrap standard deviation); see :func:`sobol_bootstrap_samples`.
 
     Parameters
     ----------
     ya, yb : arrays (N, q)
+        The outputs on A and on B.
     yab : array (D, N, q)
         As :func:`sobol_evaluate` returns them.
     n_boot : int
         Resamples.
-    seed : int
-        Seed of the resampling.
+    seed : None, int, SeedSequence or numpy.random.Generator
+        The randomness of the resampling (:func:`mtaccuracy.validate.rng`).
     conf : float
         Confidence level.
     chunk : int
@@ -538,24 +596,23 @@ def sobol_bootstrap(ya, yb, yab, n_boot: int, seed, conf: float = 0.95, chunk: i
     Returns
     -------
     s1_half, st_half : arrays (D, q)
+        Half-widths of the intervals.
     """
-    s1s, sts = sobol_bootstrap_samples(ya, yb, yab, n_boot, seed, chunk)
+    s1s, sts = sobol_bootstrap_samples(ya, yb, yab, n_boot=n_boot, seed=seed, chunk=chunk)
     return ci_half_width(s1s, conf), ci_half_width(sts, conf)
 
 
 def _row_blocks(a, b, rows):
-    """(n, d, iterator of (a, b) row blocks) of a :class:`SobolDesign` or of arrays A, B."""
-    if int(rows) != rows or rows < 1:
-        raise ValueError(f"rows must be a positive integer, got {rows!r}")
-    rows = int(rows)
+    """(n, d, inputs, iterator of (a, b) row blocks) of a :class:`SobolDesign` or arrays A, B."""
+    rows = integer(rows, "rows", low=1)
     if isinstance(a, SobolDesign):
         if b is not None:
             raise ValueError("give either a SobolDesign or the arrays A and B, not both")
         _check_method(a.n, a.method)
-        return int(a.n), int(a.d), a.blocks(rows)
+        return int(a.n), int(a.d), a.inputs, a.blocks(rows)
     a, b = _check_ab(a, b)
     n = a.shape[0]
-    return n, a.shape[1], ((a[s:s + rows], b[s:s + rows]) for s in range(0, n, rows))
+    return n, a.shape[1], None, ((a[s:s + rows], b[s:s + rows]) for s in range(0, n, rows))
 
 
 def _sum(terms):
@@ -567,8 +624,8 @@ def _sum(terms):
 
 
 def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | None = None,
-                  chunk: int = 200_000, progress: Callable[[int, int], None] | None = None,
-                  *, rows: int = BASE_ROWS) -> tuple[np.ndarray, np.ndarray]:
+                  *, chunk: int = 200_000, progress: Callable[[int, int], None] | None = None,
+                  rows: int = BASE_ROWS, outputs: Sequence[str] | None = None) -> SobolIndices:
     """First-order and total Sobol indices of ``model``, streaming over base rows and AB runs.
 
     The estimators are Saltelli et al. 2010 (first order) and Jansen 1999 (total), on outputs
@@ -595,11 +652,15 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
     rows : int
         Base rows per block (:data:`BASE_ROWS`).  With N <= ``rows`` the result is bitwise
         that of a whole-array pass; with more blocks it differs by rounding only.
+    outputs : sequence of str (q,), optional
+        Names of the model's outputs (default ``y1`` ... ``yq``), for :meth:`SobolIndices.to_df`.
 
     Returns
     -------
-    s1, st : (D, q) arrays
-        First-order and total indices.
+    SobolIndices
+        Unpacks as ``s1, st``, (D, q) arrays of first-order and total indices; labelled with
+        the design's input names (a :class:`SobolDesign` of an :class:`Inputs`; else ``x1``
+        ... ``xD``) and ``outputs``.
 
     Notes
     -----
@@ -611,7 +672,8 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
     (``sum_k w_k (var_k + (c_k - c)^2)``, ``w_k = m_k / N``).  Memory: one block of A and B, one
     batch of ``chunk`` runs, its ``ya`` and ``yb``, and three (D, q) sums per block.
     """
-    n, d, blocks = _row_blocks(a, b, rows)
+    chunk = integer(chunk, "chunk", low=1)
+    n, d, inputs, blocks = _row_blocks(a, b, rows)
     run = _model_runs(model, n, d, chunk, progress)
     parts = []
     for ab, bb in blocks:
@@ -637,11 +699,93 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
     c = _sum([wk * ck for wk, ck in zip(w, centre, strict=True)])
     var = _sum([wk * (vk + (ck - c) ** 2) for wk, vk, ck in zip(w, var, centre, strict=True)])
     num = _sum([sb - (mu - ck) * s for sb, ck, s in zip(sbd, centre, sd_, strict=True)])
-    return num / (n * var), 0.5 * _sum(sd2) / (n * var)
+    return SobolIndices(num / (n * var), 0.5 * _sum(sd2) / (n * var),
+                        names=inputs.names if inputs is not None else None, outputs=outputs)
+
+
+class SobolIndices(tuple):
+    """First-order and total indices (D, q) labelled by input and output, with their intervals.
+
+    A pair ``(s1, st)`` (it unpacks and indexes as the tuple the estimators always returned)
+    that also knows the input and output names and, when given, the half-widths of the
+    confidence intervals (:func:`sobol_bootstrap`, :func:`ci_half_width`); :meth:`to_df` is
+    the long table SALib's ``to_df()`` gives, so a notebook does not rebuild it in a loop.
+
+    >>> r = SobolIndices(np.array([[0.6], [0.3]]), np.array([[0.7], [0.3]]), names=["a", "b"])
+    >>> r.to_df().to_dict("list")
+    {'output': ['y1', 'y1'], 'input': ['a', 'b'], 'S1': [0.6, 0.3], 'ST': [0.7, 0.3]}
+
+    Parameters
+    ----------
+    s1, st : (D, q) array_like
+        First-order and total indices, inputs by outputs.
+    names : sequence of str (D,), optional
+        Input names (default ``x1`` ... ``xD``).
+    outputs : sequence of str (q,), optional
+        Output names (default ``y1`` ... ``yq``).
+    s1_ci, st_ci : (D, q) array_like, optional
+        Half-widths of their ``conf`` confidence intervals.
+    conf : float
+        The confidence level of the half-widths (names their columns: ``S1_ci95``).
+
+    Raises
+    ------
+    ValueError
+        If the arrays are not (D, q) of one shape or the names do not match it.
+    """
+
+    def __new__(cls, s1, st, *, names: Sequence[str] | None = None,
+                outputs: Sequence[str] | None = None, s1_ci=None, st_ci=None,
+                conf: float = 0.95) -> SobolIndices:
+        s1, st = np.asarray(s1, dtype=float), np.asarray(st, dtype=float)
+        if s1.ndim != 2 or st.shape != s1.shape:
+            raise ValueError(f"s1 and st must be (D, q) arrays of one shape, got {s1.shape}, "
+                             f"{st.shape}")
+        d, q = s1.shape
+        cis = [None if c is None else np.asarray(c, dtype=float) for c in (s1_ci, st_ci)]
+        if any(c is not None and c.shape != s1.shape for c in cis):
+            raise ValueError(f"s1_ci and st_ci must be {s1.shape} like the indices")
+        names = tuple(f"x{i + 1}" for i in range(d)) if names is None else tuple(names)
+        outputs = tuple(f"y{k + 1}" for k in range(q)) if outputs is None else tuple(outputs)
+        if len(names) != d or len(outputs) != q:
+            raise ValueError(f"{len(names)} input and {len(outputs)} output names for "
+                             f"indices of {d} inputs and {q} outputs")
+        self = super().__new__(cls, (s1, st))
+        self.names, self.outputs, self.conf = names, outputs, float(conf)
+        self.s1_ci, self.st_ci = cis
+        return self
+
+    @property
+    def s1(self) -> np.ndarray:
+        """(D, q) ndarray: the first-order indices."""
+        return self[0]
+
+    @property
+    def st(self) -> np.ndarray:
+        """(D, q) ndarray: the total indices."""
+        return self[1]
+
+    def to_df(self) -> pd.DataFrame:
+        """The indices as a long table: one row per (output, input), outputs outermost.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``output``, ``input``, ``S1``, ``ST``, and with intervals ``S1_ci95``
+            after ``S1`` and ``ST_ci95`` after ``ST`` (the level in the name: half-widths).
+        """
+        d, q = self.s1.shape
+        cols = {"output": np.repeat(self.outputs, d).tolist(), "input": list(self.names) * q}
+        tag = f"_ci{100 * self.conf:g}"
+        for key, val, ci in (("S1", self.s1, self.s1_ci), ("ST", self.st, self.st_ci)):
+            cols[key] = val.T.ravel()
+            if ci is not None:
+                cols[key + tag] = ci.T.ravel()
+        return pd.DataFrame(cols)
 
 
 # --------------------------------------------------------------------------------------------
-# Floating-point resolution of the estimates, and canonical ties.
+# Floating-point resolution of the estimates (the tie rule built on it: screening.ties).
 # --------------------------------------------------------------------------------------------
 
 #: Absolute floating-point resolution declared for Sobol indices estimated from model outputs
@@ -655,47 +799,5 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
 #: bootstrap half-widths, 1e-3 for the leading indices) is a different, far larger thing.
 FLOAT_NOISE = 1e-11
 
-#: Values within ``max(TIE_REL * |v|, TIE_ABS)`` of each other are ties for a ranking rule: far
-#: above the floating-point resolution (:data:`FLOAT_NOISE`, 1e-9 of an index of 0.01), far
-#: below any difference the sampling can resolve (1e-4 and more).
-TIE_REL = 1e-9
-TIE_ABS = FLOAT_NOISE
-
-
-def merge_ties(values, rel: float = TIE_REL, abs_tol: float = TIE_ABS) -> np.ndarray:
-    """A copy of ``values`` (D,) or (D, q) in which every group of near-equal values (along
-    axis 0, per column) takes the group's largest value, so that a stable descending sort
-    orders the group by its position (catalogue order) instead of by rounding noise.
-
-    Groups: sort descending; a value joins the group of the value above it when the gap is at
-    most ``max(rel * |larger|, abs_tol)``.  Errors that enter the model identically have equal
-    indices in exact arithmetic; this makes "equal" mean equal within the stated tolerance, so
-    the 90 % rule and the rankings are the same on every machine.  Leading (bootstrap) axes
-    are allowed: ``values`` (..., D, q).
-
-    Parameters
-    ----------
-    values : array (..., D) or (..., D, q)
-        Indices.
-    rel, abs_tol : float
-        The tie tolerances.
-
-    Returns
-    -------
-    array, the shape of ``values``
-    """
-    a = np.array(values, dtype=float)
-    flat = a.ndim == 1
-    if flat:
-        a = a[:, None]
-    order = np.argsort(-a, axis=-2, kind="stable")
-    s = np.take_along_axis(a, order, axis=-2)
-    gap = s[..., :-1, :] - s[..., 1:, :]
-    tol = np.maximum(rel * np.abs(s[..., :-1, :]), abs_tol)
-    new = np.concatenate([np.ones_like(gap[..., :1, :], dtype=bool), gap > tol], axis=-2)
-    leader = np.where(new, np.arange(s.shape[-2])[:, None], 0)
-    leader = np.maximum.accumulate(leader, axis=-2)
-    merged = np.take_along_axis(s, leader, axis=-2)
-    out = np.empty_like(a)
-    np.put_along_axis(out, order, merged, axis=-2)
-    return out[:, 0] if flat else out
+# The tie rule built on this resolution (``TIE_REL``, ``TIE_ABS``, ``merge_ties``) is a key-set
+# rule: it lives in :mod:`.screening`, which imports this module, never the reverse.

@@ -7,7 +7,7 @@ key-error rules join it with the later papers.  Latin hypercube sampling is scip
 
 from __future__ import annotations
 
-__all__ = ["as_generator", "latin_hypercube", "repeated_latin_hypercube", "average_ranks",
+__all__ = ["latin_hypercube", "repeated_latin_hypercube", "average_ranks",
            "spearman", "centred_ranks", "rank_by_magnitude", "below_group_mean",
            "position_outputs", "spearman_over_poses", "rank_positions", "rank_intervals",
            "sum_of_squares", "rank_r_squared", "lhs_rank_eigenvalues"]
@@ -16,21 +16,7 @@ import numpy as np
 from scipy import stats
 from scipy.stats import qmc
 
-
-def as_generator(seed) -> np.random.Generator:
-    """A ``numpy.random.Generator`` from a seed, SeedSequence or Generator.
-
-    Parameters
-    ----------
-    seed : int, SeedSequence or Generator
-
-    Returns
-    -------
-    numpy.random.Generator
-    """
-    if isinstance(seed, np.random.Generator):
-        return seed
-    return np.random.default_rng(seed)
+from mtaccuracy import validate
 
 
 def latin_hypercube(n: int, bounds: np.ndarray, seed) -> np.ndarray:
@@ -41,25 +27,27 @@ def latin_hypercube(n: int, bounds: np.ndarray, seed) -> np.ndarray:
     Parameters
     ----------
     n : int
-        Samples.
+        Samples (>= 2), one per stratum of every input.
     bounds : array (2, d)
-        Lower and upper bounds (mm, rad).
-    seed : int, SeedSequence or Generator
+        Lower and upper bounds of the d inputs (mm, rad).
+    seed : int, SeedSequence, Generator or None
+        The randomness (:func:`mtaccuracy.validate.rng`); a Generator is used as it is, so the
+        caller's stream continues.
 
     Returns
     -------
     array (n, d)
+        The design, in the units of ``bounds``.
     """
     bounds = np.asarray(bounds, dtype=float)
     if bounds.ndim != 2 or bounds.shape[0] != 2:
         raise ValueError(f"bounds must have shape (2, d), got {bounds.shape}")
-    if int(n) != n or n < 2:
-        raise ValueError(f"n must be an integer >= 2, got {n!r}")
-    u = qmc.LatinHypercube(d=bounds.shape[1], rng=as_generator(seed)).random(int(n))
+    n = validate.integer(n, "n", low=2)
+    u = qmc.LatinHypercube(d=bounds.shape[1], rng=validate.rng(seed)).random(n)
     return bounds[0] + u * (bounds[1] - bounds[0])
 
 
-def repeated_latin_hypercube(n: int, bounds: np.ndarray, repeats: int, seed) -> np.ndarray:
+def repeated_latin_hypercube(n: int, bounds: np.ndarray, *, repeats: int, seed) -> np.ndarray:
     """``repeats`` independent Latin hypercube designs, (repeats, n, d).
 
     Each design gets its own child of ``numpy.random.SeedSequence(seed)``, so design ``r`` is
@@ -68,21 +56,21 @@ def repeated_latin_hypercube(n: int, bounds: np.ndarray, repeats: int, seed) -> 
     Parameters
     ----------
     n : int
-        Samples per design.
+        Samples per design (>= 2).
     bounds : array (2, d)
-        Lower and upper bounds (mm, rad).
+        Lower and upper bounds of the d inputs (mm, rad).
     repeats : int
-        Designs.
+        Independent designs (>= 1).
     seed : int
-        Seed of the parent ``SeedSequence``.
+        Seed of the parent ``SeedSequence``, whose children seed the designs.
 
     Returns
     -------
     array (repeats, n, d)
+        The designs, in the units of ``bounds``.
     """
-    if int(repeats) != repeats or repeats < 1:
-        raise ValueError(f"repeats must be an integer >= 1, got {repeats!r}")
-    children = np.random.SeedSequence(seed).spawn(int(repeats))
+    repeats = validate.integer(repeats, "repeats", low=1)
+    children = np.random.SeedSequence(seed).spawn(repeats)
     return np.stack([latin_hypercube(n, bounds, np.random.default_rng(c)) for c in children])
 
 
@@ -145,13 +133,14 @@ def spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     x : array (..., n, p)
-        Inputs.
+        Inputs, samples along axis -2.
     y : array (..., n, q)
-        Outputs.
+        Outputs on the same samples.
 
     Returns
     -------
     array (..., p, q)
+        Coefficients in [-1, 1] (NaN for a constant column).
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -161,21 +150,23 @@ def spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def rank_by_magnitude(values: np.ndarray, names: list[str]) -> list[tuple[str, float]]:
-    """(name, value) pairs sorted by decreasing ``|value|``, equal ``|value|`` in the order of
-    ``names`` (catalogue order).  For Spearman coefficients equal means equal to the bit (see
-    :func:`spearman`); distinct coefficients of n samples differ by at least 1/4 of a rank
-    product, about 3/n^3 of the denominator, far above rounding.
+    """(name, value) pairs by decreasing ``|value|``, equal ``|value|`` in catalogue order.
+
+    For Spearman coefficients equal means equal to the bit (see :func:`spearman`); distinct
+    coefficients of n samples differ by at least 1/4 of a rank product, about 3/n^3 of the
+    denominator, far above rounding, so no tolerance is needed.
 
     Parameters
     ----------
     values : array (p,)
-        Coefficients.
+        Coefficients (their sign is kept, their magnitude ranks them).
     names : list of str (p,)
-        Input names, in catalogue order.
+        Input names, in catalogue order: the order of equal magnitudes.
 
     Returns
     -------
     list of (str, float)
+        Largest magnitude first.
     """
     values = np.asarray(values, dtype=float)
     order = sorted(range(len(names)), key=lambda j: (-abs(values[j]), j))
@@ -183,25 +174,24 @@ def rank_by_magnitude(values: np.ndarray, names: list[str]) -> list[tuple[str, f
 
 
 def below_group_mean(coefficients: np.ndarray) -> np.ndarray:
-    """Guo et al.'s weak-error rule: True where ``|rho|`` is below the mean ``|rho|`` of its
-    output column for every output.  ``coefficients`` is (p, q); returns (p,) booleans.
+    """Guo et al.'s weak-error rule: below the mean ``|rho|`` of its output, for every output.
 
     Parameters
     ----------
     coefficients : array (p, q)
-        Spearman coefficients.
+        Spearman coefficients of p inputs with q outputs.
 
     Returns
     -------
     array of bool (p,)
+        True for the weak inputs.
     """
     a = np.abs(np.asarray(coefficients, dtype=float))
     return np.all(a < a.mean(axis=0, keepdims=True), axis=1)
 
 
 def position_outputs(pose_error: np.ndarray) -> np.ndarray:
-    """Ex, Ey, Ez and Et = sqrt(Ex^2 + Ey^2 + Ez^2) (Guo et al. Eq. 14) from (..., 6) pose
-    errors, as (..., 4).
+    """Ex, Ey, Ez and Et = sqrt(Ex^2 + Ey^2 + Ez^2) (Guo et al. Eq. 14) from the pose errors.
 
     Parameters
     ----------
@@ -218,49 +208,53 @@ def position_outputs(pose_error: np.ndarray) -> np.ndarray:
 
 
 def centred_ranks(samples: np.ndarray) -> np.ndarray:
-    """Average ranks along axis -2 minus their mean: what :func:`spearman_over_poses` needs of
-    the design, computed once for an optimiser that calls it many times.
+    """Average ranks along axis -2 minus their mean, the design's part of a Spearman coefficient.
+
+    What :func:`spearman_over_poses` needs of the design, computed once for an optimiser that
+    calls it many times.
 
     Parameters
     ----------
     samples : array (..., n, d)
-        The design.
+        The design, samples along axis -2.
 
     Returns
     -------
     array (..., n, d)
+        Centred ranks (multiples of 1/2).
     """
     return _centred(average_ranks(samples))
 
 
-def spearman_over_poses(machine, samples: np.ndarray, poses: dict, outputs=position_outputs,
+def spearman_over_poses(machine, samples: np.ndarray, poses: dict, *, outputs=position_outputs,
                         chunk: int = 64, sample_ranks: np.ndarray | None = None) -> np.ndarray:
     """Spearman coefficients of every error with every output, at many poses.
 
-    ``samples`` (n, d) is one error design reused at every pose (common random numbers);
-    ``poses`` maps pose names to (P,) arrays.  Returns (P, d, q).  Poses are evaluated in
-    chunks of ``chunk`` poses, each chunk as one batched model call over chunk * n rows.
-    ``sample_ranks``: :func:`centred_ranks` of ``samples`` if already computed.
+    One error design is reused at every pose (common random numbers).  Poses are evaluated in
+    chunks, each chunk as one batched model call over ``chunk * n`` rows.
 
     Parameters
     ----------
     machine : ChainMachine
-        Any object with ``pose_error(errors, pose)`` (errors (N, d) -> (N, q)).
+        Any object with ``pose_error(errors, pose)`` (errors (N, d) -> (N, 6)).
     samples : array (n, d)
-        One error design (mm, rad).
+        One error design (mm, rad), reused at every pose.
     poses : dict
-        Pose name -> (P,) array (mm, rad).
+        Axis name -> (P,) array of its values (mm, rad), one entry per pose.
     outputs : callable
-        ``(..., 6) -> (..., q)`` (default :func:`position_outputs`).
+        ``(..., 6) -> (..., q)``, the outputs ranked (default :func:`position_outputs`).
     chunk : int
-        Poses per batched model call.
+        Poses per batched model call (>= 1): memory against the number of calls.
     sample_ranks : array (n, d), optional
-        :func:`centred_ranks` of ``samples``.
+        :func:`centred_ranks` of ``samples``, if already computed (an optimiser calling this
+        many times computes them once).
 
     Returns
     -------
     array (P, d, q)
+        The coefficients per pose, error and output.
     """
+    chunk = validate.integer(chunk, "chunk", low=1)
     samples = np.asarray(samples, dtype=float)
     n = samples.shape[0]
     sizes = {np.size(v) for v in poses.values()}
@@ -290,7 +284,8 @@ def rank_positions(coefficients: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     coefficients : array (..., p, q)
-        Spearman coefficients.
+        Spearman coefficients of p inputs (catalogue order) with q outputs, as
+        :func:`spearman` returns them.
 
     Returns
     -------
@@ -306,28 +301,26 @@ def rank_positions(coefficients: np.ndarray) -> np.ndarray:
 
 
 def rank_intervals(repeated: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
-    """Sampling interval of each input's rank: the central ``level`` range of its rank over
-    independent repeated designs.
+    """Sampling interval of each input's rank: its central range over repeated designs.
 
-    ``repeated`` (R, p, q): coefficients of R independent designs of the same size.  Returns
-    ``(lo, hi)`` integer ranks (p, q) (``numpy.quantile`` with ``method="inverted_cdf"``, so
-    both ends are ranks that occurred).
+    ``numpy.quantile`` with ``method="inverted_cdf"``, so both ends are ranks that occurred.
 
     Parameters
     ----------
     repeated : array (R, p, q)
-        Coefficients of R independent designs.
+        Coefficients of R >= 2 independent designs of the same size.
     level : float
-        Central share of the ranks covered.
+        Central share of the ranks covered, in (0, 1).
 
     Returns
     -------
     lo, hi : arrays of int (p, q)
+        The interval's ends (1 = largest ``|rho|``).
     """
     r = rank_positions(repeated)
     if r.ndim != 3 or r.shape[0] < 2:
         raise ValueError(f"need coefficients of at least 2 designs, shape (R, p, q); got {r.shape}")
-    if not 0 < level < 1:
+    if not 0 < level < 1:  # an open interval: validate.probability allows 0 and 1
         raise ValueError(f"level must be in (0, 1), got {level!r}")
     a = (1 - level) / 2
     lo = np.quantile(r, a, axis=0, method="inverted_cdf")
@@ -350,32 +343,34 @@ def sum_of_squares(coefficients: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     coefficients : array (..., p, q)
-        Spearman coefficients.
+        Spearman coefficients of p independent inputs with q outputs.
 
     Returns
     -------
     array (..., q)
+        The sum per output (at most 1 in the population, see above).
     """
     return (np.asarray(coefficients, dtype=float) ** 2).sum(axis=-2)
 
 
 def rank_r_squared(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """R^2 of the least-squares regression of the ranks of each ``y`` column on the ranks of
-    all ``x`` columns, ``r^T C^{-1} r`` with ``r`` the Spearman coefficients and ``C`` the
-    rank correlation matrix of the design: at most 1 in every sample (it is an R^2), and equal
-    to :func:`sum_of_squares` when the design's ranks are exactly uncorrelated.  ``x`` (n, p),
-    ``y`` (n, q); returns (q,).
+    """R^2 of the regression of the ranks of each ``y`` column on the ranks of all of ``x``.
+
+    ``r^T C^{-1} r`` with ``r`` the Spearman coefficients and ``C`` the rank correlation
+    matrix of the design: at most 1 in every sample (it is an R^2), and equal to
+    :func:`sum_of_squares` when the design's ranks are exactly uncorrelated.
 
     Parameters
     ----------
     x : array (n, p)
-        The design.
+        The design (its rank correlation matrix must be invertible).
     y : array (n, q)
-        Outputs.
+        Outputs on the design.
 
     Returns
     -------
     array (q,)
+        R^2 per output, in [0, 1].
     """
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     r = spearman(x, y)
@@ -388,9 +383,10 @@ EIGEN_BLOCK = 500
 
 
 def lhs_rank_eigenvalues(n: int, k: int, *, designs: int, seed) -> np.ndarray:
-    """Largest eigenvalue of the rank-correlation matrix of ``k`` inputs in each of
-    ``designs`` independent ``n``-run Latin hypercube designs: the model-free bound on the sum
-    of squared Spearman coefficients over any ``k`` inputs.
+    """Largest eigenvalue of the k-input rank-correlation matrix of random Latin hypercubes.
+
+    One value per independent ``n``-run design: the model-free bound on the sum of squared
+    Spearman coefficients over any ``k`` inputs.
 
     For any output ``y`` whatsoever (any model, any pose, even noise), let ``U`` (n, k) hold
     the centred ranks of the ``k`` inputs scaled to unit length, ``v`` the same for ``y``,
@@ -429,10 +425,9 @@ def lhs_rank_eigenvalues(n: int, k: int, *, designs: int, seed) -> np.ndarray:
     array (designs,)
         ``lambda_max`` of each design's (k, k) Spearman correlation matrix, in [1, k].
     """
-    for name, v, lo in (("n", n, 3), ("k", k, 2), ("designs", designs, 1)):
-        if int(v) != v or v < lo:
-            raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
-    n, k, designs = int(n), int(k), int(designs)
+    n = validate.integer(n, "n", low=3)
+    k = validate.integer(k, "k", low=2)
+    designs = validate.integer(designs, "designs", low=1)
     centred = np.arange(n) - (n - 1) / 2.0          # centred ranks, half-integers
     norm2 = n * (n * n - 1) / 12.0                  # their sum of squares
     idx_type = np.int16 if n < 2**15 else np.int64
