@@ -26,8 +26,8 @@ def test_uniform_moments_and_linear_indices_equal_sampling_with_uniform_offset_e
     jac = H3.jacobian(pose)[0, :3]                       # (3, 21)
     lin = S.linear_indices(jac, sd=np.sqrt(var))                        # (21, 3), as st
     ua, ub = S.base_samples(2**13, 21, method="sobol", seed=3)
-    s1, st = S.sobol_indices(lambda e: e @ jac.T, S.from_unit_uniform(ua, bounds),
-                             S.from_unit_uniform(ub, bounds))
+    s1, st = S.sobol_indices(lambda e: e @ jac.T, S.Inputs.from_bounds(bounds).from_unit(ua),
+                             S.Inputs.from_bounds(bounds).from_unit(ub))
     # Sobol' design, N = 8192: the sampling error of these indices is below 0.01
     assert np.abs(st - lin).max() < 0.015 and np.abs(s1 - lin).max() < 0.015
     assert lin[:, 0].max() > 0.1  # not a trivial comparison
@@ -126,7 +126,7 @@ def test_pose_box_indices_equal_sampling_with_the_pose_as_an_input_on_h3():
         p = dict(zip("xyz", z[:, 21:].T, strict=True), **tool)
         return np.einsum("nqd,nd->nq", H3.jacobian(p)[:, :3], z[:, :21])
     ua, ub = S.base_samples(2**13, 24, method="sobol", seed=8)
-    a, b = S.from_unit_uniform(ua, full), S.from_unit_uniform(ub, full)
+    a, b = S.Inputs.from_bounds(full).from_unit(ua), S.Inputs.from_bounds(full).from_unit(ub)
     es1, est = S.sobol_indices(model, a, b)
     assert np.abs(est[:21] - st[0]).max() < 0.02 and np.abs(es1[:21] - s1[0]).max() < 0.02
     assert np.allclose(model(np.vstack([a, b])).var(0), v[0], rtol=0.05)

@@ -63,8 +63,8 @@ def test_pce_recovers_analytic_indices_of_linear_and_interacting_functions():
 
 def test_sampling_estimators_agree_with_the_same_analytic_indices():
     ua, ub = S.base_samples(2**14, 5, method="lhs", seed=3)
-    s1, st = S.sobol_indices(interacting, S.from_unit_normal(ua, np.ones(5)),
-                             S.from_unit_normal(ub, np.ones(5)))
+    s1, st = S.sobol_indices(interacting, S.Inputs.normal(0.0, np.ones(5)).from_unit(ua),
+                             S.Inputs.normal(0.0, np.ones(5)).from_unit(ub))
     e1, et = analytic()
     assert np.allclose(s1[:, 0], e1, atol=0.03) and np.allclose(st[:, 0], et, atol=0.03)
 

@@ -24,11 +24,12 @@ def ishigami_exact(a=7.0, b=0.1):
 
 
 BOUNDS = np.array([[-np.pi] * 3, [np.pi] * 3])
+ISHIGAMI_INPUTS = S.Inputs.from_bounds(BOUNDS)          # x_i uniform on [-pi, pi]
 
 
 def test_agrees_with_salib_on_the_same_runs():
     ua, ub = S.base_samples(256, 3, method="sobol", seed=0)
-    a, b = S.from_unit_uniform(ua, BOUNDS), S.from_unit_uniform(ub, BOUNDS)
+    a, b = ISHIGAMI_INPUTS.from_unit(ua), ISHIGAMI_INPUTS.from_unit(ub)
     ya, yb, yab = S.sobol_evaluate(ishigami, a, b)
     s1, st = S.sobol_estimate(ya, yb, yab)
     # SALib's layout without second order: per base row A, AB_1..AB_D, B.
@@ -42,8 +43,8 @@ def test_agrees_with_salib_on_the_same_runs():
 @pytest.mark.parametrize("method", ["mc", "lhs", "sobol"])
 def test_ishigami_converges_to_the_analytic_indices(method):
     ua, ub = S.base_samples(2**14, 3, method=method, seed=4)
-    s1, st = S.sobol_indices(ishigami, S.from_unit_uniform(ua, BOUNDS),
-                             S.from_unit_uniform(ub, BOUNDS))
+    s1, st = S.sobol_indices(ishigami, ISHIGAMI_INPUTS.from_unit(ua),
+                             ISHIGAMI_INPUTS.from_unit(ub))
     e1, et = ishigami_exact()
     assert np.allclose(s1[:, 0], e1, atol=0.04) and np.allclose(st[:, 0], et, atol=0.04)
 
@@ -66,8 +67,8 @@ def test_streaming_indices_equal_the_stored_estimate(n, chunk):
 
     def model(x):   # two outputs far from zero (centring matters) with interactions
         return np.c_[ishigami(x) + 40.0, x[:, 3] * x[:, 4] - 3.0 + x[:, 0]]
-    a, b = S.from_unit_uniform(ua, np.array([[-np.pi] * 5, [np.pi] * 5])), S.from_unit_uniform(
-        ub, np.array([[-np.pi] * 5, [np.pi] * 5]))
+    five = S.Inputs.from_bounds(np.array([[-np.pi] * 5, [np.pi] * 5]))
+    a, b = five.from_unit(ua), five.from_unit(ub)
     seen = []
     s1, st = S.sobol_indices(model, a, b, chunk=chunk, progress=lambda d, t: seen.append((d, t)))
     e1, et = S.sobol_estimate(*S.sobol_evaluate(model, a, b, chunk=chunk))
@@ -105,8 +106,8 @@ def test_bootstrap_half_width_shrinks_with_n():
     widths = []
     for n in (256, 4096):
         ua, ub = S.base_samples(n, 3, method="mc", seed=3)
-        ya, yb, yab = S.sobol_evaluate(ishigami, S.from_unit_uniform(ua, BOUNDS),
-                                       S.from_unit_uniform(ub, BOUNDS))
+        ya, yb, yab = S.sobol_evaluate(ishigami, ISHIGAMI_INPUTS.from_unit(ua),
+                                       ISHIGAMI_INPUTS.from_unit(ub))
         w1, wt = S.sobol_bootstrap(ya, yb, yab, n_boot=50, seed=0)
         assert w1.shape == wt.shape == (3, 1)
         widths.append(wt[1, 0])
@@ -126,8 +127,8 @@ def test_linear_indices_equal_the_sampling_estimate_of_a_linear_model():
     lin = S.linear_indices(jac, sd=sd)                    # (inputs, outputs), as st
     assert np.allclose(lin[:, 0], [4.0, 9.0, 1.0] / np.float64(14.0)) and not lin[:, 1].any()
     ua, ub = S.base_samples(2**14, 3, method="sobol", seed=5)
-    s1, st = S.sobol_indices(lambda x: x @ jac[0], S.from_unit_normal(ua, sd),
-                             S.from_unit_normal(ub, sd))
+    s1, st = S.sobol_indices(lambda x: x @ jac[0], S.Inputs.normal(0.0, sd).from_unit(ua),
+                             S.Inputs.normal(0.0, sd).from_unit(ub))
     assert np.allclose(st[:, 0], lin[:, 0], atol=0.02) and \
         np.allclose(s1[:, 0], lin[:, 0], atol=0.02)
 
@@ -148,7 +149,7 @@ def _direct_bootstrap(ya, yb, yab, n_boot, seed, chunk=20):
 def test_bootstrap_by_counts_equals_resampling_the_rows():
     ua, ub = S.base_samples(300, 3, method="mc", seed=6)
     ya, yb, yab = S.sobol_evaluate(lambda x: np.c_[ishigami(x) + 50.0, x[:, 0]],
-                                   S.from_unit_uniform(ua, BOUNDS), S.from_unit_uniform(ub, BOUNDS))
+                                   ISHIGAMI_INPUTS.from_unit(ua), ISHIGAMI_INPUTS.from_unit(ub))
     ref1, reft = _direct_bootstrap(ya, yb, yab, 45, 9)
     for block in (2**21, 300 * 7):  # one product, or several (the draws do not change)
         s1b, stb = S.sobol_bootstrap_samples(ya, yb, yab, n_boot=45, seed=9, block=block)
@@ -224,7 +225,7 @@ def test_streamed_design_equals_the_whole_array_estimate(method):
     """Base rows drawn and run in blocks give the whole-array estimate (sobol_estimate on all
     runs of base_samples' A and B, the same seed) to rounding; one block gives it bitwise."""
     n, d = 256, 5
-    to_inputs = lambda u: S.from_unit_uniform(u, np.array([[-np.pi] * d, [np.pi] * d]))  # noqa
+    to_inputs = S.Inputs.from_bounds(np.array([[-np.pi] * d, [np.pi] * d])).from_unit
     ua, ub = S.base_samples(n, d, method=method, seed=12)
     a, b = to_inputs(ua), to_inputs(ub)
     e1, et = S.sobol_estimate(*S.sobol_evaluate(_offset_model, a, b))

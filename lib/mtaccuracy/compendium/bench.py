@@ -102,7 +102,7 @@ def _zheng_pce(components):
 
     m, sd, pose = _zheng()
     u = S.base_samples(1000, 41, method="lhs", seed=1)[0]
-    xi = S.from_unit_normal(u, np.ones(41))
+    xi = S.Inputs.normal(0.0, np.ones(41)).from_unit(u)
     yv = m.pose_error(xi * sd, pose)
 
     def run():
@@ -127,8 +127,7 @@ def task_zheng_mcs():
     from .. import sensitivity as S
 
     m, sd, pose = _zheng()
-    design = S.SobolDesign(100_000, 41, method="mc", seed=2,
-                           to_inputs=lambda u: S.from_unit_normal(u, sd))
+    design = S.SobolDesign(100_000, S.Inputs.normal(0.0, sd), method="mc", seed=2)
 
     def run():   # sampling included; streamed: the base rows and AB runs are never all held
         return S.sobol_indices(lambda z: m.pose_error(z, pose), design, chunk=250_000)
@@ -150,8 +149,7 @@ def _sobol_memory(n: int) -> dict:
 
     m, sd, pose = _zheng()
     jac = m.jacobian(pose).reshape(6, 41)
-    design = S.SobolDesign(n, 41, method="mc", seed=2,
-                           to_inputs=lambda u: S.from_unit_normal(u, sd))
+    design = S.SobolDesign(n, S.Inputs.normal(0.0, sd), method="mc", seed=2)
     t0 = time.perf_counter()
     s1, st = S.sobol_indices(lambda e: e @ jac.T, design, chunk=250_000)
     t = time.perf_counter() - t0

@@ -126,7 +126,8 @@ def range_path_study(machine, half_a, half_b, ts, *, unit_rows, workspace_mm, to
         sets = S.key_errors_by_output(ranked(st), names=names, outputs=list(outputs),
                                       threshold=threshold)
         union = S.union_key_set(sets, names)
-        x = S.from_unit_uniform(np.asarray(unit_rows), np.hstack([np.vstack([-h, h]), pose_b]))
+        x = S.Inputs.from_bounds(np.hstack([np.vstack([-h, h]), pose_b])).from_unit(
+            np.asarray(unit_rows))
         full = model(x)
         res = full - model(np.c_[S.zero_non_key(x[:, :d], union, names), x[:, d:]])
         rows.append(dict(t=float(t), **{f"n_key_{o}": ks.n_key for o, ks in sets.items()},

@@ -522,8 +522,7 @@ def sobol_reference(machine, pose, sd, method: str, n: int, rng_seed: int, progr
     Errors normal with standard deviations ``sd`` (41,): ``method`` "mc" or "lhs" designs of
     ``n`` base rows, streamed (``sensitivity.sobol_indices`` on a ``SobolDesign``).  With
     ``progress`` a line per quarter of the runs."""
-    design = S.SobolDesign(n, 41, method=method, seed=rng_seed,
-                           to_inputs=lambda u: S.from_unit_normal(u, sd))
+    design = S.SobolDesign(n, S.Inputs.normal(0.0, sd), method=method, seed=rng_seed)
     marks = set()
 
     def report(done, total):
@@ -545,7 +544,7 @@ def pce_indices(machine, pose, sd, n: int, degree: int, rng_seed: int, q_norm: f
     ``sensitivity.fit_pce_outputs`` on a Latin hypercube of ``n`` standard normals (errors =
     xi * sd)."""
     u = S.base_samples(n, 41, method="lhs", seed=rng_seed)[0]
-    xi = S.from_unit_normal(u, np.ones(41))
+    xi = S.Inputs.normal(0.0, np.ones(41)).from_unit(u)
     y = machine.pose_error(xi * sd, pose)
     fits = S.fit_pce_outputs(xi, y[:, list(comps)], degree=degree, q_norm=q_norm)
     return dict(zip(comps, fits, strict=True))

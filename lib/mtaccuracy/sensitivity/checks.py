@@ -25,11 +25,11 @@ from scipy import stats
 
 from mtaccuracy import validate
 
+from .inputs import Inputs
 from .linear import indices_at_poses, nonlinear_remainder, uniform_moments
 from .screening import merge_ties
 from .sobol import (
     base_samples,
-    from_unit_uniform,
     sobol_bootstrap,
     sobol_estimate,
     sobol_evaluate,
@@ -186,7 +186,8 @@ def sample_at_pose(model: Callable[[np.ndarray], np.ndarray], jacobian: np.ndarr
     bounds = np.asarray(bounds, dtype=float)
     d = bounds.shape[1]
     ua, ub = base_samples(n, d, method="mc", seed=seed)
-    a, b = from_unit_uniform(ua, bounds), from_unit_uniform(ub, bounds)
+    inputs = Inputs.from_bounds(bounds)
+    a, b = inputs.from_unit(ua), inputs.from_unit(ub)
     ya, yb, yab = sobol_evaluate(model, a, b)
     _, st = sobol_estimate(ya, yb, yab)
     _, half = sobol_bootstrap(ya, yb, yab, n_boot=n_boot, seed=seed + 10)

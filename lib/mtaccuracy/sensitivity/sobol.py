@@ -20,10 +20,9 @@ drawn through its laws and :func:`sobol_indices` labels its result (:class:`Sobo
 from __future__ import annotations
 
 __all__ = ["base_samples", "base_blocks", "BASE_ROWS", "SobolDesign", "SobolIndices",
-           "from_unit_uniform",
-           "from_unit_normal", "sobol_evaluate", "sobol_estimate", "bootstrap_counts",
+           "sobol_evaluate", "sobol_estimate", "bootstrap_counts",
            "sobol_bootstrap_samples", "ci_half_width", "sobol_bootstrap", "sobol_indices",
-           "linear_indices", "FLOAT_NOISE"]
+           "FLOAT_NOISE"]
 
 import copy
 import warnings
@@ -33,13 +32,11 @@ from dataclasses import KW_ONLY, dataclass
 import numpy as np
 import pandas as pd
 from scipy import stats
-from scipy.special import ndtri
 from scipy.stats import qmc
 
 from ..validate import integer
 from ..validate import rng as _rng
 from .inputs import Inputs
-from .linear import linear_indices  # it lives in .linear; kept here for old callers
 
 #: Base rows (of A and of B) drawn and run at a time by :func:`sobol_indices`.  Peak memory
 #: is that of one block whatever N (``make bench``: about 210 MB above the imports at D = 41,
@@ -210,7 +207,7 @@ class SobolDesign:
         The randomness (:func:`mtaccuracy.validate.rng`).
     to_inputs : callable, optional
         Unit-cube rows (m, d) to model inputs (m, d), row by row (e.g.
-        ``lambda u: from_unit_normal(u, sd)``); default: through :attr:`inputs`, else the
+        ``lambda u: sd * scipy.special.ndtri(u)``); default: through :attr:`inputs`, else the
         unit cube itself.
     inputs : Inputs, optional
         The inputs (set from ``d``); their names label :func:`sobol_indices`' result.
@@ -268,50 +265,6 @@ class SobolDesign:
         """
         (a, b), = self.blocks(rows=self.n)
         return a, b
-
-
-def from_unit_uniform(u: np.ndarray, bounds: np.ndarray) -> np.ndarray:
-    """Map unit-cube samples to independent uniforms on ``bounds`` (2, d).
-
-    ``bounds[0] + u (bounds[1] - bounds[0])``: the numbers of
-    :meth:`Inputs.from_unit` of ``Inputs.from_bounds(bounds)``.
-
-    Parameters
-    ----------
-    u : array (n, d)
-        Unit-cube samples.
-    bounds : array (2, d)
-        Lower and upper bounds (mm, rad).
-
-    Returns
-    -------
-    array (n, d)
-    """
-    bounds = np.asarray(bounds, dtype=float)
-    return bounds[0] + u * (bounds[1] - bounds[0])
-
-
-def from_unit_normal(u: np.ndarray, sd: np.ndarray, mean: np.ndarray | float = 0.0) -> np.ndarray:
-    """Map unit-cube samples to independent normals (inverse CDF), ``sd`` per column.
-
-    ``scipy.special.ndtri`` is the function ``scipy.stats.norm.ppf`` evaluates, called
-    without the distribution machinery (five times faster; the same numbers, as those of
-    :meth:`Inputs.from_unit` of ``Inputs.normal(mean, sd)``).
-
-    Parameters
-    ----------
-    u : array (n, d)
-        Unit-cube samples (in (0, 1)).
-    sd : array (d,)
-        Standard deviations.
-    mean : array (d,) or float
-        Means.
-
-    Returns
-    -------
-    array (n, d)
-    """
-    return np.asarray(mean) + np.asarray(sd) * ndtri(u)
 
 
 def _model_runs(model, n, d, chunk, progress):
