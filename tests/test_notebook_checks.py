@@ -57,7 +57,8 @@ def test_zheng_fixed_ratio_floor_spans_every_group_not_the_last():
     groups = pd.DataFrame({"entry": [0, 1, 2, 3, 4], "group": [0, 0, 1, 1, 2],
                            "factor": [1.0] * 5})
     cross = pd.DataFrame(columns=["num_k", "den_k", "num_l", "den_l", "value"])
-    eq, quot, floor, scatter = zheng2024.fixed_ratio_checks(t2, half, groups, cross, set())
+    eq, quot, floor, scatter = zheng2024.fixed_ratio_checks(t2, half=half, groups=groups,
+                                                            cross=cross, any_sd=set())
     assert floor == pytest.approx(np.sqrt((0.1 ** 2 * 2) / 5))    # group 0 scatters, 1 and 2 not
     assert list(eq.group) == ["Px a/b", "Px c/d"] and quot.empty
     assert eq.pce_spread_percent.iloc[0] == pytest.approx(20.0)

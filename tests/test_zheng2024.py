@@ -101,7 +101,9 @@ def test_bars_figure_draws_published_values_only_when_given():
     st = {m: np.full((6, 41), 1 / 41) for m in ("PCE", "MCS", "LHS")}
     t2 = pd.DataFrame({"comp": ["Px"], "symbol": ["e3"], "pce": [0.1]})
     for table, n_marks in ((None, 0), (t2, 1)):
-        fig = zheng2024.bars_figure(st, ["Px", "Py"], COMP, names, table, 0.05, "t", "k")
+        fig = zheng2024.bars_figure(st, comps=["Px", "Py"], all_comps=COMP, names=names,
+                                    t2=table, key_threshold=0.05, title="t",
+                                    published_colour="k")
         assert len(fig.axes[0].collections) == n_marks
         plt.close(fig)
 

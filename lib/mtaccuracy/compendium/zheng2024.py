@@ -562,7 +562,7 @@ def group_head(groups, ci, ei, g):
     return ci[j], ei[j]
 
 
-def fixed_ratio_checks(t2, half, groups, cross, any_sd, methods=("pce", "mcs", "lhs")):
+def fixed_ratio_checks(t2, *, half, groups, cross, any_sd, methods=("pce", "mcs", "lhs")):
     """Table 2 against the equalities and quotients the model fixes at every pose.
 
     ``t2``: Table 2 (one row per entry, a column per method), ``half``: half a unit of each
@@ -838,7 +838,7 @@ def fluctuation_text(r_steps: pd.DataFrame, *, method: str, sizes=(1000, 2000),
                      for rd in readings)
 
 
-def bars_figure(st, comps, all_comps, names, t2, key_threshold: float, title: str,
+def bars_figure(st, *, comps, all_comps, names, t2, key_threshold: float, title: str,
                 published_colour):
     """Figs. 5-6: normalised total indices of every error by method (bars).
 
@@ -866,7 +866,7 @@ def bars_figure(st, comps, all_comps, names, t2, key_threshold: float, title: st
     return fig
 
 
-def fig04_figure(s_tp, comps, names, diagonal, vmax: float = 0.3):
+def fig04_figure(s_tp, *, comps, names, diagonal, vmax: float = 0.3):
     """Fig. 4's test points: the linear total index of every error at every test point.
 
     Errors are rows (named), test points columns (numbered 1..N along the diagonals, which
