@@ -21,6 +21,7 @@ import pkgutil
 import pydoc
 import re
 import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -355,3 +356,31 @@ def test_a_summary_over_two_lines_is_named():
     assert function_problems("bare", bare) == ["bare: parameter machine has a type and nothing "
                                                "else"]
     assert function_problems("one", one) == []
+
+
+def _summaries(node, where: str, public: bool = True):
+    """``(name, docstring)`` of the public functions, classes and methods under ``node``."""
+    for ch in ast.iter_child_nodes(node):
+        if isinstance(ch, ast.FunctionDef | ast.ClassDef):
+            pub = public and not ch.name.startswith("_")
+            if pub:
+                yield f"{where}.{ch.name}", ast.get_docstring(ch) or ""
+            if isinstance(ch, ast.ClassDef):
+                yield from _summaries(ch, f"{where}.{ch.name}", pub)
+
+
+def compendium_summary_problems() -> list[str]:
+    """Summaries over one line in the compendium's modules (module, public functions, classes
+    and their public methods): the machinery reads like the science layer (issue 25 item 9)."""
+    out = []
+    for path in sorted((Path(mtaccuracy.__file__).parent / "compendium").glob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        out += summary_problems(path.name, ast.get_docstring(tree) or "")
+        for name, doc in _summaries(tree, path.stem):
+            out += summary_problems(name, doc)
+    return out
+
+
+def test_compendium_summaries_are_one_line():
+    problems = compendium_summary_problems()
+    assert not problems, "\n".join(problems)

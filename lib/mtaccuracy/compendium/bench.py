@@ -160,8 +160,9 @@ def _sobol_memory(n: int) -> dict:
 
 
 def task_zheng_linear_pose():
-    """All 41 x 6 closed-form indices at one pose, the Jacobian included; one call is too
-    quick for the timer, so a loop of 1000 calls is timed and divided."""
+    """All 41 x 6 closed-form indices at one pose, the Jacobian included.
+
+    One call is too quick for the timer, so a loop of 1000 calls is timed and divided."""
     from .. import sensitivity as S
 
     m, sd, pose = _zheng()
@@ -323,8 +324,10 @@ def _thermal_limit_data(n_exp=10, n_meas=100, n_sens=100, n_pos=500, seed=0, dt=
 
 
 def task_xu_split_limit():
-    """One train/test split of notebook 04 at the reader's limits (1000 measurements x 100
-    sensors x 500 positions): selection, point-by-point MLR, decoupled MLR and SVR; one run."""
+    """One train/test split of notebook 04 at the reader's limits; one run.
+
+    The limits are 1000 measurements x 100 sensors x 500 positions; the split runs selection,
+    point-by-point MLR, decoupled MLR and SVR."""
     from .. import thermal
 
     data = _thermal_limit_data()
@@ -334,10 +337,11 @@ def task_xu_split_limit():
 
 
 def task_explore_update():
-    """One slider move of the explorer's Machine tab (``mtaccuracy.compendium.explore``): the
-    closed-form indices at the pose and the dominant-error map over a 25 x 25 grid, for each of
-    the papers' three machines at its starting pose; min of 10 runs each after a warm-up.  The
-    time is the slowest machine's."""
+    """One slider move of the explorer's Machine tab (``mtaccuracy.compendium.explore``).
+
+    The move computes the closed-form indices at the pose and the dominant-error map over a 25 x 25
+    grid, for each of the papers' three machines at its starting pose; min of 10 runs each after a
+    warm-up.  The time is the slowest machine's."""
     from . import explore_model as M
 
     times = {name: M.time_slider_update(M.machine_setup(name), repeat=10)
@@ -394,9 +398,10 @@ for _name, (_b, _n, _deg, _otd, _) in PCE_CASES.items():
 
 
 def run_task(name: str) -> dict:
-    """Run one task in this process; its time, peak RSS and the task's own memory: peak RSS
-    above the process with the library imported (numpy, scipy, pandas, scikit-learn, chaospy:
-    about 120 MB, the same for every task), MB."""
+    """Run one task in this process; its time, peak RSS and the task's own memory.
+
+    The task's own memory is its peak RSS above the process with the library imported (numpy,
+    scipy, pandas, scikit-learn, chaospy: about 120 MB, the same for every task), MB."""
     from .. import machines, sensitivity  # noqa: F401
 
     start = _rss_mb()

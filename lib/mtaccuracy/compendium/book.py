@@ -76,9 +76,10 @@ class BookError(RuntimeError):
 # ---------------------------------------------------------------------------- the contents
 
 def captions(path: Path | None = None) -> dict[str, list[dict]]:
-    """``book/figures.yml``: per notebook stem, its figures in the paper's order, each
-    ``{"figure": stem of the PNG, "label": "Fig. 4", "caption": text}``.  A malformed file is a
-    ``ValueError`` naming the file and the entry."""
+    """``book/figures.yml``: per notebook stem, its figures in the paper's order.
+
+    Each figure is ``{"figure": stem of the PNG, "label": "Fig. 4", "caption": text}``.  A malformed
+    file is a ``ValueError`` naming the file and the entry."""
     path = Path(path or CAPTIONS)
     if not path.is_file():
         raise ValueError(f"{path} is missing: it holds the figures' captions")
@@ -102,8 +103,9 @@ def captions(path: Path | None = None) -> dict[str, list[dict]]:
 
 
 def figure_problems(figures: Path, stems: list[str], caps: dict) -> list[tuple[Path, str]]:
-    """Figures (PNGs listed in a folder's ``provenance.json``) without a caption, and captions
-    naming a figure that is not there: ``(path, why)``."""
+    """Figures without a caption, and captions naming a figure that is not there: ``(path, why)``.
+
+    The figures are the PNGs listed in a folder's ``provenance.json``."""
     out, where = [], paths.relative(CAPTIONS)
     for stem in stems:
         folder = figures / stem
@@ -122,8 +124,10 @@ def figure_problems(figures: Path, stems: list[str], caps: dict) -> list[tuple[P
 
 
 def notebook_parts(nb_path: Path) -> dict:
-    """The title (first ``#`` heading), the conclusion (the markdown cell whose heading says
-    "What we conclude", without that heading) of a notebook."""
+    """The title and the conclusion of a notebook.
+
+    The title is its first ``#`` heading; the conclusion is the markdown cell whose heading says
+    "What we conclude", without that heading."""
     nb = json.loads(Path(nb_path).read_text(encoding="utf-8"))
     md = ["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown"]
     title = next((m.splitlines()[0].lstrip("# ").strip() for m in md if m.startswith("# ")),
@@ -143,8 +147,9 @@ def _verdict_html(v: str) -> str:
 
 def scorecard_html(cards: pd.DataFrame, table_id: str, dt_url: str,
                    columns: list[str] | None = None) -> str:
-    """A scorecard as a DataTables table (sorts by any column, filters by the search box),
-    its script loaded from ``dt_url`` (inside the book)."""
+    """A scorecard as a DataTables table (sorts by any column, filters by the search box).
+
+    Its script is loaded from ``dt_url`` (inside the book)."""
     import itables
 
     cols = columns or CARD_COLUMNS
@@ -370,8 +375,9 @@ def _replace(new: Path, final: Path) -> None:
 
 def write_source(src: Path, figures: Path, stems: list[str], caps: dict,
                  broken: dict) -> None:
-    """The pages' source: conf.py, the generated Markdown, copies of the notebooks, of
-    ``figures/`` and ``data/`` (links in the notebooks resolve), MathJax and DataTables."""
+    """The pages' source: conf.py, generated Markdown, copied notebooks, MathJax and DataTables.
+
+    Copies of ``figures/`` and ``data/`` go with the notebooks, so that their links resolve."""
     import itables
     import jupyter_server_mathjax
 
@@ -425,8 +431,9 @@ def check(figures: Path, stems: list[str], caps: dict) -> dict[str, list[tuple[P
 
 def build(out: Path = BUILD, figures: Path | None = None, *, quiet: bool = True
           ) -> tuple[Path, dict, list[str]]:
-    """Build the book into ``out/html``; returns (that folder, the problems found per
-    notebook, Sphinx's warnings)."""
+    """Build the book into ``out/html``.
+
+    Returns (that folder, the problems found per notebook, Sphinx's warnings)."""
     from sphinx.cmd.build import build_main
 
     figures = Path(figures or paths.FIGURES)

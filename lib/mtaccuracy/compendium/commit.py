@@ -66,9 +66,10 @@ def _safe_rel(name) -> str | None:
 
 
 def manifest(folder: Path, stem: str) -> dict[str, str | None]:
-    """The files the compendium wrote in ``folder`` for notebook ``stem``: relative path ->
-    the SHA-256 recorded when it was written (None: not hashed, a measured file or the
-    manifest itself).  Empty when ``folder`` has no manifest of ``stem``."""
+    """The files the compendium wrote in ``folder`` for notebook ``stem``, with their hashes.
+
+    Relative path -> the SHA-256 recorded when it was written (None: not hashed, a measured file or
+    the manifest itself).  Empty when ``folder`` has no manifest of ``stem``."""
     try:
         data = json.loads((Path(folder) / SIDECAR).read_text(encoding="utf-8"))
         if data["run"]["notebook"] != stem or not isinstance(data.get("files", {}), dict):
@@ -94,8 +95,10 @@ def _is_ours(path: Path, digest: str | None) -> bool:
 
 
 def written_notebook_is_ours(path: Path, name: str) -> bool:
-    """Whether ``path`` is an executed notebook the compendium stored (its papermill metadata
-    names ``notebooks/<name>``, as :func:`mtaccuracy.compendium.runner` normalises it)."""
+    """Whether ``path`` is an executed notebook the compendium stored.
+
+    It is when its papermill metadata names ``notebooks/<name>``, as
+    :func:`mtaccuracy.compendium.runner` normalises it."""
     if path.is_symlink() or not path.is_file():
         return False
     try:
@@ -119,8 +122,9 @@ def _files(folder: Path) -> list[str]:
 
 
 def complete_manifest(staging: Path, stem: str) -> None:
-    """List in ``staging/provenance.json`` every staged file the notebook wrote without
-    registering it (with its hash), so that the next run knows the compendium wrote it."""
+    """List in ``staging/provenance.json`` every staged file the notebook wrote unregistered.
+
+    Each is listed with its hash, so that the next run knows the compendium wrote it."""
     side = staging / SIDECAR
     try:
         data = json.loads(side.read_text(encoding="utf-8")) if side.exists() else {}
@@ -286,9 +290,10 @@ def pending() -> list[Path]:
 
 
 def recover(*, quiet: bool = False) -> list[str]:
-    """Finish every commit a killed process left half done; remove what runs that died before
-    committing left (staging folders, temporary notebooks) in ``figures/`` and ``notebooks/``.
-    Returns one line per commit finished."""
+    """Finish every commit a killed process left half done, and clean up after dead runs.
+
+    What runs that died before committing left (staging folders, temporary notebooks) in
+    ``figures/`` and ``notebooks/`` is removed.  Returns one line per commit finished."""
     done = []
     d = journal_dir()
     if pending() or (d.is_dir() and any(d.glob(".*.json.tmp"))):
@@ -328,9 +333,10 @@ _LEFTOVER = re.compile(r"^\.(?:staging-(\d+)|.+\.commit-(\d+)\.tmp)$")
 
 
 def remove_stale(folder: Path) -> list[Path]:
-    """Remove from ``folder`` the staging folders (``.staging-<pid>``) and temporary notebooks
-    (``.<name>.commit-<pid>.tmp``) of runs whose process is gone and that no pending journal
-    names; returns what was removed."""
+    """Remove from ``folder`` the staging folders and temporary notebooks of dead runs.
+
+    Staging folders are ``.staging-<pid>``, temporary notebooks ``.<name>.commit-<pid>.tmp``; a run
+    is dead when its process is gone and no pending journal names it.  Returns what was removed."""
     gone = []
     try:
         entries = list(Path(folder).iterdir())

@@ -795,8 +795,9 @@ def create_app():
 
 
 def check_address(address: str) -> str:
-    """Refuse any address but 127.0.0.1 (never ``0.0.0.0``, ``::``, a host name or a LAN
-    address): the explorer serves this machine only.
+    """Refuse any address but 127.0.0.1: the explorer serves this machine only.
+
+    Never ``0.0.0.0``, ``::``, a host name or a LAN address.
 
     Parameters
     ----------

@@ -474,8 +474,10 @@ class DominantMap:
 
 
 def default_map_axes(setup: MachineSetup) -> tuple[str, str]:
-    """The two axes the dominant-error map starts on: the last and first rotary axes when the
-    machine has two (as notebook 06), else its first two axes (one axis: it twice).
+    """The two axes the dominant-error map starts on.
+
+    The last and first rotary axes when the machine has two (as notebook 06), else its first two
+    axes (one axis: it twice).
 
     Parameters
     ----------
@@ -549,8 +551,9 @@ def slider_update(setup: MachineSetup, values: Mapping[str, float] | None = None
                   axes: Sequence[str] | None = None, steps: int = GRID_STEPS,
                   position_um: float | None = None, angular_arcsec: float | None = None
                   ) -> tuple[PoseIndices, DominantMap]:
-    """Everything one slider move of the Machine tab computes: the indices at the pose and the
-    dominant-error map.
+    """Everything one slider move of the Machine tab computes.
+
+    The indices at the pose and the dominant-error map.
 
     Parameters
     ----------
@@ -576,8 +579,9 @@ def slider_update(setup: MachineSetup, values: Mapping[str, float] | None = None
 
 def time_slider_update(setup: MachineSetup, *, repeat: int = 10, steps: int = GRID_STEPS
                        ) -> float:
-    """The minimum wall time (s) of :func:`slider_update` at the default pose over ``repeat``
-    runs after one warm-up run (``make bench``).
+    """The minimum wall time (s) of :func:`slider_update` at the default pose (``make bench``).
+
+    Taken over ``repeat`` runs after one warm-up run.
 
     Parameters
     ----------
@@ -793,9 +797,11 @@ class ThermalPrediction:
 
 
 def thermal_data(folder=None):
-    """The thermal measurements (default the committed reconstruction, ``data/thermal``) and
-    whether they are the paper's reconstruction (decided by content,
-    :func:`mtaccuracy.compendium.xu2022.reconstruction_seed`).
+    """The thermal measurements and whether they are the paper's reconstruction.
+
+    The measurements default to the committed reconstruction (``data/thermal``); whether they are
+    the reconstruction is decided by content
+    (:func:`mtaccuracy.compendium.xu2022.reconstruction_seed`).
 
     Parameters
     ----------
@@ -820,8 +826,10 @@ published_thermal_inputs = xu2022.published_inputs
 def thermal_prediction(data, *, train: Sequence[int], test: int, inputs: str = "published",
                        kind: str = "mlr", progress: Callable[[str], None] | None = None
                        ) -> ThermalPrediction:
-    """Predict the test experiment's thermal error with the decoupled model (Eq. 9) fitted on
-    the training experiments: :func:`mtaccuracy.thermal.evaluate_split`, as notebook 04.
+    """Predict the test experiment's thermal error with the decoupled model (Eq. 9).
+
+    The model is fitted on the training experiments: :func:`mtaccuracy.thermal.evaluate_split`, as
+    notebook 04.
 
     Parameters
     ----------

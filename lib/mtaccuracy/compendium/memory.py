@@ -412,8 +412,9 @@ def available(*, proc_root="/proc", cgroup_root="/sys/fs/cgroup") -> tuple[float
 
 
 def tightest(found: list[Limit], *, share: int = 1) -> Limit:
-    """The limit that leaves a run the fewest bytes when ``share`` runs start at once: they
-    divide the machine's memory and the cgroups' headroom, while each has a per-process limit
+    """The limit that leaves a run the fewest bytes when ``share`` runs start at once.
+
+    They divide the machine's memory and the cgroups' headroom, while each has a per-process limit
     (``ulimit -v``) whole.
 
     Parameters

@@ -24,8 +24,9 @@ MINE = os.path.realpath(os.path.join(os.path.dirname(os.path.abspath(__file__)),
 
 
 def owner() -> str | None:
-    """The ``mtaccuracy`` package folder the running interpreter imports (resolved), or None
-    when it has none."""
+    """The ``mtaccuracy`` package folder the running interpreter imports, resolved.
+
+    None when it has none."""
     spec = importlib.util.find_spec("mtaccuracy")
     if spec is None or not spec.origin:
         return None
@@ -33,8 +34,9 @@ def owner() -> str | None:
 
 
 def problem(found: str | None, mine: str = MINE, prefix: str = sys.prefix) -> str | None:
-    """What is wrong when the environment at ``prefix`` imports ``found`` instead of ``mine``
-    (None when nothing is)."""
+    """What is wrong when the environment at ``prefix`` imports ``found`` instead of ``mine``.
+
+    None when nothing is."""
     if found is None or found == mine:
         return None
     other = os.path.dirname(os.path.dirname(found))  # <checkout>/lib/mtaccuracy -> <checkout>

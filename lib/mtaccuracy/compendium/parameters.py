@@ -109,9 +109,10 @@ def _parse_constraints(text: str, where: str) -> list[tuple[str, object]]:
 
 
 def notebook_path(name: str | Path) -> Path:
-    """Resolve ``03``, a stem (or its start) or a path to one of the compendium's notebooks
-    (``notebooks/NN_*.ipynb``).  Names are compared as text, never as patterns: ``*`` matches
-    nothing."""
+    """Resolve ``03``, a stem (or its start) or a path to one of the compendium's notebooks.
+
+    The notebooks are ``notebooks/NN_*.ipynb``.  Names are compared as text, never as patterns:
+    ``*`` matches nothing."""
     text = str(name).strip()
     known = all_notebooks()
     names = ", ".join(h.stem for h in known)
@@ -208,8 +209,10 @@ def _eval_arithmetic(node, names: dict, where: str) -> float:
 
 
 def memory_estimate(notebook: str | Path, values: dict) -> float | None:
-    """Peak bytes of a run with ``values`` (all parameters), from the ``# {memory: ...}`` line
-    of the parameters cell; None when the notebook declares none."""
+    """Peak bytes of a run with ``values`` (all parameters), from the notebook's declaration.
+
+    The declaration is the ``# {memory: ...}`` line of the parameters cell; None when the notebook
+    declares none."""
     path, src = _parameters_source(notebook)
     lines = src.splitlines()
     for i, line in enumerate(lines):
@@ -322,9 +325,10 @@ def _check_one(p: Parameter, value, notebook: str) -> object:
 
 
 def validate(notebook: str | Path, overrides: dict, share: int = 1) -> dict:
-    """Check ``overrides`` against the notebook's declared parameters and the run's memory
-    estimate; return them cleaned.  Raises :class:`ParameterError` naming the parameter and
-    the allowed ones."""
+    """Check ``overrides`` against the notebook's declared parameters; return them cleaned.
+
+    They are checked against the run's memory estimate too.  Raises :class:`ParameterError` naming
+    the parameter and the allowed ones."""
     path = notebook_path(notebook)
     declared = read_parameters(path)
     unknown = [k for k in overrides if k not in declared]
@@ -340,8 +344,9 @@ def validate(notebook: str | Path, overrides: dict, share: int = 1) -> dict:
 
 
 def check_parameters(namespace: dict, notebook: str) -> None:
-    """Inside a notebook: check the current values of its declared parameters, and start the
-    provenance record of this run (:mod:`mtaccuracy.compendium.provenance`)."""
+    """Inside a notebook: check the current values of its declared parameters.
+
+    It also starts the provenance record of this run (:mod:`mtaccuracy.compendium.provenance`)."""
     declared = read_parameters(notebook)
     for name, p in declared.items():
         if name not in namespace:

@@ -1,5 +1,6 @@
-"""Where things live in the compendium, independent of the current working directory, and
-which output folders a notebook may write.
+"""Where things live in the compendium, and which output folders a notebook may write.
+
+The paths do not depend on the current working directory.
 
 A notebook's ``output_dir`` may be (:func:`check_output_dir`):
 
@@ -49,8 +50,9 @@ def _base() -> Path:
 
 
 def resolve_output(path: str | os.PathLike) -> Path:
-    """The absolute, normalised folder an ``output_dir`` value names (``..`` and symbolic
-    links resolved)."""
+    """The absolute, normalised folder an ``output_dir`` value names.
+
+    ``..`` and symbolic links are resolved."""
     p = Path(os.path.expanduser(os.fspath(path)))
     if not p.is_absolute():
         p = _base() / p
@@ -67,8 +69,9 @@ def _written_by(folder: Path) -> str | None:
 
 
 def check_output_dir(path: str | os.PathLike, notebook: str) -> Path:
-    """Check that notebook ``notebook`` (its stem) may write into ``path``; return the
-    resolved folder.  Raises :class:`OutputDirError` saying what is allowed."""
+    """Check that notebook ``notebook`` (its stem) may write into ``path``; return it resolved.
+
+    Raises :class:`OutputDirError` saying what is allowed."""
     allowed = (f"use figures/{notebook} (the default) or a new or empty folder outside the "
                f"repository ({ROOT})")
     if not str(path).strip():
@@ -102,10 +105,11 @@ def check_output_dir(path: str | os.PathLike, notebook: str) -> Path:
 
 
 def check_copy_dir(path: str | os.PathLike) -> Path:
-    """The folder of ``--copy-to`` (the executed notebook and, by default, its outputs under
-    ``figures/<stem>/`` there), resolved: it must lie outside the repository, so that a copy
-    never touches the committed notebooks, figures or anything else of the checkout.  Raises
-    :class:`OutputDirError`."""
+    """The folder of ``--copy-to``, resolved: it must lie outside the repository.
+
+    It receives the executed notebook and, by default, its outputs under ``figures/<stem>/`` there;
+    outside the repository, a copy never touches the committed notebooks, figures or anything else
+    of the checkout.  Raises :class:`OutputDirError`."""
     text = os.fspath(path)
     if not str(text).strip():
         raise OutputDirError("--copy-to needs a folder outside the repository")
@@ -137,8 +141,9 @@ def output_dir(path: str | os.PathLike) -> Path:
 
 
 def relative(path) -> str:
-    """``path`` as a reader of this repository's messages wants it: relative to the repository
-    root when it lies inside (symbolic links resolved), else absolute; ``/``-separated."""
+    """``path`` as a reader of this repository's messages wants it, ``/``-separated.
+
+    Relative to the repository root when it lies inside (symbolic links resolved), else absolute."""
     p = Path(path).resolve()
     try:
         return p.relative_to(ROOT).as_posix()
@@ -147,8 +152,10 @@ def relative(path) -> str:
 
 
 def input_file(name, what: str) -> Path:
-    """An input file a notebook parameter names: relative paths are taken from the
-    repository root; a missing file is a ``FileNotFoundError`` naming the parameter."""
+    """An input file a notebook parameter names.
+
+    Relative paths are taken from the repository root; a missing file is a ``FileNotFoundError``
+    naming the parameter."""
     path = Path(name) if Path(name).is_absolute() else ROOT / name
     if not path.exists():
         raise FileNotFoundError(f"{what} {name!r} not found")

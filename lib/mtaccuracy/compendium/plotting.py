@@ -51,8 +51,9 @@ UNIT_SYMBOLS = {"um": "µm", "degC": "°C", "deg": "°", "percent": "%"}
 
 
 def unit_symbol(unit: str) -> str:
-    """``"um/m/degC"`` -> ``"µm/m/°C"``: each part of an ASCII unit written with its symbol
-    (:data:`UNIT_SYMBOLS`), for labels and tables a reader sees."""
+    """``"um/m/degC"`` -> ``"µm/m/°C"``, for labels and tables a reader sees.
+
+    Each part of an ASCII unit is written with its symbol (:data:`UNIT_SYMBOLS`)."""
     return "/".join(UNIT_SYMBOLS.get(part, part) for part in str(unit).split("/"))
 
 
@@ -71,9 +72,10 @@ CLIP_PREFIX = "clip"
 
 
 def stable_svg_ids(svg: str) -> str:
-    """``svg`` with each clip path named after its printed definition instead of matplotlib's
-    hash of the unrounded rectangle: ``clip1``, ``clip2``, ... in order of first definition,
-    clip paths that print the same merged into one.
+    """``svg`` with each clip path named after its printed definition, not matplotlib's hash.
+
+    Matplotlib's names hash the unrounded rectangle; these are ``clip1``, ``clip2``, ... in order of
+    first definition, clip paths that print the same merged into one.
 
     The file then depends only on what it prints (coordinates to six decimals), as its PNG
     depends only on pixels: rounding noise in the data behind a figure no longer renames its
@@ -118,8 +120,9 @@ def stable_svg_ids(svg: str) -> str:
 
 def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = None,
          scored_with=None) -> None:
-    """Save ``fig`` as ``folder/name.<fmt>`` for each format, without timestamps, and record
-    each file in the folder's ``provenance.json``.
+    """Save ``fig`` as ``folder/name.<fmt>`` for each format, without timestamps.
+
+    Each file is recorded in the folder's ``provenance.json``.
 
     The SVG's clip paths are named after what it prints (:func:`stable_svg_ids`), so that the
     bytes do not change with rounding noise in the data.

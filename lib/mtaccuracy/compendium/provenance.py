@@ -65,8 +65,10 @@ def git_commit() -> str:
 
 
 def notebook_source_hash(path) -> str:
-    """SHA-256 over a notebook's cell types and sources, without outputs, execution counts,
-    metadata or the cell papermill injects: what the reader wrote, not what a run produced."""
+    """SHA-256 over a notebook's cell types and sources: what the reader wrote.
+
+    Without outputs, execution counts, metadata or the cell papermill injects: not what a run
+    produced."""
     nb = json.loads(Path(path).read_text(encoding="utf-8"))
     h = hashlib.sha256()
     for c in nb.get("cells", []):
@@ -80,9 +82,10 @@ def notebook_source_hash(path) -> str:
 
 @functools.cache
 def library_hash() -> str:
-    """SHA-256 over the library's Python sources and its package data (``mtaccuracy/data``:
-    the error catalogue), in path order.  Computed once per process: the code a process runs
-    is the code it imported, whatever changes on disk later."""
+    """SHA-256 over the library's Python sources and its package data, in path order.
+
+    The package data is ``mtaccuracy/data``: the error catalogue.  Computed once per process: the
+    code a process runs is the code it imported, whatever changes on disk later."""
     h = hashlib.sha256()
     lib = Path(__file__).resolve().parent.parent   # the mtaccuracy package
     data = [p for p in (lib / "data").rglob("*") if p.is_file()]
@@ -93,8 +96,9 @@ def library_hash() -> str:
 
 
 def start(notebook: str, parameters: dict, source=None) -> None:
-    """Begin the record of a notebook run (called by ``check_parameters``); ``source`` is the
-    notebook file, whose source cells are hashed."""
+    """Begin the record of a notebook run (called by ``check_parameters``).
+
+    ``source`` is the notebook file, whose source cells are hashed."""
     _state["notebook"] = notebook
     _state["notebook_sha256"] = notebook_source_hash(source) if source else None
     _state["parameters"] = {k: v for k, v in sorted(parameters.items())
@@ -141,8 +145,10 @@ def as_text(rec: dict | None = None) -> str:
 
 
 def register_output(path, measured: bool = False, tolerance: dict | None = None) -> None:
-    """Record an output file in its folder's ``provenance.json``: its hash and, for tables,
-    the tolerance of each float column; a ``measured`` file (wall-clock times) without a hash.
+    """Record an output file in its folder's ``provenance.json``.
+
+    It is recorded with its hash and, for tables, the tolerance of each float column; a
+    ``measured`` file (wall-clock times) without a hash.
     """
     p = Path(path)
     side = p.parent / SIDECAR
@@ -160,8 +166,9 @@ def register_output(path, measured: bool = False, tolerance: dict | None = None)
 
 
 def write_sidecar(folder, data: dict) -> None:
-    """Write ``folder/provenance.json`` (files sorted, fixed format), replaced whole, and only
-    when its bytes change."""
+    """Write ``folder/provenance.json`` (files sorted, fixed format), replaced whole.
+
+    It is written only when its bytes change."""
     side = Path(folder) / SIDECAR
     data = {**data, "files": dict(sorted(data.get("files", {}).items()))}
     text = json.dumps(data, sort_keys=True, indent=1, default=str) + "\n"
@@ -241,9 +248,10 @@ def output_problem(path: Path, side: dict) -> str | None:
 
 
 def folder_problems(folder: Path, side: dict | None = None) -> list[tuple[Path, str]]:
-    """Every problem (:func:`output_problem`) of the files an output folder's
-    ``provenance.json`` lists (its outputs); a file it does not list is not the compendium's
-    (:func:`not_outputs`) and is not judged.
+    """Every problem (:func:`output_problem`) of an output folder's outputs.
+
+    Its outputs are the files its ``provenance.json`` lists; a file it does not list is not the
+    compendium's (:func:`not_outputs`) and is not judged.
 
     Parameters
     ----------
@@ -264,9 +272,10 @@ def folder_problems(folder: Path, side: dict | None = None) -> list[tuple[Path, 
 
 
 def not_outputs(folder: Path, side: dict | None = None) -> list[str]:
-    """The files in an output folder that its ``provenance.json`` does not list: put there by
-    someone else (notes, an input file), left alone by every run, never shown or linked as
-    results.
+    """The files in an output folder that its ``provenance.json`` does not list.
+
+    They were put there by someone else (notes, an input file), are left alone by every run, and
+    are never shown or linked as results.
 
     Parameters
     ----------

@@ -127,8 +127,9 @@ class Input:
 
 
 def printed_half_unit(published) -> float:
-    """Half a unit of the last digit printed in ``published`` (``"0.0776"`` -> 5e-5,
-    ``"12"`` -> 0.5, ``"1.2e-05"`` -> 5e-7): the printed precision of a published number."""
+    """Half a unit of the last digit printed in ``published``: its printed precision.
+
+    ``"0.0776"`` -> 5e-5, ``"12"`` -> 0.5, ``"1.2e-05"`` -> 5e-7."""
     return 0.5 * float(_last_digit_place(pd.Series([str(published)]))[0])
 
 
@@ -162,11 +163,12 @@ def _tolerance_text(value: float, source: str) -> str:
 
 
 def set_verdict(published, ours, ordered: bool = False) -> tuple[str, list, list]:
-    """Verdict for a published set (or sequence, ``ordered``) against ours, with the missing
-    and extra elements: ``reproduced`` when equal; ``close`` when at most one element is
-    missing and at most one extra (one replaced) and they share at least 60 % of their union
-    (Jaccard), so a one-for-one swap in a set of 4 or more; else ``differs``.  Extra elements
-    count as much as missing ones."""
+    """Verdict for a published set (or sequence, ``ordered``) against ours.
+
+    Returned with the missing and extra elements.  ``reproduced`` when equal; ``close`` when at
+    most one element is missing and at most one extra (one replaced) and they share at least 60 %
+    of their union (Jaccard), so a one-for-one swap in a set of 4 or more; else ``differs``.  Extra
+    elements count as much as missing ones."""
     pub, mine = [str(x) for x in published], [str(x) for x in ours]
     missing = [x for x in pub if x not in mine]
     extra = [x for x in mine if x not in pub]
@@ -180,8 +182,9 @@ def set_verdict(published, ours, ordered: bool = False) -> tuple[str, list, list
 
 
 class Card:
-    """A notebook's scorecard: one row per published number, set, count or claim, each with
-    its verdict and its basis (:data:`BASES`), written by :meth:`write`.
+    """A notebook's scorecard: one row per published number, set, count or claim.
+
+    Each row has its verdict and its basis (:data:`BASES`); the card is written by :meth:`write`.
 
     The basis is decided by the inputs a row declares it ``uses`` (:meth:`fitted`,
     :meth:`constructed`, :meth:`simulated`, :meth:`printed`, :meth:`assumed`), never typed,
@@ -233,29 +236,34 @@ class Card:
         return self._input(name, "fitted", to, how)
 
     def constructed(self, name: str, targets, how: str) -> Input:
-        """Reconstructed data, a calibration, or a simulation whose inputs were set to
-        published values (``targets``: the published items it was built to reproduce or whose
-        values it took).  Every row using it is ``constructed``."""
+        """Reconstructed data, a calibration, or a simulation with inputs set to published values.
+
+        ``targets``: the published items it was built to reproduce or whose values it took.
+        Every row using it is ``constructed``."""
         if not targets:
             raise ValueError(f"constructed input {name!r}: name its published targets")
         return self._input(name, "constructed", targets, how)
 
     def simulated(self, name: str, how: str) -> Input:
-        """Simulated data standing in for a measurement the paper made, with no input set to
-        a published value (otherwise declare it :meth:`constructed`)."""
+        """Simulated data standing in for a measurement the paper made.
+
+        None of its inputs is set to a published value (otherwise declare it
+        :meth:`constructed`)."""
         return self._input(name, "simulated", (), how)
 
     def assumed(self, name: str, settles, how: str) -> Input:
-        """An assumption of ours that makes the rows matching ``settles`` true by design
-        (e.g. a simulated error set equal at every speed, then "confirmed" equal): those rows
-        are scored ``not reproducible``, never ``reproduced``."""
+        """An assumption of ours that makes the rows matching ``settles`` true by design.
+
+        E.g. a simulated error set equal at every speed, then "confirmed" equal.  Those rows are
+        scored ``not reproducible``, never ``reproduced``."""
         if not settles:
             raise ValueError(f"assumed input {name!r}: name the rows it settles (settles=)")
         return self._input(name, "assumed", settles, how)
 
     def printed(self, name: str, how: str = "printed in the paper") -> Input:
-        """The paper's own printed numbers used as an input (rows using only these are
-        ``internal``: checks of the paper)."""
+        """The paper's own printed numbers used as an input.
+
+        Rows using only these are ``internal``: checks of the paper."""
         return self._input(name, "printed", (), how)
 
     # -- rows ----------------------------------------------------------------------------------
@@ -305,10 +313,12 @@ class Card:
                paper_rel=None, paper_abs=None, sampling_se=None, conclusion: str = "",
                holds: bool | None = None, digits: int | None = None, note: str = "",
                measured: bool = False) -> None:
-        """A published number against ours.  ``reproduced`` within the tolerance of
-        :func:`tolerance_for`; outside it ``close`` only when a stated ``conclusion`` (the
-        paper's, in words) ``holds`` for our number, else ``differs``.  ``published`` is the
-        string printed in the paper (its digits give the printed precision)."""
+        """A published number against ours.
+
+        ``reproduced`` within the tolerance of :func:`tolerance_for`; outside it ``close`` only
+        when a stated ``conclusion`` (the paper's, in words) ``holds`` for our number, else
+        ``differs``.  ``published`` is the string printed in the paper (its digits give the printed
+        precision)."""
         tol, src = tolerance_for(published, paper_rel=paper_rel, paper_abs=paper_abs,
                                  sampling_se=sampling_se)
         pub = _finite(published, f"{item}: {quantity}: published")
@@ -339,8 +349,9 @@ class Card:
 
     def set(self, item, quantity, published, ours, *, uses=(), ordered: bool = False,
             note: str = "") -> None:
-        """A published set (or sequence) of names against ours (:func:`set_verdict`); the
-        note lists the missing and the extra elements."""
+        """A published set (or sequence) of names against ours (:func:`set_verdict`).
+
+        The note lists the missing and the extra elements."""
         pub, mine = list(published), list(ours)
         v, missing, extra = set_verdict(pub, mine, ordered)
         said = [f"missing: {', '.join(missing)}" if missing else "",
@@ -355,19 +366,21 @@ class Card:
 
     def statement(self, item, quantity, published: str, ours: str, holds: bool, *, uses=(),
                   note: str = "", measured: bool = False) -> None:
-        """A claim of the paper in words, checked on our results: ``reproduced`` when it
-        ``holds``, else ``differs``."""
+        """A claim of the paper in words, checked on our results.
+
+        ``reproduced`` when it ``holds``, else ``differs``."""
         self._add(item, quantity, str(published), str(ours), "", "claim",
                   "reproduced" if holds else "differs", uses, note, measured)
 
     def bracket(self, item, quantity, published, low, high, unit: str = "", *, why: str,
                 uses=(), digits: int | None = None) -> None:
-        """A published number that rests on an input the paper omits, scored against ours at
-        the two ends of the defensible values of that input (``low``, ``high``, either order).
-        Inside the bracket the missing input decides it: ``not reproducible``, ours shown as
-        ``low-high``.  Outside, every defensible input disagrees: a :meth:`number` against the
-        nearer end (``differs`` unless within its tolerance).  ``why`` says what is missing and
-        what the two ends are."""
+        """A published number that rests on an input the paper omits.
+
+        It is scored against ours at the two ends of the defensible values of that input (``low``,
+        ``high``, either order).  Inside the bracket the missing input decides it: ``not
+        reproducible``, ours shown as ``low-high``.  Outside, every defensible input disagrees: a
+        :meth:`number` against the nearer end (``differs`` unless within its tolerance).  ``why``
+        says what is missing and what the two ends are."""
         if not str(why).strip():
             raise ValueError(f"{item}: {quantity}: say what is missing (why=...)")
         lo, hi = sorted((_finite(low, f"{item}: {quantity}: low"),
@@ -383,8 +396,9 @@ class Card:
                     note=f"{why}; the published value lies outside {fmt(lo)}-{fmt(hi)}")
 
     def claim(self, item, quantity, published: str, why: str, ours="", unit: str = "") -> None:
-        """A published number or claim that cannot be checked: ``not reproducible``, with
-        what is missing (``why``).  ``ours``: a value we computed all the same (shown, not
+        """A published number or claim that cannot be checked: ``not reproducible``.
+
+        ``why`` says what is missing.  ``ours``: a value we computed all the same (shown, not
         scored), e.g. for a figure whose data the paper does not give."""
         if not str(why).strip():
             raise ValueError(f"{item}: {quantity}: say what the paper lacks (why=...)")
@@ -405,8 +419,9 @@ class Card:
         return crosstab(self.frame())
 
     def write(self, path, tolerance=None) -> pd.DataFrame:
-        """Write ``reproduction.csv`` (and ``reproduction_measured.csv``) with
-        :func:`write_card`."""
+        """Write the card with :func:`write_card`.
+
+        The files are ``reproduction.csv`` (and ``reproduction_measured.csv``)."""
         if not self.rows:
             raise ValueError("an empty scorecard: add rows first")
         return write_card(self.rows, path, tolerance)
@@ -491,12 +506,12 @@ def write_card(rows: list[dict], path, tolerance=None) -> pd.DataFrame:
 
 @dataclass(frozen=True)
 class Tolerance:
-    """How closely a float column regenerated on another machine must match the committed
-    one.  The printed precision (one unit in the last digit written) is always allowed on
-    top, so a last-digit rounding flip never fails; ``abs`` and ``rel`` add what the
-    quantity's own numerical uncertainty justifies, and ``why`` says what that is (an
-    optimiser's stopping tolerance, a solver's conditioning, ...).  Text and integer columns
-    are always compared exactly."""
+    """How closely a float column regenerated on another machine must match the committed one.
+
+    The printed precision (one unit in the last digit written) is always allowed on top, so a
+    last-digit rounding flip never fails; ``abs`` and ``rel`` add what the quantity's own numerical
+    uncertainty justifies, and ``why`` says what that is (an optimiser's stopping tolerance, a
+    solver's conditioning, ...).  Text and integer columns are always compared exactly."""
 
     rel: float = 0.0
     abs: float = 0.0
@@ -511,8 +526,9 @@ class Tolerance:
             raise ValueError("a Tolerance needs its reason (why=...)")
 
     def allows(self, a: np.ndarray, b: np.ndarray, unit: np.ndarray) -> np.ndarray:
-        """Elementwise: ``|a - b| <= max(abs, rel * max(|a|, |b|)) + unit`` (``unit``: the
-        last printed digit's place of the two strings)."""
+        """Elementwise: ``|a - b| <= max(abs, rel * max(|a|, |b|)) + unit``.
+
+        ``unit``: the last printed digit's place of the two strings."""
         scale = np.maximum(np.abs(a), np.abs(b))
         return np.abs(a - b) <= np.maximum(self.abs, self.rel * scale) + unit * (1 + 1e-9)
 
@@ -544,9 +560,10 @@ def _tolerance_map(df: pd.DataFrame, tolerance) -> dict[str, dict]:
 
 def save_table(df: pd.DataFrame, path, float_format: str = "%.6g", tolerance=None,
                measured: bool = False) -> None:
-    """Write a CSV deterministically (fixed float format, '\\n' line ends, no index) and record
-    it in the folder's ``provenance.json`` with its hash and the tolerance of each float column
-    (what the regenerated-table test allows on another machine).
+    """Write a CSV deterministically and record it in the folder's ``provenance.json``.
+
+    Fixed float format, '\\n' line ends, no index; the record has its hash and the tolerance of
+    each float column (what the regenerated-table test allows on another machine).
 
     ``tolerance``: a :class:`Tolerance` for every float column, or ``{column: Tolerance}``
     (key ``"*"`` for the others); default :data:`PRINTED`.  ``measured=True`` declares the
@@ -597,8 +614,9 @@ def _strip_words(text: pd.Series, num: pd.Series) -> pd.Series:
 
 
 def compare_tables(new_path, committed_path, tolerances: dict | None = None) -> list[str]:
-    """Differences between a regenerated CSV and the committed one, as messages (empty when
-    they agree).  Text and integer cells must be equal; float cells within the column's
+    """Differences between a regenerated CSV and the committed one, as messages.
+
+    Empty when they agree.  Text and integer cells must be equal; float cells within the column's
     declared :class:`Tolerance` (``tolerances``: as recorded in ``provenance.json``) plus the
     printed precision."""
     a = pd.read_csv(new_path, dtype=str, keep_default_na=False)
@@ -663,10 +681,12 @@ def _md_cell(text) -> str:
 
 
 def collect(figures=None, measured: bool = False) -> pd.DataFrame:
-    """Every ``figures/<stem>/reproduction.csv`` of the papers' notebooks (the stems of
-    ``data/papers/index.csv``), with a ``paper`` and ``notebook`` column; with ``measured``,
-    the ``reproduction_measured.csv`` cards instead (wall-clock rows, which change from run to
-    run and so are kept out of the committed summaries)."""
+    """Every ``figures/<stem>/reproduction.csv`` of the papers' notebooks, in one table.
+
+    The notebooks are the stems of ``data/papers/index.csv``; the table has a ``paper`` and
+    ``notebook`` column.  With ``measured``, the ``reproduction_measured.csv`` cards instead
+    (wall-clock rows, which change from run to run and so are kept out of the committed
+    summaries)."""
     figures = Path(figures or paths.FIGURES)
     index = papers_index()
     frames = []
@@ -726,8 +746,9 @@ def _crosstab_markdown(t: pd.DataFrame) -> str:
 
 
 def scorecard_markdown(cards: pd.DataFrame, full: bool = True, notes: bool = True) -> str:
-    """The scorecard as Markdown: the headline, verdict counts per paper, verdict x basis,
-    then (``full``) every row, with its note (``notes``)."""
+    """The scorecard as Markdown: the headline, verdict counts per paper, verdict x basis.
+
+    Then (``full``) every row, with its note (``notes``)."""
     lines = ["| paper | notebook | " + " | ".join(VERDICTS) + " | total | "
              "reproduced independently |",
              "| --- | --- | " + " | ".join("---:" for _ in VERDICTS) + " | ---: | ---: |"]
@@ -773,8 +794,9 @@ def _write_if_changed(path: Path, text: str) -> None:
 
 
 def gather(figures=None, readme=None, report=None) -> tuple[Path, Path]:
-    """Write ``figures/REPRODUCTION.md`` (every row) and refresh the scorecard summary of
-    ``README.md`` (the counts; the rows are in the book and in ``REPRODUCTION.md``)."""
+    """Write ``figures/REPRODUCTION.md`` (every row) and refresh the summary of ``README.md``.
+
+    The summary is the scorecard's counts; the rows are in the book and in ``REPRODUCTION.md``."""
     figures = Path(figures or paths.FIGURES)
     readme = Path(readme or paths.ROOT / "README.md")
     report = Path(report or figures / "REPRODUCTION.md")

@@ -209,8 +209,10 @@ def _output_base(base: Path | None):
 
 def run(notebook: str | Path, overrides: dict | None = None, progress: bool = True,
         share: int = 1, copy_to: str | Path | None = None) -> float:
-    """Validate, execute with papermill and, only if every cell succeeds, commit the executed
-    notebook and its outputs (:func:`mtaccuracy.compendium.commit.commit`); returns seconds.
+    """Validate, execute with papermill and, only if every cell succeeds, commit the notebook.
+
+    The commit takes the executed notebook and its outputs
+    (:func:`mtaccuracy.compendium.commit.commit`); returns seconds.
 
     ``copy_to``: store the executed notebook as ``<copy_to>/<stem>.ipynb`` and take relative
     output folders from ``copy_to`` (``<copy_to>/figures/<stem>/`` by default), touching
@@ -287,8 +289,9 @@ def _in_place(path: Path, target: Path | None) -> bool:
 
 
 def written_notebook(notebook: str | Path, params: dict, copy_to: Path | None = None) -> Path:
-    """Where a run with ``params`` stores the executed notebook (``copy_to``: the folder of
-    ``--copy-to``, where it always goes)."""
+    """Where a run with ``params`` stores the executed notebook.
+
+    ``copy_to``: the folder of ``--copy-to``, where it always goes."""
     path = notebook_path(notebook)
     if copy_to is not None:
         return Path(copy_to) / path.name

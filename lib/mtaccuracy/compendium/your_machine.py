@@ -1,5 +1,6 @@
-"""The compendium's side of notebook 06 (a reader's own machine): the drawing of its chain and
-the numbers its conclusion rests on."""
+"""The compendium's side of notebook 06 (a reader's own machine).
+
+The drawing of the machine's chain and the numbers the notebook's conclusion rests on."""
 
 from __future__ import annotations
 
@@ -13,9 +14,11 @@ __all__ = ["chain_figure", "conclusion_numbers"]
 
 def chain_figure(machine, topology: str, *, travels: dict, pivots: dict, tool: dict,
                  tool_length_mm: float):
-    """The machine's chain: (a) its bodies from the workpiece to the tool, each rotary axis
-    with its pivot; (b) the ideal tool over the first rotary head axis's travel at the centre
-    of the linear travels, computed from the chain with zero errors (blank without one).
+    """The machine's chain, in two panels.
+
+    (a) Its bodies from the workpiece to the tool, each rotary axis with its pivot; (b) the ideal
+    tool over the first rotary head axis's travel at the centre of the linear travels, computed
+    from the chain with zero errors (blank without one).
 
     Parameters
     ----------
@@ -80,10 +83,11 @@ def chain_figure(machine, topology: str, *, travels: dict, pivots: dict, tool: d
 
 def conclusion_numbers(catalogue, removed, key_shares, *, centred_ratio: float,
                        check_ratio: float, half: float = 0.5) -> list[str]:
-    """The lines the notebook prints before its conclusion, so that the markdown states no
-    number: the catalogue's counts, the closed form's accuracy, the errors key over at least
-    ``half`` of the workspace for each output (then the next four, and how many more are key
-    somewhere), and the share of the allowance the sampled check used.
+    """The lines the notebook prints before its conclusion, so that the markdown states no number.
+
+    The catalogue's counts, the closed form's accuracy, the errors key over at least ``half`` of
+    the workspace for each output (then the next four, and how many more are key somewhere), and
+    the share of the allowance the sampled check used.
 
     Parameters
     ----------
