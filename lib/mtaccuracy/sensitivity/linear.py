@@ -265,8 +265,7 @@ def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
     if inputs is None and (mean is None or var is None):
         raise ValueError("give the inputs: an Inputs, or both mean= and var=")
     if inputs is not None:
-        _, var = _spread(inputs, None, None, inputs.dim, "var")
-        mean = inputs.mean
+        mean, var = inputs.mean, inputs.var
     mean, var = _moments(mean, var)
     u, w = gauss_legendre_unit(nodes)
     base = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in (poses or {}).items()}

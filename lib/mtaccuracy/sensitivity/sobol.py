@@ -27,7 +27,7 @@ __all__ = ["base_samples", "base_blocks", "BASE_ROWS", "SobolDesign", "SobolIndi
 import copy
 import warnings
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import KW_ONLY, dataclass
+from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -209,8 +209,8 @@ class SobolDesign:
         Unit-cube rows (m, d) to model inputs (m, d), row by row (e.g.
         ``lambda u: sd * scipy.special.ndtri(u)``); default: through :attr:`inputs`, else the
         unit cube itself.
-    inputs : Inputs, optional
-        The inputs (set from ``d``); their names label :func:`sobol_indices`' result.
+    inputs : Inputs or None
+        Set from ``d`` (not an argument); their names label :func:`sobol_indices`' result.
     """
 
     n: int
@@ -219,19 +219,12 @@ class SobolDesign:
     method: str = "sobol"
     seed: object = None
     to_inputs: Callable[[np.ndarray], np.ndarray] | None = None
-    inputs: Inputs | None = None
+    inputs: Inputs | None = field(init=False, default=None)
 
     def __post_init__(self):
         d, inputs = _dim(self.d)
-        if inputs is not None and self.inputs is not None:
-            raise ValueError("give the inputs once (as d or as inputs=)")
-        inputs = inputs if inputs is not None else self.inputs
-        if inputs is not None:
-            if inputs.dim != d and not isinstance(self.d, Inputs):
-                raise ValueError(f"d = {d} but {inputs.dim} inputs")
-            if self.to_inputs is not None:
-                raise ValueError("give either inputs or to_inputs, not both")
-            d = inputs.dim
+        if inputs is not None and self.to_inputs is not None:
+            raise ValueError("give either inputs or to_inputs, not both")
         object.__setattr__(self, "d", d)
         object.__setattr__(self, "inputs", inputs)
 
