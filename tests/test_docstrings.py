@@ -36,9 +36,13 @@ _SECTION = re.compile(r"^(Parameters|Returns|Yields|Raises|Attributes|Notes|Refe
                       r"Examples|See Also|Other Parameters|Warns)\n-{3,}$", re.M)
 
 
+#: The rooms above the science: paper code, the workflow, the apps (one-line summaries only).
+ABOVE = ("mtaccuracy.papers", "mtaccuracy.compendium", "mtaccuracy.apps")
+
+
 def science_modules() -> list[str]:
     return sorted(m.name for m in pkgutil.walk_packages(mtaccuracy.__path__, "mtaccuracy.")
-                  if not m.name.startswith("mtaccuracy.compendium"))
+                  if not m.name.startswith(ABOVE))
 
 
 def sections(doc: str | None) -> dict[str, str]:
@@ -373,7 +377,9 @@ def compendium_summary_problems() -> list[str]:
     """Summaries over one line in the compendium's modules (module, public functions, classes
     and their public methods): the machinery reads like the science layer (issue 25 item 9)."""
     out = []
-    for path in sorted((Path(mtaccuracy.__file__).parent / "compendium").glob("*.py")):
+    lib = Path(mtaccuracy.__file__).parent
+    for path in sorted(p for room in ("papers", "compendium", "apps")
+                       for p in (lib / room).glob("*.py")):
         tree = ast.parse(path.read_text(encoding="utf-8"))
         out += summary_problems(path.name, ast.get_docstring(tree) or "")
         for name, doc in _summaries(tree, path.stem):

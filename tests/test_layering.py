@@ -1,6 +1,6 @@
-"""The science packages never import the compendium's machinery (issue 15): a reader can take
-kinematics, machines, sensitivity, spindle, roundness and optimise into their own work without
-the runner, the book or the provenance of this repository."""
+"""The rooms of the library and the direction of its imports: science < papers < compendium
+(the workflow) < apps.  A reader can take kinematics, machines, sensitivity, spindle, roundness
+and optimise into their own work without the papers, the workflow or the book."""
 
 import ast
 from pathlib import Path
@@ -8,7 +8,7 @@ from pathlib import Path
 import mtaccuracy
 
 LIB = Path(mtaccuracy.__file__).parent
-MACHINERY = {"compendium"}   # runner, book, provenance, reproduction, paths, plotting, lab, bench
+MACHINERY = {"papers", "compendium", "apps"}   # paper code, the workflow, the apps
 SCIENCE = ["validate.py", "kinematics.py", "errors.py", "roundness.py", "csvlines.py",
            "machines",
            "sensitivity", "spindle", "optimise", "thermal"]
@@ -48,14 +48,14 @@ def test_science_modules_import_no_machinery():
 
 
 def test_the_check_sees_an_import_and_covers_every_science_package():
-    # the checker itself sees a relative import: book.py's ``from . import paths`` is
-    # ``mtaccuracy.compendium``
-    assert "compendium" in _imports(LIB / "compendium" / "book.py")
+    # the checker itself sees a relative import: workflow.py's ``from . import provenance`` is
+    # ``mtaccuracy.compendium``, its ``from ..papers import ...`` ``mtaccuracy.papers``
+    assert {"compendium", "papers"} <= _imports(LIB / "compendium" / "workflow.py")
     # every top-level package or module of the library is science or the compendium
     # (package data, such as a folder of CSV files, holds no module)
     top = {p.name for p in LIB.iterdir() if p.name != "__pycache__" and not p.name.startswith(".")
            and (p.is_dir() and any(p.rglob("*.py")) or p.suffix == ".py")}
-    assert top == {*SCIENCE, "compendium", "__init__.py"}
+    assert top == {*SCIENCE, *MACHINERY, "__init__.py"}
 
 
 # --- no import cycles; layers in one direction (issue 25 item 4) -----------------------------
@@ -150,11 +150,11 @@ def test_no_import_cycles():
 #: package.  validate (the argument checks) imports nothing of mtaccuracy; csvlines,
 #: roundness and optimise import nothing but validate (leaf tools:
 #: spindle builds on roundness and optimise, machines, spindle and thermal on csvlines);
-#: sensitivity, thermal and spindle do not import one another.  The compendium comes last
-#: and may import anything below it.
+#: sensitivity, thermal and spindle do not import one another.  Then the paper code, the
+#: workflow (compendium) and the apps, each of which may import anything below it.
 LAYERS = [{"validate"}, {"csvlines", "roundness", "optimise"}, {"kinematics"}, {"errors"},
           {"machines"},
-          {"sensitivity", "thermal", "spindle"}, {"compendium"}]
+          {"sensitivity", "thermal", "spindle"}, {"papers"}, {"compendium"}, {"apps"}]
 LAYER = {pkg: k for k, layer in enumerate(LAYERS) for pkg in layer}
 
 #: Imports against the direction that exist today, ``(importer, imported): statements``.

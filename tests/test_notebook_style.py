@@ -17,12 +17,12 @@ import unicodedata
 
 import pytest
 
-from mtaccuracy.compendium import parameters
+from mtaccuracy.compendium.notebook import NOTEBOOKS as FOLDER
 
 MAX_LINES = 25
 MAX_HELPER = 15
 PLOT_HELPER = re.compile(r"^(plot|draw)_")
-NOTEBOOKS = parameters.all_notebooks()
+NOTEBOOKS = sorted(FOLDER.glob("[0-9][0-9]_*.ipynb"))
 
 
 def _code_cells(path):

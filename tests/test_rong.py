@@ -1,7 +1,11 @@
 """Notebook 02 (Rong et al.), issue 24: the ranking precision of the 90 % rule (ties broken in
 catalogue order, the saved table in the rule's order), the ranges of Zheng 2024 as a second
 defensible set, the study between two range sets, and the bracket scoring; the closed-form
-indices of the linearised model, the study's models and the tool lengths."""
+indices of the linearised model, the study's models and the tool lengths; issue 32: the sweep
+grids (one rule for the parameter check and the sweep), the declared parameters' checks and the
+figures' captions."""
+
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -9,8 +13,11 @@ import pytest
 
 from mtaccuracy import errors
 from mtaccuracy import sensitivity as S
-from mtaccuracy.compendium import reproduction, rong
+from mtaccuracy.compendium import reproduction
 from mtaccuracy.machines import build
+from mtaccuracy.papers import parameters, rong
+
+ROOT = Path(__file__).resolve().parents[1]
 
 MACHINE = build("horizontal_3axis", layout="z/xy")
 NAMES = MACHINE.error_names
@@ -49,7 +56,7 @@ def test_ranked_values_survive_the_saved_table(tmp_path):
     path = tmp_path / "t.csv"
     df = pd.DataFrame({"symbol": np.repeat([NAMES], 3, 0).ravel(),
                        "output": np.repeat([0, 1, 2], D), "ST": r.T.ravel()})
-    reproduction.save_table(df, path)
+    reproduction.write_table(df, path)
     back = pd.read_csv(path)
     for k in range(3):
         d = back[back.output == k].sort_values("ST", ascending=False, kind="stable")
@@ -280,3 +287,83 @@ def test_range_bracket_figure_draws_the_path_its_ends_and_the_published_values()
         assert "90% rule" in fig._suptitle.get_text()
     finally:
         plt.close(fig)
+
+
+def test_the_sweep_grids_are_the_notebooks_arange_and_never_pass_the_last_value():
+    # the defaults: what the notebook swept before the grids were shared with the check
+    assert np.array_equal(rong.threshold_grid([0.8, 0.99, 0.01]),
+                          np.round(np.arange(0.8, 0.99 + 0.005, 0.01), 10))
+    assert np.array_equal(rong.tool_length_grid([0.0, 300.0, 25.0]),
+                          np.round(np.arange(0.0, 312.5, 25.0), 9))
+    assert len(rong.threshold_grid([0.5, 0.99, 0.01])) == 50
+    assert list(rong.threshold_grid([0.9, 0.9, 0.05])) == [0.9]
+    # a step that does not divide the span: arange would pass last (0.8, 0.92, 1.04 > 1)
+    assert list(rong.threshold_grid([0.8, 0.99, 0.12])) == [0.8, 0.92]
+    assert list(rong.tool_length_grid([0.0, 100.0, 35.0])) == [0.0, 35.0, 70.0]
+    assert len(rong.tool_length_grid([0.0, 995.0, 5.0])) == rong.MAX_SWEEP
+
+
+@pytest.mark.parametrize("grid, value, message", [
+    (rong.threshold_grid, [0.9, 0.5, 0.01], r"0 < first <= last < 1, step > 0"),
+    (rong.threshold_grid, [0.0, 0.5, 0.01], r"0 < first <= last < 1, step > 0"),
+    (rong.threshold_grid, [0.01, 0.99, 0.001], "gives 981 thresholds; at most 200"),
+    (rong.tool_length_grid, [300.0, 0.0, 10.0], "first <= last and step > 0"),
+    (rong.tool_length_grid, [0.0, 300.0, 0.0], "first <= last and step > 0"),
+    (rong.tool_length_grid, [0.0, 300.0, 1.0], "gives 301 tool lengths; at most 200"),
+])
+def test_the_sweep_grids_refuse_with_a_clear_message(grid, value, message):
+    with pytest.raises(ValueError, match=message):
+        grid(value)
+
+
+GOOD = dict(workspace_mm=[800, 700, 600], tool_offset_mm=[0, 0, 100],
+            sweep_thresholds=[0.5, 0.99, 0.01], tool_lengths_mm=[0, 300, 10], n_plot=100,
+            n_base=1000)
+
+
+def test_the_declared_parameters_accept_the_defaults_and_good_values():
+    assert parameters.check(rong.Parameters, {}).n_base == 8192
+    filled = parameters.check(rong.Parameters, GOOD)
+    assert len(rong.threshold_grid(filled.sweep_thresholds)) == 50
+
+
+@pytest.mark.parametrize("change, message", [
+    (dict(workspace_mm=[800, 700]), "workspace_mm"),
+    (dict(sweep_thresholds=[0.9, 0.5, 0.01]), r"0 < first <= last < 1, step > 0"),
+    (dict(tool_lengths_mm=[0, 300, 1]), "gives 301 tool lengths; at most 200"),
+    (dict(tool_lengths_mm=[300, 0, 10]), "first <= last and step > 0"),
+    (dict(n_plot=2000), "n_plot = 2000 must be at most n_base = 1000"),
+    (dict(sweep_thresholds=[0.01, 0.99, 0.001]), "gives 981 thresholds; at most 200"),
+])
+def test_the_declared_parameters_refuse_what_the_notebook_cannot_run(change, message):
+    with pytest.raises(parameters.ParameterError, match=message) as err:
+        parameters.check(rong.Parameters, {**GOOD, **change})
+    assert str(err.value).startswith("02_rong_sobol_21_errors: ")
+
+
+def test_leading_errors_name_the_largest_indices_by_kind_with_their_ties():
+    sob = pd.DataFrame({"output": ["Ey"] * 6 + ["Ex"],
+                        "symbol": ["dy(x)", "dy(z)", "ez(z)", "ex(z)", "dy(y)", "S_yz", "ez(x)"],
+                        "kind": ["straightness"] * 2 + ["angular"] * 2 + ["positioning",
+                                                                          "squareness", "angular"],
+                        "ST": [0.054407, 0.054407, 0.568732, 0.29016, 0.030604, 0.001, 0.9]})
+    assert rong.leading_errors(sob, "Ey") == (
+        "the angular errors ez(z), ex(z) (ST 0.57, 0.29), then the straightness errors dy(x), "
+        "dy(z) (ST 0.054, 0.054)")                      # dy(z) ties with the third: named too
+    assert rong.leading_errors(sob, "Ey", n=1) == "the angular error ez(z) (ST 0.57)"
+    assert rong.leading_errors(sob, "Ex", n=3) == "the angular error ez(x) (ST 0.9)"
+
+
+def test_the_captions_name_every_figure_in_the_books_order_and_fill_every_field():
+    names = list(rong.FIGURES)
+    assert names[:6] == ["fig02_ex_sobol_indices", "fig03_ey_sobol_indices",
+                         "fig04_ez_sobol_indices", "fig05_ex_prediction", "fig06_ey_prediction",
+                         "fig07_ez_prediction"]
+    assert rong.FIGURES["fig_range_bracket"] is rong.RANGE_BRACKET
+    assert rong.FIGURES["fig_tool_offset_key_errors"] is rong.TOOL_LENGTH
+    assert {p.stem for p in (ROOT / "figures" / rong.Parameters.stem).glob("*.png")} == set(names)
+    filled = rong.FIGURES["fig_pose_dependence"].format(
+        n_poses=125, g=5, threshold=90.0, n_min=4, n_max=13, n_pooled=7, n_key_pub=12,
+        published_share=4.8)
+    assert "125 poses of a 5 × 5 × 5 grid" in filled.text and "12 occurs at 5 %" in filled.text
+    assert "{" not in filled.text and filled.label == "Beyond the paper"

@@ -16,9 +16,9 @@ from sklearn.linear_model import Ridge
 from sklearn.model_selection import GroupKFold, cross_val_score
 
 from mtaccuracy import thermal
-from mtaccuracy.compendium import paths, runner, xu2022, xu2022_reconstruction
+from mtaccuracy.papers import parameters, xu2022, xu2022_reconstruction
 
-COMMITTED = paths.ROOT / xu2022.DEFAULT_DIR
+COMMITTED = xu2022.DATA
 LAB = dict(experiments=(11, 12, 13, 14, 15), n_measurements=19,
            positions_mm=np.arange(25) * 40.0)
 
@@ -34,13 +34,16 @@ def lab(tmp_path_factory):
 
 
 def test_a_byte_identical_copy_of_the_reconstruction_anywhere_is_the_reconstruction(tmp_path):
+    assert xu2022.reconstruction_seed(COMMITTED) == xu2022_reconstruction.DEFAULT_SEED
     copy = tmp_path / "somewhere" / "else"
     shutil.copytree(COMMITTED, copy)
     (copy / "provenance.json").unlink()                 # what the copy says of itself is not asked
-    data = thermal.read_measurements(copy)
-    assert xu2022.reconstruction_seed(copy, data) == xu2022_reconstruction.DEFAULT_SEED
+    (copy / "README.md").unlink()                       # nor what else the folder holds
+    assert xu2022.reconstruction_seed(copy) == xu2022_reconstruction.DEFAULT_SEED
     (copy / "experiments.csv").unlink()                 # optional file: its absence changes nothing
-    assert xu2022.reconstruction_seed(copy, data) == xu2022_reconstruction.DEFAULT_SEED
+    assert xu2022.reconstruction_seed(copy) == xu2022_reconstruction.DEFAULT_SEED
+    (copy / "errors.csv").unlink()                      # a required one: not the reconstruction
+    assert xu2022.reconstruction_seed(copy) is None
 
 
 def test_an_edited_copy_and_a_readers_data_are_not_the_reconstruction(tmp_path, lab):
@@ -48,22 +51,26 @@ def test_an_edited_copy_and_a_readers_data_are_not_the_reconstruction(tmp_path, 
     shutil.copytree(COMMITTED, copy)
     text = (copy / "errors.csv").read_text()
     (copy / "errors.csv").write_text(text.replace("1,1,205,0.051", "1,1,205,0.052", 1))
-    data = thermal.read_measurements(copy)
-    assert xu2022.reconstruction_seed(copy, data, seeds=[2022, 7]) is None
-    folder, _, lab_data = lab
-    assert xu2022.reconstruction_seed(folder, lab_data, seeds=[2022, 7]) is None
+    thermal.read_measurements(copy)                     # a valid dataset, only one reading changed
+    assert xu2022.reconstruction_seed(copy) is None
+    folder, _, _ = lab
+    assert xu2022.reconstruction_seed(folder) is None
     # a folder named data/thermal is not enough either: the path never decides
     fake = tmp_path / "data" / "thermal"
     shutil.copytree(folder, fake)
-    assert xu2022.reconstruction_seed(fake, lab_data) is None
+    assert xu2022.reconstruction_seed(fake) is None
 
 
-def test_a_reconstruction_with_another_seed_is_known_by_its_numbers(tmp_path):
-    data = xu2022.reconstruct(7)
-    thermal.write_measurements(data, tmp_path)
-    read = thermal.read_measurements(tmp_path)
-    assert xu2022.reconstruction_seed(tmp_path, read, seeds=[7]) == 7
-    assert xu2022.reconstruction_seed(tmp_path, read, seeds=[8]) is None
+def test_the_same_numbers_in_other_bytes_are_not_the_reconstruction(tmp_path):
+    """Content means the files' bytes: the same measurements written otherwise (another seed
+    would differ anyway) are a reader's data, compared with nothing."""
+    thermal.write_measurements(xu2022.reconstruct(), tmp_path, temperature_decimals=3)
+    assert np.allclose(thermal.read_measurements(tmp_path).errors,
+                       thermal.read_measurements(COMMITTED).errors)
+    assert xu2022.reconstruction_seed(tmp_path) is None
+    other = tmp_path / "seed7"
+    thermal.write_measurements(xu2022.reconstruct(7), other)
+    assert xu2022.reconstruction_seed(other) is None
 
 
 # ------------------------------------------------ the split's defaults
@@ -76,21 +83,25 @@ def test_split_defaults_predict_the_last_experiment_from_all_others(lab):
     assert xu2022.resolve_split("04", data, train=[13, 11], test=15) == ([13, 11], 15)
     recon = thermal.read_measurements(COMMITTED)
     assert xu2022.resolve_split("04", recon, train=[], test=0) == ([1, 2, 3], 4)   # the paper's
-    with pytest.raises(runner.ParameterError, match=r"experiment\(s\) \[4\] are not in the data; "
-                                                    r"they have \[11, 12, 13, 14, 15\]"):
+    with pytest.raises(parameters.ParameterError, match=r"experiment\(s\) \[4\] are not in the "
+                                                        r"data; they have \[11, 12, 13, 14, 15\]"):
         xu2022.resolve_split("04", data, train=[], test=4)
-    with pytest.raises(runner.ParameterError, match="also a training experiment"):
+    with pytest.raises(parameters.ParameterError, match="also a training experiment"):
         xu2022.resolve_split("04", data, train=[11, 15], test=15)
-    with pytest.raises(runner.ParameterError, match="at least 2"):
+    with pytest.raises(parameters.ParameterError, match="at least 2"):
         xu2022.resolve_split("04", data, train=[11], test=15)
     assert [xu2022.resolve_inputs("auto", p) for p in (True, False)] == ["published", "selected"]
     assert xu2022.resolve_inputs("published", False) == "published"
 
 
 def test_a_list_parameter_with_an_empty_default_refuses_text_elements():
-    with pytest.raises(runner.ParameterError, match=r"'x' is not a number \(it must be >= 1\)"):
-        runner.validate("04", {"train_experiments": [1, "x"]})
-    assert runner.validate("04", {"train_experiments": [11, 12]}) == {"train_experiments": [11, 12]}
+    with pytest.raises(parameters.ParameterError, match="train_experiments.*must be instances of "
+                                                        "<class 'int'>"):
+        parameters.check(xu2022.Parameters, {"train_experiments": [1, "x"]})
+    with pytest.raises(parameters.ParameterError, match=r"0 is outside \[1, inf\]"):
+        parameters.check(xu2022.Parameters, {"train_experiments": [0, 12]})
+    assert parameters.check(xu2022.Parameters,
+                            {"train_experiments": [11, 12]}).train_experiments == [11, 12]
 
 
 # ------------------------------------------------ one RMSE, pooled

@@ -1,6 +1,7 @@
 """Notebook 05 (Yang et al. 2021) after the second audit: the inputs of the simulated lathe
-experiment and the bases they give, the paper's experimental layout as printed, and the GA
-settings study (its speed-ups against their definition, its determinism)."""
+experiment and the bases they give, the paper's experimental layout as printed, the GA
+settings study (its speed-ups against their definition, its determinism), the declaration's
+checks of its parameters and the captions' texts."""
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -8,17 +9,19 @@ import pandas as pd
 import pytest
 
 from mtaccuracy import spindle as SP
-from mtaccuracy.compendium import reproduction, yang2021
+from mtaccuracy.compendium import reproduction
+from mtaccuracy.papers import printed, yang2021
+from mtaccuracy.papers.parameters import ParameterError, check
 
 
 def _facts():
-    facts = reproduction.published("yang2021_facts", ["quantity", "value"])
+    facts = printed.published("yang2021_facts", ["quantity", "value"])
     return facts.set_index("quantity").value
 
 
 def test_the_experiment_layout_is_table1s_k20_row():
     genes = yang2021.experiment_genes(_facts())
-    t1 = reproduction.published("yang2021_table1", ["k", "phi1_rad", "a3"]).set_index("k")
+    t1 = printed.published("yang2021_table1", ["k", "phi1_rad", "a3"]).set_index("k")
     row = t1.loc["20"]
     assert genes == pytest.approx([float(row.phi1_rad), float(row.phi2_rad), float(row.phi3_rad),
                                    float(row.a3)])
@@ -80,12 +83,6 @@ def test_the_settings_study_against_its_definition(counts):
     pd.testing.assert_frame_equal(study, yang2021.ga_settings_study(8, **kw))
 
 
-#: Notebook 05's default parameters that ``check_run`` reads.
-RUN = dict(probe_positions=[0, 14, 65, 116], n_samples=128, lowpass_harmonic=50,
-           exp_n_samples=128, interleave=2, worst_k=20, harmonic_k=20, k_sweep_max=80,
-           pop_size=50, unrelated="ignored")
-
-
 @pytest.mark.parametrize("change, words", [
     (dict(probe_positions=[1, 14, 65, 116]), r"probe_positions must be 4 distinct .* 0\.\.127"),
     (dict(probe_positions=[0, 14, 14, 116]), "probe_positions must be 4 distinct"),
@@ -95,10 +92,10 @@ RUN = dict(probe_positions=[0, 14, 65, 116], n_samples=128, lowpass_harmonic=50,
     (dict(harmonic_k=81), "need harmonic_k <= k_sweep_max"),
     (dict(pop_size=51), "need .* and an even pop_size"),
 ])
-def test_check_run_names_the_parameters_that_contradict_each_other(change, words):
-    yang2021.check_run(RUN, "05_x")                    # the defaults pass
-    with pytest.raises(ValueError, match=r"^05_x: " + words):
-        yang2021.check_run({**RUN, **change}, "05_x")
+def test_the_declaration_names_the_parameters_that_contradict_each_other(change, words):
+    check(yang2021.Parameters, {})                     # the defaults pass
+    with pytest.raises(ParameterError, match=r"^05_yang2021_spindle_four_point_ga: " + words):
+        check(yang2021.Parameters, change)
 
 
 def _section13():
@@ -225,3 +222,38 @@ def test_the_ranges_statement_counts_the_orders_above_the_band():
     ours, ok, _ = yang2021.ranges_statement(sweep[sweep.k != 7], np.array([20]), np.array([0.26]),
                                             k_tab=4, band_text="0.273")
     assert ok and "above it" not in ours
+
+
+def test_a_difference_is_stated_as_round_off_or_by_its_size():
+    assert yang2021.difference_text(0.0, 20.0, roundoff=1e-12) == "zero"
+    assert yang2021.difference_text(-2.3e-14, 20.0, roundoff=1e-12) == (
+        "of order 1e-14 µm: round-off")
+    assert yang2021.difference_text(1e-11, 5.0, roundoff=1e-12) == "up to 1e-11 µm"
+    assert yang2021.difference_text(0.01234, 20.0, roundoff=1e-12) == "up to 0.0123 µm"
+
+
+def test_a_layout_is_stated_with_its_genes_and_sample_positions():
+    text = yang2021.layout_text("the paper's layout", [0.522, 3.45, 5.47, 1.39], [0, 11, 70, 111],
+                                n_samples=128)
+    assert text == ("the paper's layout (φ = 0.522, 3.45, 5.47 rad, a3 = 1.39, a1 and a2 from "
+                    "Eq. 15, rounded to samples 0, 11, 70, 111 of 128)")
+
+
+def test_the_captions_follow_the_paper_and_name_every_mapping():
+    assert set(yang2021.MAPPING_TEXT) == set(SP.MAPPINGS)
+    names = list(yang2021.FIGURES)
+    assert names[:3] == ["fig03_set_profile", "fig04_set_rotation_error", "fig05_sensor_signals"]
+    assert names.index("fig21_random_vs_optimised_angles_simulated") \
+        < names.index("eq06_matrix_eigenvalues")
+    assert yang2021.FIGURES["fig08_improved_ga_convergence"] is yang2021.FIG08
+    assert yang2021.FIGURES["fig08_09_settings_dependence"].rows == (
+        "Fig. 8", "Fig. 9", "Abstract, Figs. 8-9")
+    # a caption states no number of its own: the run's numbers fill it
+    caption = yang2021.FIGURES["fig03_set_profile"].format(n_samples=64)
+    assert "N = 64 points" in caption.text and caption.rows == ("Section 1.3*",)
+    settings = yang2021.FIGURES["fig08_09_settings_dependence"].format(
+        harmonic_k=20, encoding="binary", pop_size=50, n_runs=32, pc=0.8, pm=0.05,
+        generation_counts="120, 200", improved_medians="73, 106", published_improved=55.0,
+        published_traditional=118.0, generations=200, pcs="0.6, 0.8", pms="0.01",
+        low=-46.2, high=34.4, published_speedup="50")
+    assert "Pc ∈ {0.6, 0.8} and Pm ∈ {0.01}: from -46 % to 34 %" in settings.text

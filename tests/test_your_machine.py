@@ -1,4 +1,7 @@
-"""Notebook 06's compendium module: the chain's drawing and the numbers of its conclusion."""
+"""Notebook 06's paper module: the chain's drawing and its caption, the numbers of its
+conclusion, the declared parameters' check and the figures' captions."""
+
+from pathlib import Path
 
 import matplotlib
 
@@ -9,15 +12,16 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
-from mtaccuracy.compendium import paths, your_machine  # noqa: E402
 from mtaccuracy.machines import chain  # noqa: E402
+from mtaccuracy.papers import parameters, your_machine  # noqa: E402
 
 TOPOLOGY = "w C b X Y Z B t"
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
 def swivel_head():
-    travels, pivots = chain.read_axis_table(paths.DATA / "machines" / "swivel_head_axes.csv",
+    travels, pivots = chain.read_axis_table(ROOT / "data" / "machines" / "swivel_head_axes.csv",
                                             TOPOLOGY)
     machine = chain.iso_machine(TOPOLOGY, pivots=pivots, travels=travels,
                                 tool_offsets=("tool_x", "tool_y", "tool_z"), name="m")
@@ -72,3 +76,42 @@ def test_the_conclusion_numbers_count_and_rank_what_the_tables_hold():
     assert lines[3] == "Vz: key over >= 50% of the workspace: EBB 50%; next: none"
     assert lines[4] == "never key: ECB"
     assert lines[5] == "sampled check: the largest difference uses 0.87 of the allowance"
+
+
+def test_the_chain_caption_states_the_topology_the_tool_and_the_swept_travel(swivel_head):
+    _, travels, _ = swivel_head
+    assert your_machine.swept_axis(TOPOLOGY) == "B"
+    cap = your_machine.chain_caption(TOPOLOGY, travels, tool_length_mm=120.0,
+                                     axis_table="data/machines/swivel_head_axes.csv")
+    assert cap.name == "chain" and cap.label == "Figure 1"
+    assert ("topology `w C b X Y Z B t` (workpiece <- C <- bed -> X -> Y -> Z -> B -> tool)"
+            in cap.text)
+    assert "The ideal 120 mm tool (tip dots) at nine B angles from -110° to 110°" in cap.text
+    assert "{" not in cap.text
+
+
+def test_without_a_rotary_head_axis_the_chain_caption_says_the_panel_is_blank():
+    topo = "w C b X Y Z t"
+    travels = {"x": (-1.0, 1.0), "y": (-1.0, 1.0), "z": (-1.0, 1.0), "C": (0.0, 6.28)}
+    assert your_machine.swept_axis(topo) is None
+    cap = your_machine.chain_caption(topo, travels, tool_length_mm=50.0, axis_table="a.csv")
+    assert "right panel is blank" in cap.text and "tool (tip dots)" not in cap.text
+
+
+def test_the_declared_parameters_refuse_a_bad_topology_before_any_work():
+    assert parameters.check(your_machine.Parameters, {}).topology == TOPOLOGY
+    with pytest.raises(parameters.ParameterError,
+                       match=r"^06_your_machine: axis \['X'\] appears more than once"):
+        parameters.check(your_machine.Parameters, {"topology": "w b X X t"})
+
+
+def test_the_captions_name_every_figure_in_the_notebooks_order():
+    names = list(your_machine.FIGURES)
+    assert names == ["chain", "atlas_dominant_error_map", "atlas_key_errors", "sobol_check"]
+    assert [c.label for c in your_machine.FIGURES.values()] == [f"Figure {k}" for k in (1, 2, 3, 4)]
+    assert {p.stem for p in (ROOT / "figures" / your_machine.Parameters.stem).glob("*.png")} == \
+        set(names)
+    text = your_machine.FIGURES["atlas_key_errors"].format(
+        n_atlas=10000, key_share=0.05, n_shown=36, n_errors=37, never="ECB",
+        everywhere="EZZ for Pz", ranges_file="r.csv").text
+    assert "10,000 random poses" in text and "(36 of 37; never key: ECB)" in text

@@ -9,8 +9,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from mtaccuracy.compendium import reproduction, zheng2024
 from mtaccuracy.machines import build
+from mtaccuracy.papers import printed, zheng2024
 from mtaccuracy.sensitivity import linear_indices
 
 COMP = ["Px", "Py", "Pz", "Vx", "Vy", "Vz"]
@@ -110,8 +110,8 @@ def test_bars_figure_draws_published_values_only_when_given():
 
 def test_table3_printed_arithmetic():
     """Table 3's total is the sum of its parts, and the abstract's reductions follow from it."""
-    t3 = reproduction.published("zheng2024_table3_timing").set_index("method")
-    facts = reproduction.published("zheng2024_facts").set_index("quantity").value
+    t3 = printed.published("zheng2024_table3_timing").set_index("method")
+    facts = printed.published("zheng2024_facts").set_index("quantity").value
     tot = t3.total_time_s.astype(float)
     parts = float(t3.model_time_s["PCE"]) + float(t3.index_time_s["PCE"])
     assert parts == pytest.approx(tot["PCE"])
@@ -189,3 +189,41 @@ def test_fig7_texts_give_both_readings_of_eq_24():
     assert zheng2024.fluctuation_text(r, method="MCS") == (
         "base samples: 3.0 to 12.0 % (R at the larger size), 4.0 to 9.0 % (at the smaller); "
         "model runs: 1.0 to 2.0 % (R at the larger size), 5.5 to 5.5 % (at the smaller)")
+
+
+#: Every field of the captions, as notebook 01 fills them (values of the committed run).
+CAPTION_FIELDS = dict(
+    n_points=20, n_per_diagonal=5, rms_mean=0.0361, rms_single=0.0046, n_pce=1000,
+    n_reference=100000, key_threshold=0.05, where="test point 2 (x=-200.0 mm)", gap_pce=2e-6,
+    gap_mcs=9e-4, gap_lhs=9e-4, pce_largest=2000, r_base="0.9 to 7.5 %", r_runs="10.3 to 66.7 %",
+    n_ishigami=300, n_g=1000, err_legendre=5e-6, err_hermite=0.24, n_below=10, err_g=0.11,
+    validation_g=0.31, warned="triggers a warning", loo_last=0.015, terms_last=120, terms_best=4)
+
+
+def test_figures_follow_the_book_and_state_only_numbers_the_run_fills_in():
+    import string
+
+    assert list(zheng2024.FIGURES) == [
+        "fig04_indices_per_test_point", "fig05_position_total_sobol",
+        "fig06_attitude_total_sobol", "fig07_convergence", "pce_benchmarks"]
+    # the captions declared beside the functions that draw them are the chapter's
+    assert zheng2024.FIGURES["fig04_indices_per_test_point"] is zheng2024.FIG04
+    assert zheng2024.FIGURES["fig05_position_total_sobol"] is zheng2024.FIG05
+    assert zheng2024.FIGURES["fig06_attitude_total_sobol"] is zheng2024.FIG06
+    # the scorecard rows each figure is scored with (the notebook's former FIGURE_ROWS)
+    assert zheng2024.FIG04.rows == ("Section 3.2",)
+    assert zheng2024.FIG05.rows == zheng2024.FIG06.rows == ("Section 3.3",)
+    for caption in zheng2024.FIGURES.values():
+        fields = {f for _, f, _, _ in string.Formatter().parse(caption.text) if f}
+        assert fields <= set(CAPTION_FIELDS), (caption.name, fields - set(CAPTION_FIELDS))
+        text = caption.format(**CAPTION_FIELDS).text
+        assert "{" not in text and "}" not in text
+    fig05 = zheng2024.FIG05.format(**CAPTION_FIELDS)
+    assert "sparse PCE (1000 samples), MCS and LHS (100,000 base samples each)" in fig05.text
+    assert fig05.name == zheng2024.FIG05.name and fig05.rows == zheng2024.FIG05.rows
+
+
+def test_parameters_cell_is_within_the_line_length():
+    cell = zheng2024.Parameters.cell()
+    assert len(cell.splitlines()) == len(zheng2024.Parameters.names())
+    assert max(len(line) for line in cell.splitlines()) <= 100

@@ -1,9 +1,9 @@
 """One figure style and deterministic saving.
 
-``save(fig, folder, name)`` writes PNG and SVG with no timestamps (SVG ``Date`` removed, a
+``save(fig, path, stamp=...)`` writes PNG and SVG with no timestamps (SVG ``Date`` removed, a
 fixed ``svg.hashsalt`` for element ids), so the same figure gives the same bytes, and stamps the
-run's provenance into each file (PNG text chunk ``mtaccuracy:provenance``, SVG
-``Description``; see :mod:`mtaccuracy.compendium.provenance`).
+run's provenance record into each file (PNG text chunk ``mtaccuracy:provenance``, SVG
+``Description``); a notebook saves through :meth:`mtaccuracy.compendium.notebook.Run.figure`.
 
 The SVG's clip paths are renamed after what the file prints (:func:`stable_svg_ids`):
 matplotlib names each clip path by a hash of its rectangle's floats at full precision, and an
@@ -22,8 +22,6 @@ from pathlib import Path
 
 import matplotlib as mpl
 import matplotlib.pyplot as plt
-
-from . import provenance
 
 STYLE = {
     "figure.dpi": 100,
@@ -118,11 +116,9 @@ def stable_svg_ids(svg: str) -> str:
     return refs.sub(lambda m: f"url(#{rename[m.group(1)]})", svg)
 
 
-def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = None,
-         scored_with=None) -> None:
-    """Save ``fig`` as ``folder/name.<fmt>`` for each format, without timestamps.
-
-    Each file is recorded in the folder's ``provenance.json``.
+def save(fig, path, *, stamp: str, formats=("png", "svg"), title: str | None = None,
+         scored_with=None) -> list[Path]:
+    """Save ``fig`` as ``<path>.<fmt>`` for each format, without timestamps.
 
     The SVG's clip paths are named after what it prints (:func:`stable_svg_ids`), so that the
     bytes do not change with rounding noise in the data.
@@ -131,29 +127,29 @@ def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = Non
     ----------
     fig : matplotlib.figure.Figure
         The figure.
-    folder : str or Path
-        The output folder (created when missing).
-    name : str
-        File name without extension (``fig05_...``, named after the paper's figure).
+    path : Path
+        Where, without the extension (``<folder>/fig05_position_total_sobol``).
+    stamp : str
+        The run's provenance record as text: PNG text chunk ``mtaccuracy:provenance``, SVG
+        ``Description``.
     formats : tuple of str
-        Formats written, each as ``name.<fmt>``.
+        Formats written.
     title : str, optional
         Stored as the file's ``Title``.
     scored_with : list of str, optional
-        Patterns (:mod:`fnmatch`, on a scorecard row's ``item`` or ``"item: quantity"``) of
-        the rows that score what the figure shows, for a figure whose name is not the item of
-        its rows (``fig05_...`` drawing what Table 2 scores), stored in the PNG's metadata.
+        Patterns (:mod:`fnmatch`, on a scorecard row's ``item`` or ``"item: quantity"``) of the
+        rows that score what the figure shows, stored in the PNG's metadata.
 
     Returns
     -------
-    None
-        Nothing, so that a notebook cell ending with it shows no machine-specific path.
+    list of Path
+        The files written, in the order of ``formats``.
     """
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    stamp = provenance.as_text()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    written = []
     for fmt in formats:
-        path = folder / f"{name}.{fmt}"
+        target = path.with_name(f"{path.name}.{fmt}")
         if fmt == "svg":
             meta = {"Date": None, "Creator": "mtaccuracy", "Description": stamp}
         elif fmt == "png":
@@ -164,17 +160,17 @@ def save(fig, folder, name: str, formats=("png", "svg"), title: str | None = Non
             meta["Title"] = title
         if scored_with and fmt == "png":
             meta[SCORED_WITH] = " | ".join(scored_with)
+        buf = io.BytesIO()
         with mpl.rc_context(STYLE):
-            if fmt == "svg":
-                buf = io.BytesIO()
-                fig.savefig(buf, format=fmt, metadata=meta, bbox_inches="tight")
-                text = stable_svg_ids(buf.getvalue().decode("utf-8"))
-                tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-                tmp.write_bytes(text.encode("utf-8"))
-                os.replace(tmp, path)
-            else:
-                fig.savefig(path, format=fmt, metadata=meta, bbox_inches="tight")
-        provenance.register_output(path)
+            fig.savefig(buf, format=fmt, metadata=meta, bbox_inches="tight")
+        data = buf.getvalue()
+        if fmt == "svg":
+            data = stable_svg_ids(data.decode("utf-8")).encode("utf-8")
+        tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+        tmp.write_bytes(data)
+        os.replace(tmp, target)
+        written.append(target)
+    return written
 
 
 def close(fig) -> None:

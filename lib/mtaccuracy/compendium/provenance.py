@@ -1,75 +1,64 @@
-"""Provenance of every output: which code, notebook, parameters and input data made it.
+"""Provenance of every output: which notebook, library code, parameters and inputs made it.
 
-A notebook's first call, :func:`mtaccuracy.compendium.parameters.check_parameters`, starts a
-record (:func:`start`); every input file read through the library is hashed into it (:func:`track`,
-called by ``reproduction.published`` and the data readers); every figure and table saved
-through ``plotting.save`` and ``reproduction.save_table`` carries it: PNG text chunk
-``mtaccuracy:provenance``, SVG ``Description``, and for CSVs the sidecar ``provenance.json`` of
-their folder, which lists every output file with its SHA-256.
+A run's record (:func:`record`) holds content hashes only: of the notebook's source cells, of
+the library modules the notebook imports (:func:`library_modules`: the closure of its
+``mtaccuracy`` imports, read from the source, so that a change to the explorer does not touch
+notebook 03), of every input file the run read (absolute paths included), plus the parameters
+(without ``output_dir``, which only says where files go) and the versions of the main packages.
+No timestamp, no git commit: unchanged code, notebook, inputs and parameters give identical
+records, and so identical figure bytes.
 
-The record holds content hashes only: of the library sources, of the notebook's source
-cells (code and markdown, not outputs), of each input file, plus the notebook's parameters
-(except ``output_dir``, which only says where files go) and the versions of the main packages.
-It has no timestamp and no git commit: unchanged code, notebook, inputs and parameters give
-identical records and so identical figure bytes, whatever was committed in between.  The runner
-keeps the commit of each run in ``figures/.runs.json`` (not committed; see
-:mod:`mtaccuracy.compendium.runner`).
-
-Each file entry of the sidecar also says how the regenerated-table test compares it on another
-machine: ``tolerance`` (per float column, see
-:class:`mtaccuracy.compendium.reproduction.Tolerance`) or
-``measured`` (a measurement of the machine, such as wall-clock time: never compared, no hash).
-
-Before an output is shown (the book, ``make book``) it is checked against that list
-(:func:`output_problem`, :func:`folder_problems`): missing, unreadable, unlisted or changed
-files are named; a file the sidecar does not list is the user's, never judged or shown
-(:func:`not_outputs`).
+Each output folder's ``provenance.json`` is that record plus the list of the files the run
+wrote, each with its SHA-256 and, for a table, how closely a regeneration on another machine
+must match it (``tolerance``, or ``measured`` for wall-clock times); a figure's entry carries
+its label and caption, which the book shows.  The workflow reads the list to know which files
+are the run's (a file it does not list is the user's, never replaced), the book to check what
+it shows (:func:`output_problem`).
 """
 
 from __future__ import annotations
 
+import ast
 import functools
 import hashlib
 import json
 import os
 import platform
-import subprocess
 import xml.etree.ElementTree as ET
 from importlib import metadata
 from pathlib import Path
 
-from . import paths
-
+#: The repository root (``lib/mtaccuracy/compendium/provenance.py`` -> three levels up).
+ROOT = Path(__file__).resolve().parents[3]
+LIBRARY = ROOT / "lib"
 PACKAGES = ("numpy", "scipy", "pandas", "matplotlib", "SALib", "chaospy", "scikit-learn",
             "sympy", "papermill")
 SIDECAR = "provenance.json"
-_IGNORED_PARAMETERS = {"output_dir"}
-_state: dict = {"notebook": None, "parameters": {}, "inputs": {}, "notebook_sha256": None}
 
 
 def sha256(path) -> str:
+    """The SHA-256 of a file's bytes, as hex."""
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-_rel = paths.relative
+def shown(path) -> str:
+    """``path`` relative to the repository root when it lies inside, else absolute."""
+    p = Path(path).resolve()
+    return p.relative_to(ROOT).as_posix() if p.is_relative_to(ROOT) else p.as_posix()
 
 
-def git_commit() -> str:
-    """The checkout's commit, for the runner's ``figures/.runs.json`` (never in a figure)."""
-    try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=paths.ROOT, capture_output=True,
-                             text=True, timeout=10)
-        return out.stdout.strip() or "unknown"
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
+def _code_cells(notebook: Path) -> list[str]:
+    nb = json.loads(Path(notebook).read_text(encoding="utf-8"))
+    return ["".join(c["source"]) if isinstance(c["source"], list) else c["source"]
+            for c in nb.get("cells", []) if c.get("cell_type") == "code"
+            and "injected-parameters" not in c.get("metadata", {}).get("tags", [])]
 
 
-def notebook_source_hash(path) -> str:
-    """SHA-256 over a notebook's cell types and sources: what the reader wrote.
+def notebook_source_hash(notebook) -> str:
+    """SHA-256 over a notebook's cell types and sources: what its author wrote.
 
-    Without outputs, execution counts, metadata or the cell papermill injects: not what a run
-    produced."""
-    nb = json.loads(Path(path).read_text(encoding="utf-8"))
+    Without outputs, execution counts, metadata or the cell papermill injects."""
+    nb = json.loads(Path(notebook).read_text(encoding="utf-8"))
     h = hashlib.sha256()
     for c in nb.get("cells", []):
         if "injected-parameters" in c.get("metadata", {}).get("tags", []):
@@ -80,113 +69,169 @@ def notebook_source_hash(path) -> str:
     return h.hexdigest()
 
 
-@functools.cache
-def library_hash() -> str:
-    """SHA-256 over the library's Python sources and its package data, in path order.
+def _module_file(name: str) -> Path | None:
+    """The source file of module ``mtaccuracy.x.y`` under ``lib/``, or None."""
+    base = LIBRARY.joinpath(*name.split("."))
+    for p in (base.with_suffix(".py"), base / "__init__.py"):
+        if p.is_file():
+            return p
+    return None
 
-    The package data is ``mtaccuracy/data``: the error catalogue.  Computed once per process: the
-    code a process runs is the code it imported, whatever changes on disk later."""
+
+def _imported(tree: ast.AST, package: str) -> set[str]:
+    """The ``mtaccuracy`` modules a syntax tree imports (function-local imports included):
+    ``from a import b`` counts ``a.b`` when that is a module, else ``a``."""
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                parts = package.split(".")
+                base = ".".join(parts[:len(parts) - node.level + 1])
+                mod = f"{base}.{node.module}" if node.module else base
+            else:
+                mod = node.module or ""
+            found.add(mod)
+            found.update(f"{mod}.{a.name}" for a in node.names
+                         if _module_file(f"{mod}.{a.name}") is not None)
+    return {m for m in found if m == "mtaccuracy" or m.startswith("mtaccuracy.")}
+
+
+@functools.cache
+def _closure(roots: frozenset[str]) -> tuple[Path, ...]:
+    seen: set[str] = set()
+    todo = list(roots)
+    while todo:
+        name = todo.pop()
+        parts = name.split(".")
+        for i in range(1, len(parts) + 1):  # importing a.b.c runs a and a.b first
+            parent = ".".join(parts[:i])
+            if parent in seen or _module_file(parent) is None:
+                continue
+            seen.add(parent)
+            path = _module_file(parent)
+            package = parent if path.name == "__init__.py" else parent.rpartition(".")[0]
+            todo.extend(_imported(ast.parse(path.read_text(encoding="utf-8")), package))
+    data = sorted((LIBRARY / "mtaccuracy" / "data").glob("*"))
+    return tuple(sorted(_module_file(m) for m in seen)) + tuple(p for p in data if p.is_file())
+
+
+def library_modules(notebook) -> list[Path]:
+    """The library files a notebook's code depends on: the closure of its imports.
+
+    Read from the source (every ``import`` in its code cells, then in each ``mtaccuracy``
+    module reached, function-local ones included, and each parent package), plus the library's
+    package data (``mtaccuracy/data``).
+
+    Parameters
+    ----------
+    notebook : path
+        The ``.ipynb`` file.
+
+    Returns
+    -------
+    list of Path
+        The files, sorted.
+    """
+    roots: set[str] = set()
+    for src in _code_cells(Path(notebook)):
+        python = "\n".join("" if line.lstrip().startswith(("%", "!")) else line
+                           for line in src.splitlines())  # IPython's magics and shell lines
+        try:
+            roots |= _imported(ast.parse(python), "")
+        except SyntaxError:  # not Python: it imports nothing of ours
+            continue
+    return list(_closure(frozenset(roots)))
+
+
+def library_hash(files) -> str:
+    """SHA-256 over library files (their paths under ``lib/`` and their bytes), in order."""
     h = hashlib.sha256()
-    lib = Path(__file__).resolve().parent.parent   # the mtaccuracy package
-    data = [p for p in (lib / "data").rglob("*") if p.is_file()]
-    for p in sorted([*lib.rglob("*.py"), *data]):
-        h.update(p.relative_to(lib).as_posix().encode())
-        h.update(p.read_bytes())
+    for p in files:
+        h.update(Path(p).relative_to(LIBRARY).as_posix().encode() + b"\0")
+        h.update(Path(p).read_bytes())
     return h.hexdigest()
 
 
-def start(notebook: str, parameters: dict, source=None) -> None:
-    """Begin the record of a notebook run (called by ``check_parameters``).
-
-    ``source`` is the notebook file, whose source cells are hashed."""
-    _state["notebook"] = notebook
-    _state["notebook_sha256"] = notebook_source_hash(source) if source else None
-    _state["parameters"] = {k: v for k, v in sorted(parameters.items())
-                            if k not in _IGNORED_PARAMETERS}
-    _state["inputs"] = {}
-    for value in _state["parameters"].values():  # a parameter naming a data file or folder
-        if isinstance(value, str) and value and not value.startswith("/"):
-            p = paths.ROOT / value
-            for f in ([p] if p.is_file() else sorted(p.rglob("*")) if p.is_dir() else []):
-                if f.name != SIDECAR:  # a folder's own record is an output, not an input
-                    track(f)
-
-
-def track(path) -> None:
-    """Add an input file's hash to the current record."""
-    p = Path(path)
-    if p.is_file():
-        _state["inputs"][_rel(p)] = sha256(p)
-
-
 @functools.cache
-def _versions() -> dict:
-    versions = {}
+def versions() -> dict:
+    """The versions of the main packages and of Python."""
+    out = {}
     for pkg in PACKAGES:
         try:
-            versions[pkg] = metadata.version(pkg)
+            out[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
-            versions[pkg] = "not installed"
-    versions["python"] = platform.python_version()
-    return versions
+            out[pkg] = "not installed"
+    out["python"] = platform.python_version()
+    return out
 
 
-def record() -> dict:
-    """The current provenance record (JSON-serialisable, deterministic)."""
-    versions = dict(_versions())
-    return {"library_sha256": library_hash(), "notebook": _state["notebook"],
-            "notebook_sha256": _state["notebook_sha256"],
-            "parameters": dict(_state["parameters"]),
-            "inputs": dict(sorted(_state["inputs"].items())), "packages": versions}
+def record(stem: str, notebook, parameters: dict) -> dict:
+    """The start of a run's record: notebook, library code, parameters, packages.
 
+    Parameters
+    ----------
+    stem : str
+        The notebook's stem.
+    notebook : path
+        Its ``.ipynb`` file (its source cells and imports are hashed).
+    parameters : dict
+        The run's parameters (``output_dir`` is left out).
 
-def as_text(rec: dict | None = None) -> str:
-    return json.dumps(rec or record(), sort_keys=True, separators=(",", ":"), default=str)
-
-
-def register_output(path, measured: bool = False, tolerance: dict | None = None) -> None:
-    """Record an output file in its folder's ``provenance.json``.
-
-    It is recorded with its hash and, for tables, the tolerance of each float column; a
-    ``measured`` file (wall-clock times) without a hash.
+    Returns
+    -------
+    dict
+        JSON-serialisable; ``inputs`` starts empty and the run adds each file it reads.
     """
-    p = Path(path)
-    side = p.parent / SIDECAR
-    data = json.loads(side.read_text(encoding="utf-8")) if side.exists() else {}
-    if _rel(p) in _state["inputs"]:  # an input the run rewrites (notebook 04's data/thermal):
-        track(p)                     # the record holds the bytes on disk, not those replaced
-    rec = record()
-    files = data.get("files", {}) if data.get("run", {}).get("notebook") == rec["notebook"] \
-        else {}
-    entry: dict = {"measured": True} if measured else {"sha256": sha256(p)}
-    if tolerance:
-        entry["tolerance"] = tolerance
-    files[p.name] = entry
-    write_sidecar(p.parent, {"run": rec, "files": files})
+    files = library_modules(notebook)
+    return {"notebook": stem, "notebook_sha256": notebook_source_hash(notebook),
+            "library_sha256": library_hash(files),
+            "library_modules": [p.relative_to(LIBRARY).as_posix() for p in files],
+            "parameters": {k: v for k, v in sorted(parameters.items()) if k != "output_dir"},
+            "inputs": {}, "packages": versions()}
+
+
+def as_text(rec: dict) -> str:
+    """A record as one line of JSON (what figures carry in their metadata)."""
+    return json.dumps(rec, sort_keys=True, separators=(",", ":"), default=str)
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` only when its bytes change, replaced whole (rename)."""
+    path = Path(path)
+    if path.exists() and path.read_bytes() == data:
+        return
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_bytes(data)
+    os.replace(tmp, path)
 
 
 def write_sidecar(folder, data: dict) -> None:
-    """Write ``folder/provenance.json`` (files sorted, fixed format), replaced whole.
-
-    It is written only when its bytes change."""
-    side = Path(folder) / SIDECAR
+    """Write ``folder/provenance.json`` (files sorted, fixed format), replaced whole."""
     data = {**data, "files": dict(sorted(data.get("files", {}).items()))}
     text = json.dumps(data, sort_keys=True, indent=1, default=str) + "\n"
-    if not side.exists() or side.read_text(encoding="utf-8") != text:
-        tmp = side.with_name(f".{SIDECAR}.{os.getpid()}.tmp")
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, side)
+    write_atomic(Path(folder) / SIDECAR, text.encode("utf-8"))
 
 
 def read(folder) -> dict:
-    """The sidecar of an output folder ({} when there is none)."""
-    side = Path(folder) / SIDECAR
-    return json.loads(side.read_text(encoding="utf-8")) if side.exists() else {}
+    """The ``provenance.json`` of an output folder ({} when there is none or it is unreadable)."""
+    try:
+        data = json.loads((Path(folder) / SIDECAR).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def written_by(folder) -> str | None:
+    """The notebook whose run wrote ``folder`` (its ``provenance.json``), or None."""
+    run = read(folder).get("run")
+    return run.get("notebook") if isinstance(run, dict) else None
 
 
 def from_png(path) -> dict:
-    """The provenance record stamped into a PNG (or {})."""
-    from PIL import Image  # Pillow: only where a PNG is read or written
+    """The provenance record stamped into a PNG ({} when there is none)."""
+    from PIL import Image  # Pillow: only where a PNG is read
 
     with Image.open(path) as im:
         text = im.info.get("mtaccuracy:provenance")
@@ -195,12 +240,12 @@ def from_png(path) -> dict:
 
 # ---------------------------------------------------------- checks before an output is shown
 
-def output_kind(path: Path) -> str:
-    """What an output file is, for the messages: "figure", "table" or "file"."""
+def output_kind(path) -> str:
+    """What an output file is, for messages: "figure", "table" or "file"."""
     return {".png": "figure", ".svg": "figure", ".csv": "table"}.get(Path(path).suffix, "file")
 
 
-def output_problem(path: Path, side: dict) -> str | None:
+def output_problem(path, side: dict) -> str | None:
     """Why an output file cannot be shown or linked, or None when it is sound.
 
     Parameters
@@ -213,20 +258,16 @@ def output_problem(path: Path, side: dict) -> str | None:
     Returns
     -------
     str or None
-        The problem in words, to follow the file's name ("is missing ...", "cannot be read
-        ...", "is not listed ...", "does not match the hash ..."): missing though listed, a
-        figure that cannot be decoded, not listed, no hash though not ``measured``, or bytes
-        that are not the ones the run recorded.  A ``measured`` entry is only required to
-        exist (and, for a figure, to be readable).
+        The problem, to follow the file's name: missing though listed, a figure that cannot be
+        decoded, not listed, no hash though not ``measured``, or bytes that are not the ones
+        the run recorded.  A ``measured`` entry need only exist (and, for a figure, decode).
     """
     path = Path(path)
     entry = side.get("files", {}).get(path.name)
     if not path.is_file():
         return (f"is missing (listed in {SIDECAR}, not on disk)" if entry is not None
                 else "is missing")
-    # Pillow here, not at the top: make's recovery step (commit.py) imports this module with
-    # the system's Python, before .venv exists
-    from PIL import Image  # Pillow: only where a PNG is read or written
+    from PIL import Image  # Pillow: only where a PNG is read
 
     try:
         if path.suffix == ".png":
@@ -239,7 +280,7 @@ def output_problem(path: Path, side: dict) -> str | None:
     if entry is None:
         return f"is not listed in {SIDECAR} (not written by this folder's run)"
     if entry.get("measured"):
-        return None  # a measurement of the machine: no hash to check
+        return None
     if "sha256" not in entry:
         return f"has no hash in {SIDECAR} and is not declared measured"
     if entry["sha256"] != sha256(path):
@@ -247,23 +288,20 @@ def output_problem(path: Path, side: dict) -> str | None:
     return None
 
 
-def folder_problems(folder: Path, side: dict | None = None) -> list[tuple[Path, str]]:
-    """Every problem (:func:`output_problem`) of an output folder's outputs.
-
-    Its outputs are the files its ``provenance.json`` lists; a file it does not list is not the
-    compendium's (:func:`not_outputs`) and is not judged.
+def folder_problems(folder, side: dict | None = None) -> list[tuple[Path, str]]:
+    """Every problem (:func:`output_problem`) of the files an output folder's record lists.
 
     Parameters
     ----------
     folder : Path
-        A notebook's output folder (``figures/<stem>``).
+        A notebook's output folder.
     side : dict, optional
         Its ``provenance.json`` (read when not given).
 
     Returns
     -------
     list of (Path, str)
-        ``(path, why)`` for each file with a problem, sorted by name.
+        ``(path, why)`` for each listed file with a problem, sorted by name.
     """
     folder = Path(folder)
     side = read(folder) if side is None else side
@@ -271,11 +309,8 @@ def folder_problems(folder: Path, side: dict | None = None) -> list[tuple[Path, 
     return [(p, why) for p, why in found if why]
 
 
-def not_outputs(folder: Path, side: dict | None = None) -> list[str]:
-    """The files in an output folder that its ``provenance.json`` does not list.
-
-    They were put there by someone else (notes, an input file), are left alone by every run, and
-    are never shown or linked as results.
+def not_outputs(folder, side: dict | None = None) -> list[str]:
+    """The files of an output folder that its ``provenance.json`` does not list: the user's.
 
     Parameters
     ----------
@@ -287,7 +322,7 @@ def not_outputs(folder: Path, side: dict | None = None) -> list[str]:
     Returns
     -------
     list of str
-        Their names, sorted.
+        Their names, sorted (hidden files left out).
     """
     folder = Path(folder)
     side = read(folder) if side is None else side

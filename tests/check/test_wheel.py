@@ -29,7 +29,7 @@ from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 from packaging.version import Version
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: What the build reads: the package, its metadata and the licence files it ships.
 SOURCES = ("lib", "pyproject.toml", "README.md", "LICENSE", "LICENSES.md")
 SECTION = "## Using the library in your own work"
@@ -130,7 +130,7 @@ CHILD = textwrap.dedent('''
     modules = []
     def walk(pkg):
         for m in pkgutil.iter_modules(pkg.__path__, pkg.__name__ + "."):
-            if m.name != "mtaccuracy.compendium":
+            if m.name not in ("mtaccuracy.papers", "mtaccuracy.compendium", "mtaccuracy.apps"):
                 modules.append(m.name)
                 mod = importlib.import_module(m.name)
                 if m.ispkg:

@@ -6,11 +6,12 @@ pytest configuration (a separate pytest process, ``-c pyproject.toml``)."""
 
 import subprocess
 import sys
+from pathlib import Path
 
 import nbformat
 import pytest
 
-from mtaccuracy.compendium import paths
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _notebook(path, stored: str, code: str = "print(6 * 7)", marked: bool = True) -> None:
@@ -25,7 +26,7 @@ def _notebook(path, stored: str, code: str = "print(6 * 7)", marked: bool = True
 
 
 def _run(path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "pytest", "-c", str(paths.ROOT / "pyproject.toml"),
+    return subprocess.run([sys.executable, "-m", "pytest", "-c", str(ROOT / "pyproject.toml"),
                            "--rootdir", str(path.parent), "-p", "no:cacheprovider", "-q",
                            str(path)], cwd=path.parent, capture_output=True, text=True,
                           timeout=300)

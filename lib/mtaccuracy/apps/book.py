@@ -1,13 +1,15 @@
-"""The compendium's book: ``make book`` (``python -m mtaccuracy.compendium.book``).
+"""The compendium's book: ``make book`` (``python -m mtaccuracy.apps.book``).
 
 A Sphinx site with MyST-NB and the book theme (the stack under Jupyter Book 1), built from what
 is committed, never re-running a notebook:
 
 * a home page with the verdict x basis overview, one line per paper with its DOI, and links;
 * one chapter per notebook: the paper and its DOI, the notebook's own conclusion (its "What we
-  conclude" section), the figures in the paper's order with the captions of
-  ``book/figures.yml`` (and each figure's provenance), and the scorecard as a table that sorts
-  and filters (DataTables, through ``itables``);
+  conclude" section), the figures in the paper's order (its paper module's ``FIGURES``) with
+  the captions their run recorded in ``provenance.json`` (numbers filled in by that run), the
+  scorecard as a table that sorts and filters (DataTables, through ``itables``) with, after
+  ``make sweep``, the rows whose verdict changes with the seed, and the notebook's parameters
+  as its declaration gives them (``mtaccuracy.papers.<paper>.Parameters``);
 * the full scorecard on one page, the executed notebooks as pages (math by MathJax), and the
   library's reference generated from its numpydoc docstrings.
 
@@ -21,11 +23,12 @@ from disk, the scorecards stay a static table (browsers load no module script fr
 ``file://``).
 
 Before building, every output shown is checked against its folder's ``provenance.json``
-(:func:`mtaccuracy.compendium.provenance.folder_problems`) and every figure against
-``book/figures.yml`` (:func:`figure_problems`): a broken, changed or missing output, a figure
-without a caption or a caption without a figure is named on standard error and marked in its
+(:func:`mtaccuracy.compendium.provenance.folder_problems`; a sweep's tables against
+``sweep/provenance.json``) and every figure against its caption (:func:`chapter_figures`): a
+broken, changed or missing output, a figure whose record has no caption, or a caption in
+``FIGURES`` whose figure the run did not write is named on standard error and marked in its
 chapter, and the command exits with status 1 (the book is still written, so the problem can be
-seen).
+seen).  A file the record does not list (the user's) is neither judged nor shown.
 
 The site is written to ``build/book/html`` (a fresh build in ``build/book/.html-<pid>`` first,
 then moved in place, so a killed build never leaves half a site); its pages' source goes to
@@ -41,6 +44,7 @@ from __future__ import annotations
 import argparse
 import html
 import json
+import math
 import os
 import pkgutil
 import re
@@ -50,76 +54,105 @@ import time
 from pathlib import Path
 
 import pandas as pd
-import yaml
 
 import mtaccuracy
 
-from . import parameters, paths, provenance, reproduction
-from .plotting import unit_symbol
+from ..compendium import provenance, reproduction, scorecard, workflow
+from ..compendium.notebook import FIGURES, NOTEBOOKS, ROOT
+from ..compendium.plotting import unit_symbol
+from ..papers.parameters import literal, type_name
 
-BOOK = paths.ROOT / "book"
-CAPTIONS = BOOK / "figures.yml"
-BUILD = paths.ROOT / "build" / "book"
+BOOK = ROOT / "book"
+BUILD = ROOT / "build" / "book"
 #: A file that marks a folder as written by this module (only such folders are replaced).
 MARKER = ".mtaccuracy-book"
 #: The scorecard columns shown, in order.
 CARD_COLUMNS = ["item", "quantity", "published", "reproduced", "tolerance", "verdict", "basis",
                 "note"]
-#: Library modules left out of the reference (the compendium's machinery is not an API).
-_NOT_API = ("mtaccuracy.compendium",)
+#: Where ``make sweep`` writes a notebook's sweep, inside its output folder.
+SWEEP = "sweep"
+#: Library modules left out of the reference (paper code, the workflow, the apps: no API).
+_NOT_API = ("mtaccuracy.compendium", "mtaccuracy.papers", "mtaccuracy.apps")
 
 
 class BookError(RuntimeError):
     """The book cannot be built (a folder that is not the build's own, Sphinx failed)."""
 
 
+def stems() -> list[str]:
+    """Every notebook, in notebook order (the workflow's declarations)."""
+    return [c.stem for c in workflow.DECLARATIONS]
+
+
 # ---------------------------------------------------------------------------- the contents
 
-def captions(path: Path | None = None) -> dict[str, list[dict]]:
-    """``book/figures.yml``: per notebook stem, its figures in the paper's order.
-
-    Each figure is ``{"figure": stem of the PNG, "label": "Fig. 4", "caption": text}``.  A malformed
-    file is a ``ValueError`` naming the file and the entry."""
-    path = Path(path or CAPTIONS)
-    if not path.is_file():
-        raise ValueError(f"{path} is missing: it holds the figures' captions")
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f", line {mark.line + 1}" if mark else ""
-        raise ValueError(f"{path}{where}: not valid YAML ({getattr(exc, 'problem', exc)})") \
-            from None
-    if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected a mapping of notebook stems to figure lists")
-    for stem, figs in data.items():
-        if not isinstance(figs, list):
-            raise ValueError(f"{path}: {stem}: expected a list of figures")
-        for k, f in enumerate(figs):
-            if not isinstance(f, dict) or not {"figure", "label", "caption"} <= set(f):
-                raise ValueError(f"{path}: {stem}, entry {k + 1}: needs figure, label and "
-                                 f"caption")
-    return data
+def captions(stem: str) -> dict:
+    """The captions of notebook ``stem``'s figures in the paper's order: its module's FIGURES."""
+    return getattr(sys.modules[workflow.declaration(stem).__module__], "FIGURES", {})
 
 
-def figure_problems(figures: Path, stems: list[str], caps: dict) -> list[tuple[Path, str]]:
-    """Figures without a caption, and captions naming a figure that is not there: ``(path, why)``.
+def chapter_figures(stem: str, folder: Path, side: dict | None = None
+                    ) -> tuple[list[dict], list[tuple[Path, str]]]:
+    """The figures a chapter shows, and the problems of their captions.
 
-    The figures are the PNGs listed in a folder's ``provenance.json``."""
-    out, where = [], paths.relative(CAPTIONS)
+    Parameters
+    ----------
+    stem : str
+        The notebook.
+    folder : Path
+        Its output folder.
+    side : dict, optional
+        The folder's ``provenance.json`` (read when not given).
+
+    Returns
+    -------
+    figures : list of dict
+        ``{"figure": PNG stem, "label", "caption"}`` as the run recorded them: first in the
+        order of the paper module's ``FIGURES``, then any other figure the run wrote, in the
+        run's order.
+    problems : list of (Path, str)
+        A PNG whose record has no caption, a caption in ``FIGURES`` whose figure the run did
+        not write.
+    """
+    side = provenance.read(folder) if side is None else side
+    pngs = {n[:-4]: e for n, e in side.get("files", {}).items() if n.endswith(".png")}
+    order = list(captions(stem))
+    where = f"{workflow.declaration(stem).__module__}.FIGURES"
+    problems = [(folder / f"{n}.png", f"is captioned in {where} but its run did not write it")
+                for n in order if n not in pngs]
+    others = sorted((n for n in pngs if n not in order),
+                    key=lambda n: (pngs[n].get("order", math.inf), n))
+    shown = []
+    for name in [*(n for n in order if n in pngs), *others]:
+        entry = pngs[name]
+        if not str(entry.get("caption") or "").strip():
+            problems.append((folder / f"{name}.png",
+                             f"has no caption in {provenance.SIDECAR} (its run recorded none)"))
+            continue
+        shown.append({"figure": name, "label": str(entry.get("label", "")).strip(),
+                      "caption": " ".join(str(entry["caption"]).split())})
+    return shown, problems
+
+
+def sweep_record(folder: Path, stem: str) -> dict:
+    """The ``provenance.json`` of ``make sweep``'s tables in ``folder/sweep`` ({} if none)."""
+    side = provenance.read(folder / SWEEP)
+    ok = (side.get("run", {}).get("notebook") == f"{stem} (sweep)"
+          and "verdict_stability.csv" in side.get("files", {}))
+    return side if ok else {}
+
+
+def check(figures: Path, stems: list[str]) -> dict[str, list[tuple[Path, str]]]:
+    """Every problem of the outputs shown, per notebook (see the module's docstring)."""
+    out: dict[str, list] = {}
     for stem in stems:
         folder = figures / stem
-        listed = {Path(n).stem for n in provenance.read(folder).get("files", {})
-                  if n.endswith(".png")}
-        captioned = [f["figure"] for f in caps.get(stem, [])]
-        for name in sorted(listed - set(captioned)):
-            out.append((folder / f"{name}.png", f"has no caption in {where}"))
-        for name in captioned:
-            if name not in listed:
-                out.append((folder / f"{name}.png",
-                            f"is captioned in {where} but is not one of the folder's outputs"))
-        if len(set(captioned)) != len(captioned):
-            out.append((folder, f"a figure is captioned twice in {where}"))
+        found = provenance.folder_problems(folder) + chapter_figures(stem, folder)[1]
+        sweep = sweep_record(folder, stem)
+        if sweep:
+            found += provenance.folder_problems(folder / SWEEP, sweep)
+        if found:
+            out[stem] = found
     return out
 
 
@@ -173,6 +206,8 @@ def scorecard_html(cards: pd.DataFrame, table_id: str, dt_url: str,
 #: Relative widths of the scorecard's columns on a wide screen.
 _WIDTHS = {"paper": 8, "item": 7, "quantity": 15, "published": 9, "reproduced": 10,
            "tolerance": 9, "verdict": 12, "basis": 10, "note": 28}
+
+
 def _label_css() -> str:
     """On a phone each scorecard cell is shown with its column's name (one rule per column of
     the two column sets the book shows)."""
@@ -211,11 +246,85 @@ def _provenance_details(png: Path) -> str:
             "</ul></details>")
 
 
-def chapter(stem: str, figures: Path, caps: dict, index: dict, broken: dict) -> str:
+def _cell(text) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def parameter_lines(stem: str, run: dict | None = None) -> list[str]:
+    """The notebook's parameters as a Markdown table, from its declaration.
+
+    One row per parameter: its name, default (as the parameters cell writes it), type, what is
+    allowed and its help, all read from ``Parameters`` (the allowed values as
+    ``Parameters.describe`` words them); then the values of the run shown that are not the
+    defaults (``run``: its record)."""
+    decl = workflow.declaration(stem)
+    rows = ["| parameter | default | type | allowed | what it sets |",
+            "| --- | --- | --- | --- | --- |"]
+    for n in decl.names():
+        p = decl.param[n]
+        line, head, tail = decl.describe(n), f"{n} = {p.default!r} (", f")  {p.doc}"
+        middle = line[len(head):-len(tail)] if line.startswith(head) and line.endswith(tail) \
+            else ""
+        allowed = middle.partition("; ")[2]
+        rows.append(f"| `{n}` | `{_cell(literal(p.default))}` | {type_name(p)} | "
+                    f"{_cell(allowed)} | {_cell(p.doc)} |")
+    given = (run or {}).get("parameters", {})
+    changed = {k: v for k, v in given.items() if k in decl.names() and v != decl.param[k].default}
+    used = "" if not given else ("The run shown used the defaults." if not changed else
+                                 "The run shown used " + ", ".join(
+                                     f"`{k}={literal(v)}`" for k, v in changed.items())
+                                 + ", the others at their defaults.")
+    module = decl.__module__
+    return ["## Parameters", "",
+            f"Declared once, in `{module}.Parameters`: the notebook's parameters cell, the "
+            f"workflow's checks and this table read that declaration. Run with other values: "
+            f'`make reproduce NB={stem[:2]} PARAMS="name=value ..."` (the values are checked '
+            f"before any work). {used}".rstrip(), "", *rows, ""]
+
+
+def sweep_lines(stem: str, folder: Path, bad: set[str]) -> list[str]:
+    """What ``make sweep`` found: over how many seeds the scorecard was re-run, and the rows
+    whose verdict changes with the seed (none when its tables are missing or broken)."""
+    side = sweep_record(folder, stem)
+    if not side or f"{SWEEP}/verdict_stability.csv" in bad \
+            or not (folder / SWEEP / "verdict_stability.csv").is_file():
+        return []
+    runs = side["run"].get("runs", {})
+    seeds = sorted({g.get("seed") for g in runs.values()} - {None})
+    settings = sorted({json.dumps({k: v for k, v in g.items() if k != "seed"}, sort_keys=True)
+                       for g in runs.values()})
+    table = pd.read_csv(folder / SWEEP / "verdict_stability.csv", dtype=str,
+                        keep_default_na=False)
+    counts = [v.replace(" ", "_") for v in reproduction.VERDICTS]
+    keys = ["item", "quantity", *(["setting"] if "setting" in table.columns else [])]
+    moving = table[table["changes_with_seed"].str.lower() == "true"]
+    span = f" ({seeds[0]} to {seeds[-1]})" if len(seeds) > 1 else ""
+    where = f" at each of {len(settings)} settings" if len(settings) > 1 else ""
+    links = ", ".join(f"[{n}](../figures/{stem}/{SWEEP}/{n})"
+                      for n in ("verdict_stability.csv", "values.csv")
+                      if (folder / SWEEP / n).is_file() and f"{SWEEP}/{n}" not in bad)
+    lines = ["### Over seeds", "",
+             f"`make sweep NB={stem[:2]}` re-ran the notebook over {len(seeds)} seed"
+             f"{'s' if len(seeds) != 1 else ''}{span}{where} and scored every run "
+             f"({len(runs)} runs): "
+             + (f"the verdict of {len(moving)} of the {len(table)} rows changes with the seed."
+                if len(moving) else f"no row's verdict changes with the seed ({len(table)} "
+                f"rows).") + (f" Tables: {links}." if links else ""), ""]
+    if len(moving):
+        lines += ["| " + " | ".join([*keys, *reproduction.VERDICTS]) + " |",
+                  "| " + " | ".join(["---"] * len(keys) + ["---:"] * len(counts)) + " |"]
+        lines += ["| " + " | ".join(_cell(r[c]) for c in [*keys, *counts]) + " |"
+                  for _, r in moving.iterrows()]
+        lines.append("")
+    return lines
+
+
+def chapter(stem: str, figures: Path, index: dict, broken: dict) -> str:
     """One notebook's chapter (MyST Markdown), written into ``<src>/chapters/``."""
-    parts = notebook_parts(paths.NOTEBOOKS / f"{stem}.ipynb")
+    parts = notebook_parts(NOTEBOOKS / f"{stem}.ipynb")
     paper = index.get(stem, {})
     folder = figures / stem
+    side = provenance.read(folder)
     lines = [f"# {parts['title']}", ""]
     if paper:
         doi = paper.get("doi", "")
@@ -224,33 +333,33 @@ def chapter(stem: str, figures: Path, caps: dict, index: dict, broken: dict) -> 
                   + (f"DOI: [{doi}](https://doi.org/{doi})" if doi else "It has no DOI."), ""]
     lines += [f"**Notebook.** [the executed notebook](../notebooks/{stem}.ipynb), "
               f"`notebooks/{stem}.ipynb`; its tables are in `figures/{stem}/`.", ""]
+    bad = {p.relative_to(folder).as_posix() for p, _ in broken.get(stem, [])}
     for path, why in broken.get(stem, []):
-        lines += [f'<p class="broken"><strong>Not shown:</strong> <code>{stem}/{path.name}'
-                  f"</code> {html.escape(why)}; run <code>make reproduce NB={stem[:2]}</code> "
-                  f"again.</p>", ""]
+        name = path.relative_to(folder).as_posix()
+        again = "sweep" if name.startswith(f"{SWEEP}/") else "reproduce"
+        lines += [f'<p class="broken"><strong>Not shown:</strong> <code>{stem}/{name}</code> '
+                  f"{html.escape(why)}; run <code>make {again} NB={stem[:2]}</code> again.</p>",
+                  ""]
     if parts["conclusion"]:
         lines += ["## What we conclude", "", ":::{container} conclusion", parts["conclusion"],
                   ":::", ""]
-    bad = {p.name for p, _ in broken.get(stem, [])}
-    figs = [f for f in caps.get(stem, []) if f"{f['figure']}.png" not in bad
-            and (folder / f"{f['figure']}.png").is_file()]
+    figs = [f for f in chapter_figures(stem, folder, side)[0]
+            if f"{f['figure']}.png" not in bad and (folder / f"{f['figure']}.png").is_file()]
     if figs:
         lines += ["## Figures", ""]
     for f in figs:
         png = folder / f"{f['figure']}.png"
-        svg = png.with_suffix(".svg")
-        label, cap = str(f["label"]).strip(), " ".join(str(f["caption"]).split())
         lines += [f"```{{figure}} ../figures/{stem}/{png.name}",
-                  f":alt: {_fig_alt(label, cap)}",
+                  f":alt: {_fig_alt(f['label'], f['caption'])}",
                   f":name: {stem[:2]}-{f['figure']}", "",
-                  f"**{label}.** {cap}", "```", ""]
-        extra = []
-        if svg.is_file() and svg.name not in bad:
-            extra.append(f'<a href="../figures/{stem}/{svg.name}">SVG</a>')
-        lines += [" ".join(extra) + " " + _provenance_details(png), ""]
-    card_path = folder / "reproduction.csv"
-    if card_path.is_file() and "reproduction.csv" not in bad:
-        cards = pd.read_csv(card_path, dtype=str, keep_default_na=False)
+                  f"**{f['label']}.** {f['caption']}", "```", ""]
+        svg = png.with_suffix(".svg")
+        link = (f'<a href="../figures/{stem}/{svg.name}">SVG</a>'
+                if svg.is_file() and svg.name in side.get("files", {}) and svg.name not in bad
+                else "")
+        lines += [f"{link} {_provenance_details(png)}", ""]
+    if (folder / "reproduction.csv").is_file() and "reproduction.csv" not in bad:
+        cards = pd.read_csv(folder / "reproduction.csv", dtype=str, keep_default_na=False)
         counts = cards["verdict"].value_counts()
         said = ", ".join(f"{counts[v]} {v}" for v in reproduction.VERDICTS if counts.get(v))
         lines += ["## Scorecard", "",
@@ -259,8 +368,9 @@ def chapter(stem: str, figures: Path, caps: dict, index: dict, broken: dict) -> 
                   "[the overview](../index.md#verdicts-by-basis).", "",
                   "```{raw} html", scorecard_html(cards, f"card-{stem[:2]}",
                                                    "../_static/itables/dt_bundle.js"), "```", ""]
-    listed = provenance.read(folder).get("files", {})
-    tables = sorted(n for n in listed if n.endswith(".csv") and n not in bad
+        lines += sweep_lines(stem, folder, bad)
+    lines += parameter_lines(stem, side.get("run"))
+    tables = sorted(n for n in side.get("files", {}) if n.endswith(".csv") and n not in bad
                     and (folder / n).is_file())
     if tables:
         lines += ["## Tables", "", "Every table the notebook wrote (CSV): "
@@ -268,28 +378,13 @@ def chapter(stem: str, figures: Path, caps: dict, index: dict, broken: dict) -> 
     return "\n".join(lines)
 
 
-def _papers_lines(index: dict, stems: list[str]) -> list[str]:
-    out = []
-    for stem in stems:
-        p = index.get(stem)
-        if not p:
-            continue
-        doi = p.get("doi", "")
-        out.append(f"- [{p['paper']}](chapters/{stem}.md): "
-                   + notebook_parts(paths.NOTEBOOKS / f"{stem}.ipynb")["title"].split(": ", 1)[-1]
-                   + (f" ([doi:{doi}](https://doi.org/{doi}))" if doi else " (no DOI)"))
-    return out
-
-
 def home(cards: pd.DataFrame, index: dict, stems: list[str]) -> str:
-    t = reproduction.crosstab(cards)
-    table = ["| basis | " + " | ".join(reproduction.VERDICTS) + " | total |",
-             "| --- | " + " | ".join("---:" for _ in reproduction.VERDICTS) + " | ---: |"]
-    for b, r in t.iterrows():
-        table.append(f"| {'**total**' if b == 'total' else b} | "
-                     + " | ".join(str(r[v]) for v in reproduction.VERDICTS)
-                     + f" | {r['total']} |")
+    """The home page: the headline, verdicts by basis, the papers and the other chapters."""
     own = [s for s in stems if s not in index]
+    papers = [f"- [{index[s]['paper']}](chapters/{s}.md): "
+              + notebook_parts(NOTEBOOKS / f"{s}.ipynb")["title"].split(": ", 1)[-1]
+              + (f" ([doi:{d}](https://doi.org/{d}))" if (d := index[s].get("doi")) else
+                 " (no DOI)") for s in stems if s in index]
     return "\n".join([
         "# mtaccuracy: machine-tool accuracy papers, reproduced", "",
         "A reproducible research compendium: five published studies of machine-tool accuracy "
@@ -297,28 +392,26 @@ def home(cards: pd.DataFrame, index: dict, stems: list[str]) -> str:
         "re-computed by one notebook from its equations, every printed number scored against "
         "what the code gives, with a verdict and the basis of that verdict. Everything here is "
         "regenerated by `make reproduce`; this book shows what is committed.", "",
-        reproduction.headline(cards), "",
+        scorecard.headline(cards), "",
         "## Verdicts by basis", "",
-        *table, "",
-        "What each basis means:", "",
-        *[f"- **{b}**: {d}." for b, d in reproduction.BASES.items()], "",
+        scorecard._crosstab_markdown(reproduction.crosstab(cards)),
+        "What each basis means:", "", scorecard.bases_markdown(),
         "Every row, sortable and filterable: [the scorecard](scorecard.md).", "",
-        "## The papers", "",
-        *_papers_lines(index, stems), "",
+        "## The papers", "", *papers, "",
         "## Your own data", "",
-        *[f"- [{notebook_parts(paths.NOTEBOOKS / f'{s}.ipynb')['title']}](chapters/{s}.md)"
+        *[f"- [{notebook_parts(NOTEBOOKS / f'{s}.ipynb')['title']}](chapters/{s}.md)"
           for s in own], "",
-        "```{toctree}", ":hidden:", ":caption: Papers", "",
-        *[f"chapters/{s}" for s in stems if s in index], "```", "",
-        "```{toctree}", ":hidden:", ":caption: Your own data", "",
-        *[f"chapters/{s}" for s in own], "```", "",
-        "```{toctree}", ":hidden:", ":caption: Executed notebooks", "",
-        *[f"notebooks/{s}" for s in stems], "```", "",
-        "```{toctree}", ":hidden:", ":caption: Reference", "",
-        "scorecard", "api/index", "```", ""])
+        *[line for caption, pages in (
+            ("Papers", [f"chapters/{s}" for s in stems if s in index]),
+            ("Your own data", [f"chapters/{s}" for s in own]),
+            ("Executed notebooks", [f"notebooks/{s}" for s in stems]),
+            ("Reference", ["scorecard", "api/index"]))
+          for line in ["```{toctree}", ":hidden:", f":caption: {caption}", "", *pages, "```",
+                       ""]]])
 
 
 def scorecard_page(cards: pd.DataFrame) -> str:
+    """Every scored row of the papers on one page."""
     return "\n".join([
         "# The scorecard", "",
         f"All {len(cards)} scored rows of the five papers. Type in the search box to filter "
@@ -331,21 +424,18 @@ def scorecard_page(cards: pd.DataFrame) -> str:
 
 def api_modules() -> list[str]:
     """The library's public modules (the science layer), for the reference."""
-    mods = []
-    for m in pkgutil.walk_packages(mtaccuracy.__path__, "mtaccuracy."):
-        name = m.name
-        if any(part.startswith("_") for part in name.split(".")) or name.startswith(_NOT_API):
-            continue
-        mods.append(name)
-    return sorted(mods)
+    return sorted(m.name for m in pkgutil.walk_packages(mtaccuracy.__path__, "mtaccuracy.")
+                  if not any(part.startswith("_") for part in m.name.split("."))
+                  and not m.name.startswith(_NOT_API))
 
 
 def api_pages() -> dict[str, str]:
+    """The reference's pages: an index and one ``automodule`` page per module."""
     mods = api_modules()
     pages = {"index": "\n".join([
         "# Library reference", "",
         "Generated from the numpydoc docstrings of `lib/mtaccuracy` (the science layer; the "
-        "compendium's own machinery, `mtaccuracy.compendium`, is not an API).", "",
+        "paper code, the workflow and the apps are not an API).", "",
         "```{toctree}", ":maxdepth: 1", "", *mods, "```", ""])}
     for m in mods:
         pages[m] = "\n".join([f"# `{m}`", "", "```{eval-rst}", f".. automodule:: {m}",
@@ -365,7 +455,7 @@ def _own_folder(folder: Path) -> None:
 def _replace(new: Path, final: Path) -> None:
     """Move the freshly built ``new`` to ``final``: the old build (ours) goes last."""
     _own_folder(final)
-    (new / MARKER).write_text("written by python -m mtaccuracy.compendium.book\n")
+    (new / MARKER).write_text("written by python -m mtaccuracy.apps.book\n")
     old = final.with_name(f".{final.name}-old-{os.getpid()}")
     if final.exists():
         os.replace(final, old)
@@ -373,8 +463,17 @@ def _replace(new: Path, final: Path) -> None:
     shutil.rmtree(old, ignore_errors=True)
 
 
-def write_source(src: Path, figures: Path, stems: list[str], caps: dict,
-                 broken: dict) -> None:
+def _copy_outputs(folder: Path, side: dict, target: Path, bad: set[str], prefix: str = "") -> None:
+    """Copy the figures and tables a record lists (never a file of the user's, nor a broken
+    one) into ``target``."""
+    target.mkdir(parents=True, exist_ok=True)
+    for name in sorted(side.get("files", {})):
+        f = folder / name
+        if f.is_file() and f.suffix in (".png", ".svg", ".csv") and prefix + name not in bad:
+            shutil.copy(f, target / name)
+
+
+def write_source(src: Path, figures: Path, stems: list[str], broken: dict) -> None:
     """The pages' source: conf.py, generated Markdown, copied notebooks, MathJax and DataTables.
 
     Copies of ``figures/`` and ``data/`` go with the notebooks, so that their links resolve."""
@@ -388,45 +487,30 @@ def write_source(src: Path, figures: Path, stems: list[str], caps: dict,
     (static / "scorecard.css").write_text(_label_css(), encoding="utf-8")
     shutil.copytree(Path(jupyter_server_mathjax.__file__).parent / "static", static / "mathjax",
                     ignore=shutil.ignore_patterns("localization", "*.md"))
-    dt = Path(itables.__file__).parent / "html"
     (static / "itables").mkdir()
     for name in ("dt_bundle.js", "dt_bundle.css"):
-        shutil.copy(dt / name, static / "itables" / name)
-    index = reproduction.papers_index()
-    cards = reproduction.collect(figures)
+        shutil.copy(Path(itables.__file__).parent / "html" / name, static / "itables" / name)
+    index = scorecard.papers_index()
+    cards = scorecard.collect(figures)
     (src / "index.md").write_text(home(cards, index, stems), encoding="utf-8")
     (src / "scorecard.md").write_text(scorecard_page(cards), encoding="utf-8")
-    (src / "chapters").mkdir()
+    for kind in ("chapters", "notebooks", "api"):
+        (src / kind).mkdir()
     for stem in stems:
-        (src / "chapters" / f"{stem}.md").write_text(
-            chapter(stem, figures, caps, index, broken), encoding="utf-8")
-    (src / "notebooks").mkdir()
-    for stem in stems:
-        shutil.copy(paths.NOTEBOOKS / f"{stem}.ipynb", src / "notebooks" / f"{stem}.ipynb")
-    (src / "api").mkdir()
+        (src / "chapters" / f"{stem}.md").write_text(chapter(stem, figures, index, broken),
+                                                     encoding="utf-8")
+        shutil.copy(NOTEBOOKS / f"{stem}.ipynb", src / "notebooks" / f"{stem}.ipynb")
     for name, text in api_pages().items():
         (src / "api" / f"{name}.md").write_text(text, encoding="utf-8")
     # the outputs the pages show or link (a broken one neither), and the data the notebooks link
     for stem in stems:
-        bad = {p.name for p, _ in broken.get(stem, [])}
-        target = src / "figures" / stem
-        target.mkdir(parents=True)
-        for name in sorted(provenance.read(figures / stem).get("files", {})):
-            f = figures / stem / name  # only the run's outputs, never a file of the user's
-            if f.is_file() and f.suffix in (".png", ".svg", ".csv") and f.name not in bad:
-                shutil.copy(f, target / f.name)
-    shutil.copytree(paths.DATA, src / "data")
-
-
-def check(figures: Path, stems: list[str], caps: dict) -> dict[str, list[tuple[Path, str]]]:
-    """Every problem of the outputs shown, per notebook (see the module's docstring)."""
-    out: dict[str, list] = {}
-    for stem in stems:
-        found = provenance.folder_problems(figures / stem)
-        found += figure_problems(figures, [stem], caps)
-        if found:
-            out[stem] = found
-    return out
+        folder = figures / stem
+        bad = {p.relative_to(folder).as_posix() for p, _ in broken.get(stem, [])}
+        _copy_outputs(folder, provenance.read(folder), src / "figures" / stem, bad)
+        sweep = sweep_record(folder, stem)
+        if sweep:
+            _copy_outputs(folder / SWEEP, sweep, src / "figures" / stem / SWEEP, bad, f"{SWEEP}/")
+    shutil.copytree(ROOT / "data", src / "data")
 
 
 def build(out: Path = BUILD, figures: Path | None = None, *, quiet: bool = True
@@ -436,11 +520,10 @@ def build(out: Path = BUILD, figures: Path | None = None, *, quiet: bool = True
     Returns (that folder, the problems found per notebook, Sphinx's warnings)."""
     from sphinx.cmd.build import build_main
 
-    figures = Path(figures or paths.FIGURES)
+    figures = Path(figures or FIGURES)
     out = Path(out)
-    stems = [p.stem for p in parameters.all_notebooks()]
-    caps = captions()
-    broken = check(figures, stems, caps)
+    names = stems()
+    broken = check(figures, names)
     out.mkdir(parents=True, exist_ok=True)
     src_final, html_final = out / "src", out / "html"
     _own_folder(src_final)
@@ -451,7 +534,7 @@ def build(out: Path = BUILD, figures: Path | None = None, *, quiet: bool = True
     for p in (src, site, doctrees):
         shutil.rmtree(p, ignore_errors=True)  # a stale one of this pid is ours
     try:
-        write_source(src, figures, stems, caps, broken)
+        write_source(src, figures, names, broken)
         args = ["-b", "html", "-d", str(doctrees), "-j", "auto", "-w", str(log), str(src),
                 str(site)]
         code = build_main((["-q"] if quiet else []) + args)
@@ -470,7 +553,8 @@ def build(out: Path = BUILD, figures: Path | None = None, *, quiet: bool = True
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.compendium.book",
+    """``python -m mtaccuracy.apps.book [--out DIR] [--figures DIR] [--verbose]``."""
+    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.apps.book",
                                  description="Build the compendium's book from what is "
                                              "committed (nothing is executed).")
     ap.add_argument("--out", type=Path, default=BUILD, help="build folder (default build/book)")
@@ -488,9 +572,9 @@ def main(argv=None) -> int:
         for path, why in found:
             print(f"error: {provenance.output_kind(path)} {path} {why}", file=sys.stderr)
     size = sum(f.stat().st_size for f in site.rglob("*") if f.is_file())
-    print(f"book: {paths.relative(site / 'index.html')} ({time.perf_counter() - t0:.0f} s, "
+    print(f"book: {provenance.shown(site / 'index.html')} ({time.perf_counter() - t0:.0f} s, "
           f"{size / 1e6:.1f} MB, {len(warnings)} Sphinx warning(s)); open it in a browser, "
-          f"or serve it: python -m http.server -d {paths.relative(site)} -b 127.0.0.1")
+          f"or serve it: python -m http.server -d {provenance.shown(site)} -b 127.0.0.1")
     return 1 if broken else 0
 
 

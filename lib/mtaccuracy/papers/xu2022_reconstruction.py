@@ -1,7 +1,7 @@
 """The reconstructed dataset of Xu et al. 2022 (``data/thermal/``): a seeded, documented generator.
 
 Paper code (issue 25 item 1): every constant below was calibrated to the paper's printed tables,
-so it lives in the compendium beside :mod:`mtaccuracy.compendium.xu2022`, which reads the
+so it lives with the paper modules beside :mod:`mtaccuracy.papers.xu2022`, which reads the
 published values it is built from (Table 5's k and b, Table 1's experiments) from
 ``data/papers/`` and passes them in (:func:`targets_from_tables`).  It uses the thermal package
 (:class:`~mtaccuracy.thermal.ThermalData`, :func:`~mtaccuracy.thermal.decouple`) and adds no

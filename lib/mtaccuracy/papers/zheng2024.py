@@ -17,7 +17,10 @@ written by hand for this paper:
   pose (:func:`index_invariants`), with the printed precision carried into a ratio
   (:func:`ratio_interval`), and Table 2 against them (:func:`fixed_ratio_checks`);
 - the Fig. 4 test points (:func:`diagonal_test_points`), the sampled and PCE references at a
-  test point, Section 3.2's group shares and the figures.
+  test point, Section 3.2's group shares and the figures, with their captions
+  (:data:`FIGURES`, in the book's order; :data:`FIG04`, :data:`FIG05`, :data:`FIG06` beside
+  the functions that draw them);
+- the notebook's parameters (:class:`Parameters`).
 
 The methods are in :mod:`mtaccuracy.sensitivity` (:mod:`~mtaccuracy.sensitivity.posefit`: the
 pose search shared with notebook 03; :mod:`~mtaccuracy.sensitivity.linear`: the closed-form
@@ -30,10 +33,13 @@ from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
+import param
 
 from .. import sensitivity as S
 from ..machines.ac_double_turntable import AXES, TRAVELS, ACDoubleTurntable
 from ..validate import integer
+from .figure import Caption, figures
+from .parameters import NotebookParameters, NumberList, OutputFolder
 
 __all__ = ["POSE_SYMMETRIES", "pose_orbit", "canonical_pose", "rank_poses",
            "fit_pose_to_indices", "fit_pose_average_to_indices", "index_invariants",
@@ -480,12 +486,34 @@ def ratio_interval(num, den):
 # --------------------------------------------------------------------------------------
 
 def tidy(df: pd.DataFrame) -> pd.DataFrame:
-    """Floats rounded to 6 decimals, and a rounded -0 written as 0 (its sign is rounding noise)."""
+    """Floats rounded to 6 decimals, and a rounded -0 written as 0 (its sign is rounding noise).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A table about to be saved.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The same table, its float columns rounded; other columns unchanged.
+    """
     return df.apply(lambda s: s.round(6) + 0.0 if s.dtype.kind == "f" else s)
 
 
 def fmt(v: float) -> str:
-    """One decimal for values above 0.1 in magnitude, four below (poses, misfits)."""
+    """One decimal for values above 0.1 in magnitude, four below (poses, misfits).
+
+    Parameters
+    ----------
+    v : float
+        The value printed.
+
+    Returns
+    -------
+    str
+        ``"102.5"``, ``"0.0046"``.
+    """
     return f"{v:.1f}" if abs(v) > 0.1 else f"{v:.4f}"
 
 
@@ -511,17 +539,51 @@ def table_indices(jacobian, *, sd) -> np.ndarray:
 
 
 def normalise(st):
-    """Table 2's normalised total indices: ``st`` (..., d) clipped at 0, over their sum."""
+    """Table 2's normalised total indices: ``st`` clipped at 0, over their sum.
+
+    Parameters
+    ----------
+    st : array (..., d)
+        Total indices of the d errors (a sampled estimate may be slightly negative).
+
+    Returns
+    -------
+    array (..., d)
+        Non-negative, summing to 1 over the last axis.
+    """
     st = np.clip(st, 0, None)
     return st / st.sum(axis=-1, keepdims=True)
 
 
 def sobol_reference(machine, pose, sd, method: str, n: int, rng_seed: int, progress=False):
-    """Sampled Sobol' indices (s1, st), each (41, 6), of the six pose-error components at ``pose``.
+    """Sampled Sobol' indices (s1, st) of the six pose-error components at ``pose``.
 
-    Errors normal with standard deviations ``sd`` (41,): ``method`` "mc" or "lhs" designs of
-    ``n`` base rows, streamed (``sensitivity.sobol_indices`` on a ``SobolDesign``).  With
-    ``progress`` a line per quarter of the runs."""
+    Errors normal with standard deviations ``sd``: ``method`` "mc" or "lhs" designs of ``n``
+    base rows, streamed (``sensitivity.sobol_indices`` on a ``SobolDesign``: base rows drawn
+    block by block, the AB runs reduced to per-error sums as they come, never stored).
+
+    Parameters
+    ----------
+    machine : ACDoubleTurntable
+        The machine (its ``pose_error``).
+    pose : mapping
+        x, y, z (mm), A, C (rad).
+    sd : array (41,)
+        Error standard deviations (mm, rad).
+    method : {"mc", "lhs"}
+        Independent uniforms, or two Latin hypercubes.
+    n : int
+        Base sample size N (43 N model runs).
+    rng_seed : int
+        Seed of the design.
+    progress : bool
+        Print a line per quarter of the runs.
+
+    Returns
+    -------
+    s1, st : array (41, 6)
+        First-order and total indices, errors by components.
+    """
     design = S.SobolDesign(n, S.Inputs.normal(0.0, sd), method=method, seed=rng_seed)
     marks = set()
 
@@ -531,18 +593,42 @@ def sobol_reference(machine, pose, sd, method: str, n: int, rng_seed: int, progr
             marks.add(q)
             print(f"  {method.upper()}: {done:,} / {total:,} model runs", flush=True)
 
-    # streaming: base rows drawn block by block, the AB runs reduced to per-error sums as they
-    # come, never stored (an LHS design is held whole: see sensitivity.SobolDesign)
+    # an LHS design is held whole: see sensitivity.SobolDesign
     return S.sobol_indices(lambda x: machine.pose_error(x, pose), design, chunk=250_000,
                            progress=report)
 
 
 def pce_indices(machine, pose, sd, n: int, degree: int, rng_seed: int, q_norm: float = 1.0,
                 comps=tuple(range(6))) -> dict:
-    """Sparse PCE fits of the pose-error components ``comps`` at ``pose``: {component: fit}.
+    """Sparse PCE fits of the pose-error components ``comps`` at ``pose``.
 
     ``sensitivity.fit_pce_outputs`` on a Latin hypercube of ``n`` standard normals (errors =
-    xi * sd)."""
+    xi * sd).
+
+    Parameters
+    ----------
+    machine : ACDoubleTurntable
+        The machine (its ``pose_error``).
+    pose : mapping
+        x, y, z (mm), A, C (rad).
+    sd : array (41,)
+        Error standard deviations (mm, rad).
+    n : int
+        Design size.
+    degree : int
+        Total degree of the Hermite basis.
+    rng_seed : int
+        Seed of the Latin hypercube.
+    q_norm : float
+        Hyperbolic truncation of the basis (1: the full total-degree basis).
+    comps : sequence of int
+        The components fitted (0-5: Px, Py, Pz, Vx, Vy, Vz).
+
+    Returns
+    -------
+    dict of int to PCE fit
+        ``{component: fit}``.
+    """
     u = S.base_samples(n, 41, method="lhs", seed=rng_seed)[0]
     xi = S.Inputs.normal(0.0, np.ones(41)).from_unit(u)
     y = machine.pose_error(xi * sd, pose)
@@ -551,13 +637,43 @@ def pce_indices(machine, pose, sd, n: int, degree: int, rng_seed: int, q_norm: f
 
 
 def group_label(groups, t2, g) -> str:
-    """A group of Table 2 entries fixed equal by the model: its component and symbols."""
+    """A group of Table 2 entries fixed equal by the model: its component and symbols.
+
+    Parameters
+    ----------
+    groups : pandas.DataFrame
+        The groups of :func:`index_invariants` (``entry``, ``group``).
+    t2 : pandas.DataFrame
+        Table 2, one row per entry (``comp``, ``symbol``).
+    g : int
+        The group.
+
+    Returns
+    -------
+    str
+        ``"Py d_xx/d_xz/d_xa/d_xAM"``.
+    """
     m = groups[groups.group == g].entry
     return f"{t2.comp.iloc[m.iloc[0]]} " + "/".join(t2.symbol.iloc[m])
 
 
 def group_head(groups, ci, ei, g):
-    """(component, error) index of a group's first entry."""
+    """(component, error) index of a group's first entry.
+
+    Parameters
+    ----------
+    groups : pandas.DataFrame
+        The groups of :func:`index_invariants` (``entry``, ``group``).
+    ci, ei : array of int
+        Component and error index of each Table 2 entry.
+    g : int
+        The group.
+
+    Returns
+    -------
+    (int, int)
+        Component and error index of the group's first entry.
+    """
     j = groups.entry[groups.group == g].iloc[0]
     return ci[j], ei[j]
 
@@ -565,16 +681,34 @@ def group_head(groups, ci, ei, g):
 def fixed_ratio_checks(t2, *, half, groups, cross, any_sd, methods=("pce", "mcs", "lhs")):
     """Table 2 against the equalities and quotients the model fixes at every pose.
 
-    ``t2``: Table 2 (one row per entry, a column per method), ``half``: half a unit of each
-    printed value's last digit; ``groups``, ``cross``: ``index_invariants`` (entries equal at
-    every pose, up to fixed factors; quotients of four groups fixed at every pose); ``any_sd``:
-    the quotients that hold for any error variances.  Returns (equalities, quotients, floor,
-    scatter):
-    per group the spread of the printed values and whether their printed intervals meet; per
-    quotient the printed value's interval (printed precision propagated, widened by twice the
-    paper's own scatter) and whether it holds the model's value; and the noise floor, the RMS
-    of the published PCE values around the group means of the equalities, and the relative
-    scatter of one published value around its group mean per method."""
+    Parameters
+    ----------
+    t2 : pandas.DataFrame
+        Table 2, one row per entry, a float column per method (and ``comp``, ``symbol``).
+    half : pandas.DataFrame
+        Half a unit of each printed value's last digit, the same columns.
+    groups, cross : pandas.DataFrame
+        :func:`index_invariants`: entries equal at every pose up to fixed factors, and
+        quotients of four groups fixed at every pose.
+    any_sd : set of tuple
+        The quotients ``(num_k, den_k, num_l, den_l)`` that hold for any error variances.
+    methods : sequence of str
+        The columns of ``t2`` checked.
+
+    Returns
+    -------
+    equalities : pandas.DataFrame
+        Per group of two or more entries, the spread of the printed values (percent) and
+        whether their printed intervals meet, per method.
+    quotients : pandas.DataFrame
+        Per fixed quotient, the model's value, the printed value's interval (printed precision
+        propagated, widened by twice the paper's own scatter) and whether it holds the model's
+        value, per method.
+    floor : float
+        The noise floor: RMS of the published PCE values around the group means.
+    scatter : dict of str to float
+        Per method, the relative scatter of one published value around its group mean.
+    """
     def group_interval(g, m):
         """(lo, hi) of a group's mean published value (divided by the fixed factors)."""
         e = groups[groups.group == g]
@@ -637,7 +771,22 @@ def converged_at(g, r_max: float = 3.0, assign: str = "larger"):
     Eq. 24, R = |S_(l+1) - S_l| / S_l, does not say to which of the two sizes R belongs:
     ``assign="larger"`` gives it to size l+1 (the reading under which the largest size of a
     series can be the one that converges, as the paper says of MCS and LHS at 1e5),
-    ``assign="smaller"`` to size l (Eq. 24 literally; the largest size then has no R)."""
+    ``assign="smaller"`` to size l (Eq. 24 literally; the largest size then has no R).
+
+    Parameters
+    ----------
+    g : pandas.DataFrame
+        One series: ``n`` (ascending) and ``R_percent``.
+    r_max : float
+        The criterion (percent).
+    assign : {"larger", "smaller"}
+        The size R belongs to.
+
+    Returns
+    -------
+    int or float
+        The sample size, or NaN if R does not stay small within the sizes run.
+    """
     if assign not in ("larger", "smaller"):
         raise ValueError(f"assign must be 'larger' or 'smaller', got {assign!r}")
     r = g.R_percent.to_numpy(dtype=float)[1:]
@@ -651,13 +800,24 @@ def converged_at(g, r_max: float = 3.0, assign: str = "larger"):
 def group_shares(s, catalogue, comps) -> pd.DataFrame:
     """Section 3.2's comparisons of groups of errors, from normalised total indices.
 
-    ``s`` (6, 41): indices of the components ``comps`` (summing to 1 over the errors);
-    ``catalogue``: the machine's 41 errors (``translational``, ``axis``, ``kind``).  Returns
-    one row per component with the summed index of the translational and of the angular
-    errors, of the errors of the rotary axes (A, C: their error motions and location errors)
-    and of the linear axes (X, Y, Z and the squareness errors), and the mean index per error
-    of the location errors (PIGEs) and of the error motions (PDGEs, squareness counted as
-    PIGE as in Table 1)."""
+    Parameters
+    ----------
+    s : array (6, 41)
+        Indices of the components ``comps``, summing to 1 over the errors.
+    catalogue : sequence of errors
+        The machine's 41 errors (``translational``, ``axis``, ``kind``).
+    comps : sequence of str
+        Names of the components, the rows of ``s``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per component: the summed index of the translational and of the angular
+        errors, of the errors of the rotary axes (A, C: their error motions and location
+        errors) and of the linear axes (X, Y, Z and the squareness errors), and the mean index
+        per error of the location errors (PIGEs) and of the error motions (PDGEs, squareness
+        counted as PIGE as in Table 1).
+    """
     s = np.asarray(s, dtype=float)
     trans = np.array([e.translational for e in catalogue])
     rotary = np.array([e.axis in ("A", "C") for e in catalogue])
@@ -676,7 +836,20 @@ def relative_scatter(estimate, exact, threshold: float = 0.05) -> float:
 
     Over the entries (same shape) whose exact index exceeds ``threshold`` (the key errors):
     the sampling scatter of one printed value, comparable with the paper's own scatter around
-    the equalities its model fixes."""
+    the equalities its model fixes.
+
+    Parameters
+    ----------
+    estimate, exact : array
+        Sampled and exact indices, the same shape.
+    threshold : float
+        Entries whose exact index exceeds this are compared.
+
+    Returns
+    -------
+    float
+        The RMS relative deviation (a fraction).
+    """
     estimate, exact = np.asarray(estimate, dtype=float), np.asarray(exact, dtype=float)
     key = exact > threshold
     if not key.any():
@@ -838,12 +1011,60 @@ def fluctuation_text(r_steps: pd.DataFrame, *, method: str, sizes=(1000, 2000),
                      for rd in readings)
 
 
+#: Fig. 5's caption (:func:`bars_figure` of Px, Py, Pz); fields: ``n_pce``, ``n_reference``,
+#: ``key_threshold``, ``where`` (the test point) and ``gap_pce``, ``gap_mcs``, ``gap_lhs`` (the
+#: largest difference of a drawn index from the exact one, per method).
+FIG05 = Caption(
+    "fig05_position_total_sobol", "Fig. 5",
+    "Normalised total Sobol indices of the position error Px, Py, Pz for the 41 errors: sparse "
+    "PCE ({n_pce} samples), MCS and LHS ({n_reference:,} base samples each); dashed: key "
+    "threshold {key_threshold:g}. Drawn at Fig. 4 {where}, a point chosen by a fixed rule, not "
+    "fitted. The published Table 2 belongs to another pose or mean of poses and is not drawn; "
+    "it is scored against a two-pose mean. Largest difference of a drawn index from the exact "
+    "(closed-form) one: {gap_pce:.0e} (PCE), {gap_mcs:.0e} (MCS), {gap_lhs:.0e} (LHS).",
+    rows=("Section 3.3",))
+
+#: Fig. 6's caption (:func:`bars_figure` of Vx, Vy, Vz); the fields of :data:`FIG05`.
+FIG06 = Caption(
+    "fig06_attitude_total_sobol", "Fig. 6",
+    "As Fig. 5, for the error of the tool-axis direction Vx, Vy, Vz (radians to first order), "
+    "at the same test point. Only angular and squareness errors enter. Largest difference of a "
+    "drawn index from the exact one: {gap_pce:.0e} (PCE), {gap_mcs:.0e} (MCS), {gap_lhs:.0e} "
+    "(LHS).",
+    rows=("Section 3.3",))
+
+
 def bars_figure(st, *, comps, all_comps, names, t2, key_threshold: float, title: str,
                 published_colour):
     """Figs. 5-6: normalised total indices of every error by method (bars).
 
     For the components ``comps``, beside Table 2's PCE values (diamonds) unless ``t2`` is
-    None (the bars drawn at a pose other than Table 2's)."""
+    None (the bars drawn at a pose other than Table 2's).  Captions: :data:`FIG05`,
+    :data:`FIG06`.
+
+    Parameters
+    ----------
+    st : mapping of str to array (6, 41)
+        Normalised total indices by method (three methods), components by errors.
+    comps : sequence of str
+        The components drawn, one panel each.
+    all_comps : sequence of str
+        Names of the rows of each array of ``st``.
+    names : sequence of str
+        The 41 error symbols.
+    t2 : pandas.DataFrame or None
+        Table 2 (``comp``, ``symbol``, ``pce``), drawn as diamonds; None draws none.
+    key_threshold : float
+        The key-error threshold (a dashed line).
+    title : str
+        The figure's title.
+    published_colour : colour
+        The colour of the published values.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib.pyplot as plt  # local: heavy, needed only by the figures
 
     fig, axes = plt.subplots(len(comps), 1, figsize=(13, 3.2 * len(comps)), sharex=True)
@@ -866,16 +1087,47 @@ def bars_figure(st, *, comps, all_comps, names, t2, key_threshold: float, title:
     return fig
 
 
+#: Fig. 4's caption (:func:`fig04_figure` at its default colour scale); fields: ``n_points``,
+#: ``n_per_diagonal``, ``rms_mean`` (RMS difference of the points' mean indices to Table 2) and
+#: ``rms_single`` (the same at the best single pose).
+FIG04 = Caption(
+    "fig04_indices_per_test_point", "Fig. 4",
+    "Closed-form (linear) normalised total Sobol indices of the 41 errors (rows) for the "
+    "position error Px, Py, Pz and the tool-axis direction error Vx, Vy, Vz, at the {n_points} "
+    "test points on the four workspace diagonals (columns, {n_per_diagonal} per diagonal, white "
+    "lines between diagonals); colour scale 0 to 0.3. The paper's Fig. 4 only shows where the "
+    "points lie; the rotary angles are not given, so A and C sweep the same fraction of their "
+    "travel as x, y, z (an assumption). The key errors change from point to point; their mean "
+    "does not fit Table 2 (RMS difference {rms_mean:.4f}, against {rms_single:.4f} at the best "
+    "single pose).",
+    rows=("Section 3.2",))
+
+
 def fig04_figure(s_tp, *, comps, names, diagonal, vmax: float = 0.3):
     """Fig. 4's test points: the linear total index of every error at every test point.
 
     Errors are rows (named), test points columns (numbered 1..N along the diagonals, which
     white lines separate), one heat map per component, two rows of three; the first point of
     each diagonal and the last point are numbered, and every point has a tick (up to 60
-    points).
+    points).  Caption: :data:`FIG04`.
 
-    ``s_tp`` (N, len(comps), 41): indices per point; ``names`` (41,): the error names;
-    ``diagonal`` (N,): the diagonal (0-3) of each point, points of one diagonal consecutive."""
+    Parameters
+    ----------
+    s_tp : array (N, len(comps), 41)
+        Indices per test point.
+    comps : sequence of str
+        The components, one panel each (six).
+    names : sequence of str
+        The 41 error names.
+    diagonal : array of int (N,)
+        The diagonal (0-3) of each point, points of one diagonal consecutive.
+    vmax : float
+        The top of the colour scale.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib.pyplot as plt  # local: heavy, needed only by the figures
 
     n_pts = s_tp.shape[0]
@@ -904,3 +1156,94 @@ def fig04_figure(s_tp, *, comps, names, diagonal, vmax: float = 0.3):
     fig.suptitle("Linear total index of each error at each test point on the four workspace "
                  "diagonals")
     return fig
+
+
+# --- the chapter's figures, in the book's order ----------------------------------------------
+
+FIGURES = figures(
+    FIG04,
+    FIG05,
+    FIG06,
+    Caption("fig07_convergence", "Fig. 7",
+            "Convergence of d_xc in Px (a), d_yc in Py (b) and d_za in Pz (c) at Fig. 4 "
+            "{where}, with a new seeded design at each size (PCE up to {pce_largest}). MCS and "
+            "LHS are shown with the size read as base samples N (solid) and as model runs 43 N "
+            "(dashed, from 10 base samples); dotted: the exact index. Bottom: fluctuation R "
+            "(Eq. 24) given to the larger size, with the paper's 3 % criterion dashed. R at 1e3 "
+            "(the step that ends there) is {r_base} read as base samples and {r_runs} read as "
+            "model runs; the paper reports above 10 %."),
+    Caption("pce_benchmarks", "Beyond the paper",
+            "Sparse PCE on benchmark functions with exact Sobol indices, not the machine model. "
+            "(a) Ishigami, n = {n_ishigami}: exact total indices, recovered by a Legendre PCE "
+            "(the uniform inputs' basis; largest error {err_legendre:.0e}) but not by a Hermite "
+            "PCE after a normal transform (largest error {err_hermite:.2f}). (b) Sobol's G "
+            "function in 41 inputs, n = {n_g}, degree at most 3: the first 10 of the 41 total "
+            "indices, {n_below} of them below the exact ones (largest error {err_g:.2f}); the "
+            "validation error {validation_g:.2f} {warned}. (c) G function in 16 inputs, n = 200: "
+            "along the OMP path the corrected leave-one-out error keeps falling (to "
+            "{loo_last:.3f} at {terms_last} terms) while the 5-fold validation error is smallest "
+            "at {terms_best} terms and then turns up."),
+)
+
+
+class Parameters(NotebookParameters):
+    """Notebook 01: Zheng et al. 2024, sparse PCE against MCS and LHS Sobol' indices."""
+
+    stem = "01_zheng2024_pce_sobol_41_errors"
+    seed = param.Integer(2024, bounds=(0, None), doc="seed of every random draw")
+    position_range_um = param.Number(15.0, bounds=(0.0, 1000.0), inclusive_bounds=(False, True),
+                                     doc="translational errors: +/- this range (paper: 15 µm)")
+    angular_range_arcsec = param.Number(10.0, bounds=(0.0, 3600.0),
+                                        inclusive_bounds=(False, True),
+                                        doc="angular errors: +/- this (paper: 10 arcsec)")
+    range_in_sigmas = param.Number(3.0, bounds=(0.5, 10.0),
+                                   doc="the range is this many sd (not stated in the paper)")
+    # its design matrix has n_pce x 13244 entries at degree 3
+    n_pce = param.Integer(1000, bounds=(50, 5000), doc="PCE design size (paper: 1000)")
+    # degree 4 has 148995 terms: minutes per fit
+    pce_degree = param.Integer(3, bounds=(1, 4), doc="total degree of the PCE basis (paper: 3)")
+    # 43 N model runs each, streamed in blocks of 131072 base rows (an LHS design, 1.6 kB a row,
+    # is held whole)
+    n_reference = param.Integer(100000, bounds=(100, 1000000),
+                                doc="MCS and LHS base sample size N (paper: 1e5)")
+    n_per_diagonal = param.Integer(5, bounds=(2, 50),
+                                   doc="test points per workspace diagonal (paper: 5, Fig. 4)")
+    search_starts = param.Integer(32, bounds=(1, 2000),
+                                  doc="random starts of the Table 2 pose search")
+    check_poses = param.Integer(200, bounds=(10, 100000),
+                                doc="random poses checking the ratios the model fixes")
+    average_starts = param.Integer(6, bounds=(1, 200),
+                                   doc="random starts of the two-pose mean search")
+    # the sample sizes of Fig. 7 (paper: up to 1e5); the help is short so that the parameters
+    # cell's line stays within 100 characters
+    convergence_sizes = NumberList([100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000,
+                                    100000], item_type=int, item_bounds=(10, 100000),
+                                   doc="Fig. 7")
+    # above the paper's 1000, so that R at 1000 exists under both readings of Eq. 24
+    pce_convergence_max = param.Integer(2000, bounds=(100, 5000),
+                                        doc="largest PCE design in Fig. 7")
+    select_degrees = NumberList([1, 2, 3], item_type=int, item_bounds=(1, 3),
+                                doc="degrees tried by the corrected-LOO selection")
+    select_q_norms = NumberList([0.5, 0.75, 1.0], item_type=float, item_bounds=(0.0, 1.0),
+                                item_inclusive=(False, True),
+                                doc="q-norms tried by the corrected-LOO selection")
+    bench_n_ishigami = param.Integer(300, bounds=(50, 5000),
+                                     doc="samples of the Ishigami benchmark")
+    bench_max_degree = param.Integer(14, bounds=(1, 20),
+                                     doc="highest degree tried on the Ishigami benchmark")
+    bench_n_g = param.Integer(1000, bounds=(100, 5000),
+                              doc="samples of the 41-input G-function benchmark")
+    key_threshold = param.Number(0.05, bounds=(0.0, 1.0), inclusive_bounds=(False, False),
+                                 doc="key error: normalised total index above this (paper: 0.05)")
+    output_dir = OutputFolder("figures/01_zheng2024_pce_sobol_41_errors",
+                              doc="where figures and tables are written")
+
+    def memory_bytes(self) -> float:
+        # libraries and figures, then the larger of the Sobol runs (one block of at most 131072
+        # base rows: inputs, 41 x 6 outputs and the estimator's temporaries, about 8 kB a row;
+        # plus the whole LHS design) and the PCE fits (five copies of the design matrix: 13244
+        # columns at degree 3, 11.25 times more at degree 4; the G-function benchmark: three)
+        sobol = 8000 * min(max(self.n_reference, 100000), 131072) + 1600 * self.n_reference
+        pce = (40 * 13244 * max(self.n_pce, self.pce_convergence_max)
+               * max(1.0, 11.25 ** (self.pce_degree - 3)))
+        return 4e8 + max(sobol, pce, 24 * 13244 * self.bench_n_g)
