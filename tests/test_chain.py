@@ -58,28 +58,6 @@ def test_batches_do_not_change_the_result(case):
                                                                         for k, v in one.items()}))
 
 
-@pytest.mark.parametrize("bound", [5e-5, 5e-4, 0.3])
-def test_cos_sin_branches_agree_with_numpy(bound):
-    x = np.random.default_rng(7).uniform(-bound, bound, (3, 4001))
-    c, s, x2 = np.empty_like(x), np.empty_like(x), np.empty_like(x)
-    C._cos_sin_into(x, c, s, x2)
-    c2, s2 = C._cos_sin(x)
-    for cc, ss in ((c, s), (c2, s2)):
-        assert np.abs(cc - np.cos(x)).max() <= 2.3e-16          # one ulp of 1
-        assert np.all(np.abs(ss - np.sin(x)) <= 3e-16 * np.abs(x))
-
-
-def test_exponential_coefficients_series_and_closed_form_agree():
-    t = np.array([0.0, 1e-6, 9.99e-4, 1e-3, 1.01e-3, 0.3, 2.0])
-    a, b, c = C._exp_coefficients(t**2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ref = (np.sin(t) / t, (1 - np.cos(t)) / t**2, (t - np.sin(t)) / t**3)
-    for got, want, at0 in zip((a, b, c), ref, (1.0, 0.5, 1 / 6), strict=True):
-        assert got[0] == at0
-        assert np.allclose(got[3:], want[3:], rtol=1e-9, atol=0)  # closed form is exact there
-        assert np.allclose(got[1:3], [at0, want[2]], rtol=1e-6)
-
-
 def test_a_machine_no_paper_covers_swivel_head_with_pivot():
     m = C.iso_machine("w C b X Y Z B t", pivots={"B": (0.0, 0.0, 150.0)}, tool_offsets=("L",))
     poses = _poses(m.axes, 30)

@@ -52,7 +52,8 @@ rows (structure of arrays) through the factors, innermost first, in chunks of sa
 every product written out in a fixed order (no BLAS call; the same rounding on every CPU).
 :meth:`ChainMachine.jacobian` gives the exact first-order Jacobian at zero errors in
 closed form (each error is a small twist in its frame: ``R_A (w x p_B + v)``), batched over
-poses.
+poses.  The kernels on rows (cos and sin, the exponential's coefficients, the blocks'
+rotations and inverses) are :mod:`mtaccuracy.kinematics`'s.
 
 The papers' machines are three descriptions in their modules (``ac_double_turntable``,
 ``horizontal_3axis``, ``vertical_xyfz``: a topology and a placement each); they reproduced the
@@ -77,7 +78,17 @@ import pandas as pd
 
 from .. import csvlines, validate
 from .. import errors as _errors
-from ..kinematics import homogeneous, matmul3
+from ..kinematics import (
+    ROW_FORMS,
+    cos_sin,
+    cos_sin_into,
+    cross_rows,
+    exp_coefficients,
+    homogeneous,
+    inverse_rows,
+    matmul3,
+    motion_rows,
+)
 from . import units as _units
 from .units import SuspectUnitWarning  # noqa: F401  (the readers' warning, here for readers)
 
@@ -85,7 +96,9 @@ LINEAR = "XYZ"
 ROTARY = "ABC"
 #: coordinate direction of each axis letter (A, B, C rotate about x, y, z)
 DIRECTION = {"X": 0, "Y": 1, "Z": 2, "A": 0, "B": 1, "C": 2}
-FORMS = ("euler", "screw", "rodrigues", "first_order")
+#: the forms of a block of errors: ``euler`` (elementary rotations, applied one by one) and
+#: the forms of :func:`mtaccuracy.kinematics.motion_rows`
+FORMS = ("euler", *ROW_FORMS)
 #: error components of a block: translations along x, y, z, rotations about x, y, z
 COMPONENTS = ("X", "Y", "Z", "A", "B", "C")
 SLOTS = ("motion", "pre", "post", "tilt")
@@ -314,122 +327,6 @@ def _check_placements(topology: Topology, catalogue, placements) -> list[Placeme
         seen[key] = s
         out.append(p)
     return out
-
-
-# ------------------------------------------------------------------------------------------
-# Small numerical kernels on rows (structure of arrays): V is (m, 3, k), R is 3x3 of rows
-# ------------------------------------------------------------------------------------------
-
-def _cos_sin_into(x, c, s, x2):
-    """cos and sin of ``x`` into the buffers ``c`` and ``s`` (``x2``: scratch of x's shape),
-    in place: no temporaries the size of a chunk.  Below 1e-3 rad (every geometric error) by
-    Taylor polynomials whose truncation error is under half an ulp: to x^2 and x^3 below
-    1e-4 rad (errors < x^4/24 < 5e-18 and x^5/120 < 1e-22), to x^4 and x^5 below 1e-3 rad
-    (< x^6/720 and x^7/5040): plain arithmetic, so the same rounding on every CPU (unlike
-    vectorised sin and cos), and several times faster; numpy's above."""
-    m = max(x.max(initial=0.0), -x.min(initial=0.0))
-    if m >= 1e-3:
-        np.cos(x, out=c)
-        np.sin(x, out=s)
-        return
-    np.multiply(x, x, out=x2)
-    if m < 1e-4:                       # c = 1 - x^2/2, s = x (1 - x^2/6)
-        np.multiply(x2, -0.5, out=c)
-        c += 1.0
-        np.multiply(x2, -1.0 / 6.0, out=s)
-        s += 1.0
-        s *= x
-        return
-    # c = 1 - (x^2/2)(1 - x^2/12), s = x (1 - (x^2/6)(1 - x^2/20))
-    np.divide(x2, 12.0, out=c)
-    np.subtract(1.0, c, out=c)
-    np.divide(x2, 20.0, out=s)
-    np.subtract(1.0, s, out=s)
-    np.multiply(x2, 0.5, out=x2)
-    c *= x2
-    np.subtract(1.0, c, out=c)
-    np.multiply(x, x, out=x2)
-    np.divide(x2, 6.0, out=x2)
-    s *= x2
-    np.subtract(1.0, s, out=s)
-    s *= x
-
-
-def _cos_sin(x):
-    """cos and sin of ``x`` by :func:`_cos_sin_into`; a scalar gives Python floats (the
-    operations of one pose then multiply by scalars, the fast case)."""
-    a = np.atleast_1d(np.asarray(x, dtype=float))
-    c, s, x2 = np.empty_like(a), np.empty_like(a), np.empty_like(a)
-    _cos_sin_into(a, c, s, x2)
-    return (float(c[0]), float(s[0])) if np.ndim(x) == 0 else (c, s)
-
-
-def _exp_coefficients(t2):
-    """``a = sin t / t``, ``b = (1 - cos t) / t^2``, ``c = (t - sin t) / t^3`` of ``t2 = t^2``:
-    series below t = 1e-3 (error < 1e-29), sin and cos above."""
-    t2 = np.asarray(t2, dtype=float)
-    a = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0))
-    b = 0.5 - t2 / 24.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0))
-    c = 1.0 / 6.0 - t2 / 120.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0))
-    large = t2 >= 1e-6
-    if np.any(large):
-        t = np.sqrt(t2[large])
-        s, co = np.sin(t), np.cos(t)
-        a[large], b[large], c[large] = s / t, (1.0 - co) / t2[large], (t - s) / (t2[large] * t)
-    return a, b, c
-
-
-def _rotation(form: str, w):
-    """The 3x3 (nested list of rows) of a block's rotation parameters ``w`` (3 rows), forms
-    ``first_order``, ``rodrigues`` and ``screw`` (``euler`` blocks are applied as elementary
-    rotations, :meth:`ChainMachine._ops`)."""
-    wx, wy, wz = w
-    if form == "first_order":
-        return [[1.0, -wz, wy], [wz, 1.0, -wx], [-wy, wx, 1.0]]
-    t2 = wx * wx + wy * wy + wz * wz
-    a, b, _ = _exp_coefficients(t2)
-    ww = [[wx * wx, wx * wy, wx * wz], [wy * wx, wy * wy, wy * wz], [wz * wx, wz * wy, wz * wz]]
-    hat = [[0.0, -wz, wy], [wz, 0.0, -wx], [-wy, wx, 0.0]]
-    diag = 1.0 - b * t2
-    return [[(diag if i == j else 0.0) + a * hat[i][j] + b * ww[i][j] for j in range(3)]
-            for i in range(3)]
-
-
-def _cross(u, v):
-    return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
-
-
-def _block_transform(form: str, d, w):
-    """(R, t) of a block with translations ``d`` and rotation parameters ``w`` (3 rows each)."""
-    r = _rotation(form, w)
-    if form != "screw":
-        return r, d
-    _, b, c = _exp_coefficients(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-    wxd = _cross(w, d)
-    wwxd = _cross(w, wxd)
-    return r, [d[i] + b * wxd[i] + c * wwxd[i] for i in range(3)]
-
-
-def _inverse(form: str, r, t, w):
-    """Inverse (R', t') of the block (R, t): R^T for the rigid forms; for ``first_order``,
-    ``(I + W)^-1 = (I - W + w w^T) / (1 + |w|^2)`` exactly."""
-    if form == "first_order":
-        wx, wy, wz = w
-        den = 1.0 + wx * wx + wy * wy + wz * wz
-        ww = [[wx * wx, wx * wy, wx * wz], [wy * wx, wy * wy, wy * wz],
-              [wz * wx, wz * wy, wz * wz]]
-        minus_w = [[0.0, wz, -wy], [-wz, 0.0, wx], [wy, -wx, 0.0]]
-        ri = [[((1.0 if i == j else 0.0) + minus_w[i][j] + ww[i][j]) / den for j in range(3)]
-              for i in range(3)]
-    else:
-        ri = [[r[j][i] for j in range(3)] for i in range(3)]
-    ti = [-(ri[i][0] * t[0] + ri[i][1] * t[1] + ri[i][2] * t[2]) for i in range(3)]
-    return ri, ti
-
-
-def _cross_axis1(u, v):
-    """:func:`_cross` along axis 1 of (E, 3, ...) arrays (broadcast)."""
-    return np.stack(_cross(np.moveaxis(u, 1, 0), np.moveaxis(v, 1, 0)), axis=1)
 
 
 # ------------------------------------------------------------------------------------------
@@ -672,11 +569,11 @@ class ChainMachine:
         w = [np.zeros(k) for _ in range(3)]
         for j, c, s in zip(b.cols, b.comps, b.signs, strict=True):
             w[c - 3] = e[j] if s == 1.0 else s * e[j]
-        wxe = _cross(w, unit)
+        wxe = cross_rows(w, unit)
         if self.tilt == "first_order":
             return [unit[i] + wxe[i] for i in range(3)]
-        a, bb, _ = _exp_coefficients(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-        wwxe = _cross(w, wxe)
+        a, bb, _ = exp_coefficients(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+        wwxe = cross_rows(w, wxe)
         return [unit[i] + a * wxe[i] + bb * wwxe[i] for i in range(3)]
 
     def _ops(self, e, p, side, axis, slot, k, trig=None):
@@ -692,7 +589,7 @@ class ChainMachine:
                 t = [None if (np.ndim(di) == 0 and di == 0.0) else di * sq for di in d]
                 ops = [("t", t)]
                 return [("t", [None if ti is None else -ti for ti in t])] if side < 0 else ops
-            c, sn = _cos_sin(q)
+            c, sn = cos_sin(q)
             piv = self.pivots.get(axis)
             ops = [("r", DIRECTION[axis], c, -sn if side < 0 else sn)]
             if piv is not None:
@@ -722,10 +619,10 @@ class ChainMachine:
         zero = np.zeros(k)
         dd = [zero if di is None else di for di in d]
         ww = [zero if wi is None else wi for wi in w]
-        r, t = _block_transform(self.form, dd, ww)
+        r, t = motion_rows(dd, ww, form=self.form)
         if side > 0:
             return [("m", r), ("t", t)]
-        ri, _ = _inverse(self.form, r, t, ww)
+        ri, _ = inverse_rows(r, t, ww, form=self.form)
         return [("t", [-ti for ti in t]), ("m", ri)]
 
     @staticmethod
@@ -773,7 +670,7 @@ class ChainMachine:
         trig = {}
         if cols:
             np.take(e_t, cols, axis=0, out=ang, mode="clip")
-            _cos_sin_into(ang, c_all, s_all, x2)
+            cos_sin_into(ang, c_all, s_all, x2)
             trig = {j: (c_all[i], s_all[i]) for i, j in enumerate(cols)}
         for side, axis, slot in reversed(self.factors()):
             self._run(v, self._ops(e_t, p, side, axis, slot, k, trig), scratch)
@@ -1019,11 +916,11 @@ class ChainMachine:
         u = unit[:, :, None]                                      # (E, 3, 1)
         dp = np.where(kind[:, None, None] == 0, u, 0.0)           # translations
         rotn = kind[:, None, None] == 1
-        dp = np.where(rotn, _cross_axis1(u, tip), dp)
+        dp = np.where(rotn, np.cross(u, tip, axis=1), dp)
         q = np.stack([p[self._axis_pose[a_]] if a_ else np.zeros(n) for a_ in tilt_axis])
-        dp = np.where(kind[:, None, None] == 2, _cross_axis1(u, ek[:, :, None])
+        dp = np.where(kind[:, None, None] == 2, np.cross(u, ek[:, :, None], axis=1)
                       * q[:, None, :], dp)
-        dr = (_cross_axis1(u, ax) if self.orientation == "tool_axis"
+        dr = (np.cross(u, ax, axis=1) if self.orientation == "tool_axis"
               else np.broadcast_to(u, dp.shape))
         dr = np.where(rotn, dr, 0.0)
         r_e = ra[pos]                                             # (E, n, 3, 3)
