@@ -7,7 +7,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ..machines import chain
+from ..machines.topology import LINEAR, ROTARY, parse_topology
 
 __all__ = ["chain_figure", "conclusion_numbers"]
 
@@ -37,7 +37,7 @@ def chain_figure(machine, topology: str, *, travels: dict, pivots: dict, tool: d
     -------
     matplotlib.figure.Figure
     """
-    topo = chain.parse_topology(topology)
+    topo = parse_topology(topology)
     fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(11, 3.6),
                                    gridspec_kw={"width_ratios": [2.2, 1]})
     labels = ["workpiece", *reversed(topo.work), "bed", *topo.tool, "tool"]
@@ -46,7 +46,7 @@ def chain_figure(machine, topology: str, *, travels: dict, pivots: dict, tool: d
         side = "table side" if lab in topo.work else "head side" if lab in topo.tool else ""
         c = colour.get(lab, "#1f77b4" if lab in topo.tool else "#ff7f0e")
         ax0.add_patch(plt.Rectangle((i - 0.38, -0.3), 0.76, 0.6, fc=c, alpha=0.25, ec=c))
-        kind = "linear" if lab in chain.LINEAR else "rotary"
+        kind = "linear" if lab in LINEAR else "rotary"
         ax0.text(i, 0, lab if lab in colour else f"{lab}\n{kind}", ha="center", va="center",
                  fontsize=8)
         under = side + (f"\npivot {', '.join(f'{v:g}' for v in pivots[lab])} mm"
@@ -60,13 +60,13 @@ def chain_figure(machine, topology: str, *, travels: dict, pivots: dict, tool: d
     ax0.axis("off")
     ax0.set_title(f"(a) {topology!r}: each body rides on the one towards the bed")
     centre = {a: 0.5 * (lo + hi) for a, (lo, hi) in travels.items()}
-    sweep = next((a for a in topo.tool if a in chain.ROTARY), None)  # the first rotary head axis
+    sweep = next((a for a in topo.tool if a in ROTARY), None)  # the first rotary head axis
     if not sweep:
         ax1.axis("off")
         return fig
     poses = {**{k: np.full(9, v) for k, v in {**centre, **tool}.items()},
              sweep: np.linspace(*travels[sweep], 9),
-             **{a: np.zeros(9) for a in topo.work if a in chain.ROTARY}}
+             **{a: np.zeros(9) for a in topo.work if a in ROTARY}}
     r, t = machine.relative(np.zeros((9, machine.n_errors)), poses, with_errors=False)
     back = t + r[:, :, 2] * tool_length_mm  # the tool: tip to spindle nose
     ax1.plot(np.c_[t[:, 0], back[:, 0]].T, np.c_[t[:, 2], back[:, 2]].T, "-", color="#2ca02c",
