@@ -1,5 +1,6 @@
-"""The generic kinematic chain (machines.chain): topology parsing, the closed-form Jacobian,
-batching, the ISO catalogue and its redundant location errors, a machine no paper covers.
+"""The generic kinematic chain (machines.chain): topology parsing (machines.topology), the
+closed-form Jacobian, batching, the ISO catalogue and its redundant location errors
+(machines.iso), a machine no paper covers.
 The papers' machines are held to independent formulations in their own test files."""
 
 import numpy as np
@@ -7,6 +8,9 @@ import pytest
 
 from mtaccuracy.machines import build
 from mtaccuracy.machines import chain as C
+from mtaccuracy.machines import iso as ISO
+from mtaccuracy.machines import readers as R
+from mtaccuracy.machines import topology as T
 
 RNG = np.random.default_rng(20261124)
 
@@ -58,30 +62,8 @@ def test_batches_do_not_change_the_result(case):
                                                                         for k, v in one.items()}))
 
 
-@pytest.mark.parametrize("bound", [5e-5, 5e-4, 0.3])
-def test_cos_sin_branches_agree_with_numpy(bound):
-    x = np.random.default_rng(7).uniform(-bound, bound, (3, 4001))
-    c, s, x2 = np.empty_like(x), np.empty_like(x), np.empty_like(x)
-    C._cos_sin_into(x, c, s, x2)
-    c2, s2 = C._cos_sin(x)
-    for cc, ss in ((c, s), (c2, s2)):
-        assert np.abs(cc - np.cos(x)).max() <= 2.3e-16          # one ulp of 1
-        assert np.all(np.abs(ss - np.sin(x)) <= 3e-16 * np.abs(x))
-
-
-def test_exponential_coefficients_series_and_closed_form_agree():
-    t = np.array([0.0, 1e-6, 9.99e-4, 1e-3, 1.01e-3, 0.3, 2.0])
-    a, b, c = C._exp_coefficients(t**2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ref = (np.sin(t) / t, (1 - np.cos(t)) / t**2, (t - np.sin(t)) / t**3)
-    for got, want, at0 in zip((a, b, c), ref, (1.0, 0.5, 1 / 6), strict=True):
-        assert got[0] == at0
-        assert np.allclose(got[3:], want[3:], rtol=1e-9, atol=0)  # closed form is exact there
-        assert np.allclose(got[1:3], [at0, want[2]], rtol=1e-6)
-
-
 def test_a_machine_no_paper_covers_swivel_head_with_pivot():
-    m = C.iso_machine("w C b X Y Z B t", pivots={"B": (0.0, 0.0, 150.0)}, tool_offsets=("L",))
+    m = ISO.iso_machine("w C b X Y Z B t", pivots={"B": (0.0, 0.0, 150.0)}, tool_offsets=("L",))
     poses = _poses(m.axes, 30)
     poses["L"] = np.full(30, 120.0)
     jac = m.jacobian(poses)
@@ -102,7 +84,7 @@ def test_a_machine_no_paper_covers_swivel_head_with_pivot():
 
 
 def test_zero_errors_give_zero_and_errors_are_linear_to_first_order():
-    m = C.iso_machine("w C A b Y X Z t")
+    m = ISO.iso_machine("w C A b Y X Z t")
     poses = _poses(m.axes + m.tool_offsets, 50)
     assert np.abs(m.pose_error(np.zeros((50, m.n_errors)), poses)).max() < 1e-12
     jac = m.jacobian(poses)
@@ -116,11 +98,11 @@ def test_zero_errors_give_zero_and_errors_are_linear_to_first_order():
 
 
 def test_iso_catalogue_and_redundant_location_errors():
-    cat, placements = C.iso_catalogue("w C A b Y X Z t")
+    cat, placements = ISO.iso_catalogue("w C A b Y X Z t")
     assert len(cat) == 5 * 6 + 3 + 2 * 4
     assert [e.symbol for e in cat[:6]] == ["EXA", "EYA", "EZA", "EAA", "EBA", "ECA"]
     assert {"EC0Y", "EB0Z", "EA0Z"} <= {e.symbol for e in cat}
-    m = C.iso_machine("w C A b Y X Z t")
+    m = ISO.iso_machine("w C A b Y X Z t")
     removed = dict(m.removed)
     # a shift of the A axis line along y or z is a shift of the Y or Z zero; a C axis line
     # tilted about x turns like the A axis; an x shift of C moves along A's axis
@@ -128,11 +110,11 @@ def test_iso_catalogue_and_redundant_location_errors():
     assert removed["EA0C"] == "same effect as the zero of A"
     assert m.n_errors == 37 and "EB0C" in m.error_names and "EY0C" in m.error_names
     # no redundancy among the three squareness errors of a three-axis machine
-    assert C.iso_machine("w Z b X Y t").removed == []
+    assert ISO.iso_machine("w Z b X Y t").removed == []
 
 
 def test_zheng_location_errors_in_the_moving_reading_are_mostly_set_up():
-    removed = dict(C.redundant_location_errors(build("ac_double_turntable")))
+    removed = dict(ISO.redundant_location_errors(build("ac_double_turntable")))
     assert removed["a_AM"] == "same effect as the zero of A"
     assert removed["d_yCA"] == "same effect as the workpiece set-up along y"
     assert "b_AM" not in removed
@@ -149,19 +131,19 @@ def test_zheng_location_errors_in_the_moving_reading_are_mostly_set_up():
 ])
 def test_bad_topologies_are_refused_with_the_grammar(text, message):
     with pytest.raises(ValueError, match=message):
-        C.parse_topology(text)
+        T.parse_topology(text)
 
 
 def test_topology_forms():
-    t = C.parse_topology("wCAbYXZt")
+    t = T.parse_topology("wCAbYXZt")
     assert t.work == ("A", "C") and t.tool == ("Y", "X", "Z")
-    assert C.parse_topology("w C' A' b Y X Z s t") == C.Topology("w C' A' b Y X Z s t",
+    assert T.parse_topology("w C' A' b Y X Z s t") == T.Topology("w C' A' b Y X Z s t",
                                                                   ("A", "C"), ("Y", "X", "Z"))
     assert "workpiece <- C <- A <- bed -> Y -> X -> Z -> tool" in t.describe()
 
 
 def test_bad_machine_descriptions_are_refused():
-    cat, pl = C.iso_catalogue("w b X Y t")
+    cat, pl = ISO.iso_catalogue("w b X Y t")
     with pytest.raises(ValueError, match="unknown block form 'matrix'"):
         C.ChainMachine("w b X Y t", cat, pl, form="matrix")
     with pytest.raises(ValueError, match=r"no placement for error\(s\) \['EXX'\]"):
@@ -193,7 +175,7 @@ C,0,360,deg,,,
 def test_axis_table_gives_travels_and_pivots(tmp_path):
     f = tmp_path / "axes.csv"
     f.write_text(AXIS_TABLE)
-    travels, pivots = C.read_axis_table(f, "w C b X Y Z B t")
+    travels, pivots = R.read_axis_table(f, "w C b X Y Z B t")
     assert travels["x"] == (-400.0, 400.0) and np.allclose(travels["B"], np.deg2rad([-110, 110]))
     assert set(pivots) == {"B"} and np.array_equal(pivots["B"], [0.0, 0.0, 150.0])
 
@@ -212,7 +194,7 @@ def test_an_inconsistent_axis_table_is_refused(tmp_path, edit, message):
     f = tmp_path / "axes.csv"
     f.write_text(edit(AXIS_TABLE))
     with pytest.raises(ValueError, match=message):
-        C.read_axis_table(f, "w C b X Y Z B t")
+        R.read_axis_table(f, "w C b X Y Z B t")
 
 
 def _range_file(m, tmp_path, rows=None):
@@ -225,35 +207,35 @@ def _range_file(m, tmp_path, rows=None):
 
 
 def test_range_file_gives_bounds_in_library_units(tmp_path):
-    m = C.iso_machine("w C A b Y X Z t")
-    b = C.read_ranges(_range_file(m, tmp_path), m)
+    m = ISO.iso_machine("w C A b Y X Z t")
+    b = R.read_ranges(_range_file(m, tmp_path), m)
     tr = np.array([e.translational for e in m.catalogue])
     assert np.allclose(b[1, tr], 5e-3) and np.allclose(b[1, ~tr], 5e-6) and b.shape == (2, 37)
 
 
 def test_a_range_file_that_does_not_match_the_catalogue_is_refused(tmp_path):
-    m = C.iso_machine("w C A b Y X Z t")
+    m = ISO.iso_machine("w C A b Y X Z t")
     good = [(e.symbol, -5, 5, "um" if e.translational else "urad") for e in m.catalogue]
     with pytest.raises(ValueError, match=r"EY0A.*removed: same effect as the zero of y"):
-        C.read_ranges(_range_file(m, tmp_path, good + [("EY0A", -1, 1, "um")]), m)
+        R.read_ranges(_range_file(m, tmp_path, good + [("EY0A", -1, 1, "um")]), m)
     with pytest.raises(ValueError, match=r"no range for error\(s\) \['EXX'\]"):
-        C.read_ranges(_range_file(m, tmp_path, [r for r in good if r[0] != "EXX"]), m)
+        R.read_ranges(_range_file(m, tmp_path, [r for r in good if r[0] != "EXX"]), m)
     with pytest.raises(ValueError, match=rf"error\(s\) \['{good[0][0]}'\] given more than once"):
-        C.read_ranges(_range_file(m, tmp_path, good + [good[0]]), m)
+        R.read_ranges(_range_file(m, tmp_path, good + [good[0]]), m)
     good = sorted(good, key=lambda r: r[0] != "EXX")                 # EXX first: line 2
     bad = [("EXX", -5, 5, "urad"), *good[1:]]
     with pytest.raises(ValueError, match="EXX is a translation, unit 'urad' is not"):
-        C.read_ranges(_range_file(m, tmp_path, bad), m)
+        R.read_ranges(_range_file(m, tmp_path, bad), m)
     bad = [("EXX", 5, -5, "um"), *good[1:]]
     with pytest.raises(ValueError, match=r"line 2 \(EXX\): the range must be finite with high"):
-        C.read_ranges(_range_file(m, tmp_path, bad), m)
+        R.read_ranges(_range_file(m, tmp_path, bad), m)
     with pytest.raises(FileNotFoundError, match="range file"):
-        C.read_ranges(tmp_path / "nothing.csv", m)
+        R.read_ranges(tmp_path / "nothing.csv", m)
 
 
 def test_every_machine_checks_its_errors_and_pose_the_same_way():
     """What every machine shares (the catalogue's columns, the pose checks), on ChainMachine."""
-    m = C.iso_machine("w C b X Y Z t")
+    m = ISO.iso_machine("w C b X Y Z t")
     assert isinstance(build("horizontal_3axis"), C.ChainMachine)
     assert repr(m) == (f"<ChainMachine 'iso_machine': {m.n_errors} errors, "
                        "axes ('C', 'x', 'y', 'z')>")
@@ -278,11 +260,11 @@ def test_counts_and_seeds_are_checked_by_the_one_helper():
     with pytest.raises(ValueError, match="chunk must be an integer >= 1, got 0"):
         C.ChainMachine("w b X t", m.catalogue[:1], {"dx(x)": C.Placement("X", "motion", 0)},
                        chunk=0)
-    iso = C.iso_machine("w C b X t", keep_redundant=True)
+    iso = ISO.iso_machine("w C b X t", keep_redundant=True)
     with pytest.raises(ValueError, match="n_poses must be an integer >= 1, got 2.5"):
-        C.redundant_location_errors(iso, n_poses=2.5)
+        ISO.redundant_location_errors(iso, n_poses=2.5)
     with pytest.raises(ValueError, match="seed must be"):
-        C.redundant_location_errors(iso, seed=True)
+        ISO.redundant_location_errors(iso, seed=True)
     # the same seed, the same answer (an int or a Generator seeded alike)
-    assert C.redundant_location_errors(iso, seed=3) == C.redundant_location_errors(
+    assert ISO.redundant_location_errors(iso, seed=3) == ISO.redundant_location_errors(
         iso, seed=np.random.default_rng(3))

@@ -6,7 +6,8 @@ from scipy import stats
 
 from mtaccuracy import sensitivity as S
 from mtaccuracy.machines import build
-from mtaccuracy.machines import chain as C
+from mtaccuracy.machines import iso as ISO
+from mtaccuracy.machines import readers as R
 
 
 def test_atlas_table_counts_key_poses_and_dominant_errors_break_ties_by_catalogue():
@@ -73,9 +74,9 @@ def test_checks_take_keywords_after_the_data_and_refuse_bad_counts():
 
 
 def test_catalogue_table():
-    m = C.iso_machine("w b X Y t")
+    m = ISO.iso_machine("w b X Y t")
     b = np.vstack([-np.ones(m.n_errors), np.ones(m.n_errors)]) * 1e-3
-    t = C.catalogue_table(m, b)
+    t = R.catalogue_table(m, b)
     assert list(t.columns) == ["symbol", "kind", "axis", "enters", "component", "low", "high",
                                "unit"]
     row = t.set_index("symbol").loc["EC0Y"]
@@ -83,4 +84,4 @@ def test_catalogue_table():
     assert row.high == pytest.approx(1000.0) and row.unit == "urad"
     assert t.set_index("symbol").loc["EXX", "high"] == pytest.approx(1.0)
     with pytest.raises(ValueError, match=r"bounds must be \(2, 13\)"):
-        C.catalogue_table(m, b[:, :3])
+        R.catalogue_table(m, b[:, :3])

@@ -30,7 +30,8 @@ import mtaccuracy
 #: Modules whose docstrings must carry runnable examples (kinematics, chain building, the pose
 #: error); ``test_the_examples_in_docstrings_run`` runs the examples of every science module.
 WITH_EXAMPLES = ("mtaccuracy.kinematics", "mtaccuracy.errors", "mtaccuracy.machines",
-                 "mtaccuracy.machines.chain", "mtaccuracy.sensitivity.pce")
+                 "mtaccuracy.machines.chain", "mtaccuracy.machines.topology",
+                 "mtaccuracy.machines.iso", "mtaccuracy.sensitivity.pce")
 
 _SECTION = re.compile(r"^(Parameters|Returns|Yields|Raises|Attributes|Notes|References|"
                       r"Examples|See Also|Other Parameters|Warns)\n-{3,}$", re.M)

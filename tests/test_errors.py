@@ -73,12 +73,12 @@ def test_every_code_of_the_package_map_is_what_iso_code_makes_of_its_symbol():
 
 
 def test_the_chain_and_the_catalogues_make_the_same_codes():
-    from mtaccuracy.machines import chain
-    cat, _ = chain.iso_catalogue("w X b Y Z t")
+    from mtaccuracy.machines import iso
+    cat, _ = iso.iso_catalogue("w X b Y Z t")
     three = {s.iso_code for s in errors.three_axis_catalogue()}
     assert three == {s.symbol for s in cat}          # 18 motions and 3 squareness errors
     five = {s.iso_code for s in errors.five_axis_ac_catalogue()}
-    ac, _ = chain.iso_catalogue("w C A b Y X Z t")
+    ac, _ = iso.iso_catalogue("w C A b Y X Z t")
     # the paper's motions and squareness errors are among the chain's codes (its location
     # errors are placed differently: the paper's d_xAM is no ISO 230-7 location error)
     motions = {c for c in five if "0" not in c} | {"EC0Y", "EA0Z", "EB0Z"}

@@ -18,7 +18,8 @@ import pytest
 
 from mtaccuracy import sensitivity as S
 from mtaccuracy.compendium import explore_model as M
-from mtaccuracy.machines import chain
+from mtaccuracy.machines.iso import iso_machine
+from mtaccuracy.machines.topology import parse_topology
 
 TOPOLOGY = "w C b X Y Z B t"      # notebook 06's swivel-head machine
 
@@ -191,7 +192,7 @@ def test_the_slider_update_returns_both_and_is_timed_positive(setups):
 @pytest.mark.parametrize("bad", ["w Q b t", "w X b X t", "b X Y t", ""])
 def test_a_bad_topology_gives_the_library_message(bad):
     with pytest.raises(ValueError) as lib:
-        chain.iso_machine(bad)
+        iso_machine(bad)
     for build in (M.machine_setup, M.topology_setup):
         with pytest.raises(ValueError) as ours:
             build(bad)
@@ -210,7 +211,7 @@ def test_the_app_shows_the_library_message_not_a_traceback():
     before = tab.setup.label
     tab.topology.value = "w C A b Y X Q t"
     with pytest.raises(ValueError) as lib:
-        chain.parse_topology("w C A b Y X Q t")
+        parse_topology("w C A b Y X Q t")
     assert tab.error.visible and html.escape(str(lib.value)) in tab.error.object
     assert "Traceback" not in tab.error.object and tab.setup.label == before
     tab.topology.value = TOPOLOGY                     # a good one replaces the machine

@@ -192,6 +192,27 @@ def test_every_top_level_module_has_a_layer():
     assert {_top(m) for m in MODULES} - {""} == set(LAYER)
 
 
+#: Inside ``machines``, bottom first: the topology grammar and the unit checks; the chain;
+#: what is built on the chain (the ISO catalogue, the file readers); the papers' machines, which
+#: may share descriptions among themselves (horizontal_3axis takes vertical_xyfz's placements).
+#: The package itself (the registry) may import any of them.
+MACHINES_LAYERS = [{"topology", "units"}, {"chain"}, {"iso", "readers"},
+                   {"ac_double_turntable", "horizontal_3axis", "vertical_xyfz"}]
+MACHINES_LAYER = {m: k for k, layer in enumerate(MACHINES_LAYERS) for m in layer}
+
+
+def test_the_machines_modules_import_downwards_only():
+    prefix = "mtaccuracy.machines."
+    inside = {m[len(prefix):] for m in MODULES if m.startswith(prefix)}
+    assert inside == set(MACHINES_LAYER), "every module of machines has a place"
+    top = len(MACHINES_LAYERS) - 1
+    bad = [(m, t) for m, targets in import_graph().items() if m.startswith(prefix)
+           for t in set(targets) if t.startswith(prefix)
+           if not (MACHINES_LAYER[t[len(prefix):]] < MACHINES_LAYER[m[len(prefix):]]
+                   or MACHINES_LAYER[t[len(prefix):]] == MACHINES_LAYER[m[len(prefix):]] == top)]
+    assert not bad, f"imports against {MACHINES_LAYERS} inside machines: {sorted(bad)}"
+
+
 def test_the_graph_sees_local_imports_cycles_and_upward_imports():
     mods = {"mtaccuracy.kinematics": "def f():\n    from .machines import chain\n",
             "mtaccuracy.machines": "",

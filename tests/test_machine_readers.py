@@ -1,10 +1,11 @@
-"""The readers of a researcher's own machine (machines.chain, notebook 06): the topology string,
-the axis table and the range file.  A message about a bad row names the file and the line an
-editor shows.  Inputs no machine could need are refused at once, by their size. A travel too
-large for any machine is refused, and a redundancy explanation is never blank.  A value that
-makes sense only in another unit (metres or inches labelled mm, radians labelled deg, microns
-labelled mm, an angle in a length unit) is refused when no machine tool has it, warned when only
-a rare one does, with the file, the line, the limit and the likely unit (issue 22).
+"""The readers of a researcher's own machine (notebook 06): the topology string
+(machines.topology), the axis table and the range file (machines.readers).  A message about a
+bad row names the file and the line an editor shows.  Inputs no machine could need are refused
+at once, by their size. A travel too large for any machine is refused, and a redundancy
+explanation is never blank.  A value that makes sense only in another unit (metres or inches
+labelled mm, radians labelled deg, microns labelled mm, an angle in a length unit) is refused
+when no machine tool has it, warned when only a rare one does, with the file, the line, the
+limit and the likely unit (issue 22).
 
 The large inputs are built in tmp_path.  No test measures time, but each runs in well under a
 second only while the checks are linear (the quadratic ones took minutes on these inputs)."""
@@ -17,7 +18,9 @@ import pytest
 
 from mtaccuracy import errors
 from mtaccuracy.compendium import paths
-from mtaccuracy.machines import chain as C
+from mtaccuracy.machines import iso as ISO
+from mtaccuracy.machines import readers as R
+from mtaccuracy.machines import topology as T
 from mtaccuracy.machines import units as U
 
 TOPOLOGY = "w C b X Y Z B t"
@@ -60,8 +63,8 @@ def test_a_commented_axis_table_reads_like_a_plain_one(tmp_path):
     plain = "".join(line.split("#")[0].rstrip() + "\n" for line in AXES.splitlines()
                     if line and not line.startswith("#"))
     assert "#" not in plain and plain.count("\n") == 6
-    travels, pivots = C.read_axis_table(_write(tmp_path, AXES), TOPOLOGY)
-    travels0, pivots0 = C.read_axis_table(_write(tmp_path, plain, "plain.csv"), TOPOLOGY)
+    travels, pivots = R.read_axis_table(_write(tmp_path, AXES), TOPOLOGY)
+    travels0, pivots0 = R.read_axis_table(_write(tmp_path, plain, "plain.csv"), TOPOLOGY)
     assert travels == travels0 and travels["y"] == (-300.0, 300.0)
     assert set(pivots) == set(pivots0) == {"B"} and np.array_equal(pivots["B"], [0, 0, 150])
 
@@ -80,7 +83,7 @@ def test_a_bad_row_is_named_by_its_line_in_the_file(tmp_path, newline, old, new,
     line = _line_of(text, new[:2])
     with pytest.raises(ValueError, match=rf"^axis table '{re.escape(str(f))}', line {line} "
                                          rf"\({new[0]}\): {message}"):
-        C.read_axis_table(f, TOPOLOGY)
+        R.read_axis_table(f, TOPOLOGY)
 
 
 # a note column whose quoted value spans four lines and holds a '#' and a blank line
@@ -90,50 +93,50 @@ AXES_NOTE = AXES.replace("pivot_z_mm\n", "pivot_z_mm,note\n").replace(
 
 
 def test_a_quoted_field_over_several_lines_shifts_the_lines_after_it(tmp_path):
-    assert C.read_axis_table(_write(tmp_path, AXES_NOTE), TOPOLOGY)[0] == \
-        C.read_axis_table(_write(tmp_path, AXES, "plain.csv"), TOPOLOGY)[0]
+    assert R.read_axis_table(_write(tmp_path, AXES_NOTE), TOPOLOGY)[0] == \
+        R.read_axis_table(_write(tmp_path, AXES, "plain.csv"), TOPOLOGY)[0]
     text = AXES_NOTE.replace("Z,-250,250,mm", "Z,250,-250,mm")
     assert _line_of(text, "Z,") == 12
     with pytest.raises(ValueError, match=r"line 12 \(Z\): the travel must be finite"):
-        C.read_axis_table(_write(tmp_path, text), TOPOLOGY)
+        R.read_axis_table(_write(tmp_path, text), TOPOLOGY)
     text = AXES_NOTE.replace("X,-400,400,mm", "X,400,-400,mm")      # the record of lines 5-8
     with pytest.raises(ValueError, match=r"lines 5-8 \(X\): the travel must be finite"):
-        C.read_axis_table(_write(tmp_path, text), TOPOLOGY)
+        R.read_axis_table(_write(tmp_path, text), TOPOLOGY)
 
 
 def test_unknown_repeated_and_missing_axes_point_at_their_lines(tmp_path):
     n = len(AXES.splitlines())
     with pytest.raises(ValueError, match=rf"line {n + 1} \(A\), line {n + 2} \(Q\): axis/axes "
                                          r"\['A', 'Q'\] not in the topology"):
-        C.read_axis_table(_write(tmp_path, AXES + "A,0,90,deg,,,\nQ,0,1,mm,,,\n"), TOPOLOGY)
+        R.read_axis_table(_write(tmp_path, AXES + "A,0,90,deg,,,\nQ,0,1,mm,,,\n"), TOPOLOGY)
     with pytest.raises(ValueError, match=rf"lines 5 and {n + 1} \(X\): axis/axes \['X'\] given "
                                          "more than once"):
-        C.read_axis_table(_write(tmp_path, AXES + "X,0,90,mm,,,\n"), TOPOLOGY)
+        R.read_axis_table(_write(tmp_path, AXES + "X,0,90,mm,,,\n"), TOPOLOGY)
     with pytest.raises(ValueError, match=r"\(header on line 4, rows on lines 5-10\): no row for "
                                          r"axis/axes \['C'\]"):
-        C.read_axis_table(_write(tmp_path, AXES.replace("C,0,360,deg,,,\n", "")), TOPOLOGY)
+        R.read_axis_table(_write(tmp_path, AXES.replace("C,0,360,deg,,,\n", "")), TOPOLOGY)
     with pytest.raises(ValueError, match=r"line 4 \(the header\): lacks column\(s\) "
                                          r"\['pivot_z_mm'\]"):
-        C.read_axis_table(_write(tmp_path, AXES.replace("pivot_z_mm", "pivot_z")), TOPOLOGY)
+        R.read_axis_table(_write(tmp_path, AXES.replace("pivot_z_mm", "pivot_z")), TOPOLOGY)
 
 
 def test_a_malformed_csv_is_named_by_its_line(tmp_path):
     with pytest.raises(ValueError, match="line 9: a quoted field opens here and is never closed"):
-        C.read_axis_table(_write(tmp_path, AXES.replace("Z,-250", 'Z,"-250')), TOPOLOGY)
+        R.read_axis_table(_write(tmp_path, AXES.replace("Z,-250", 'Z,"-250')), TOPOLOGY)
     with pytest.raises(ValueError, match=r"line 9: 8 fields, but the header \(line 4\) names 7"):
-        C.read_axis_table(_write(tmp_path, AXES.replace("Z,-250,250,mm,,,",
+        R.read_axis_table(_write(tmp_path, AXES.replace("Z,-250,250,mm,,,",
                                                         "Z,-250,250,mm,,,,7")), TOPOLOGY)
     f = tmp_path / "latin1.csv"
     f.write_bytes(AXES.replace("# the Y axis", "# the Y axis \xb1 1 mm").encode("latin-1"))
     with pytest.raises(ValueError, match="line 7: not UTF-8 text"):
-        C.read_axis_table(f, TOPOLOGY)
+        R.read_axis_table(f, TOPOLOGY)
     with pytest.raises(ValueError, match="has no header line"):
-        C.read_axis_table(_write(tmp_path, "# nothing but a comment\n\n"), TOPOLOGY)
+        R.read_axis_table(_write(tmp_path, "# nothing but a comment\n\n"), TOPOLOGY)
 
 
 @pytest.fixture(scope="module")
 def machine():
-    return C.iso_machine(TOPOLOGY)
+    return ISO.iso_machine(TOPOLOGY)
 
 
 def _ranges(machine, edit=lambda rows: rows):
@@ -153,11 +156,11 @@ def test_the_range_file_names_the_line_of_a_bad_row(tmp_path, machine):
     assert line == 4 + 10 + 1 + 11           # header, ten rows, a comment, EZZ the 21st error
     with pytest.raises(ValueError, match=rf"^range file '{re.escape(str(f))}', line {line} "
                                          r"\(EZZ\): EZZ is a translation, unit 'urad' is not"):
-        C.read_ranges(f, machine)
+        R.read_ranges(f, machine)
     text = _ranges(machine, lambda rows: [r.replace("EXC,-5,5", "EXC,5,-5") for r in rows])
     with pytest.raises(ValueError, match=r"line 5 \(EXC\): the range must be finite with "
                                          "high > low"):
-        C.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
+        R.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
 
 
 def test_the_range_file_points_at_unknown_repeated_and_missing_errors(tmp_path, machine):
@@ -166,17 +169,17 @@ def test_the_range_file_points_at_unknown_repeated_and_missing_errors(tmp_path, 
     with pytest.raises(ValueError, match=rf"line {line} \(EX0C\): error\(s\) \['EX0C'\] not in "
                                          r"the catalogue .*EX0C \(removed: same effect as the "
                                          "zero of x"):
-        C.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
+        R.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
     text = _ranges(machine, lambda rows: [*rows, rows[0]])
     assert text.splitlines()[4] == text.splitlines()[-1] == "EXC,-5,5,um"
     with pytest.raises(ValueError, match=rf"lines 5 and {len(text.splitlines())} \(EXC\): "
                                          r"error\(s\) \['EXC'\] given more than once"):
-        C.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
+        R.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
     text = _ranges(machine, lambda rows: [r for r in rows if not r.startswith("EXX,")])
     last = len(text.splitlines())
     with pytest.raises(ValueError, match=rf"\(header on line 4, rows on lines 5-{last}\): no "
                                          r"range for error\(s\) \['EXX'\]"):
-        C.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
+        R.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
 
 
 # -- sizes ---------------------------------------------------------------------------------
@@ -184,62 +187,62 @@ def test_the_range_file_points_at_unknown_repeated_and_missing_errors(tmp_path, 
 def test_a_huge_topology_is_refused_at_once_with_an_excerpt():
     text = " ".join(["w", "b", *["X"] * 99_997, "t"])            # 100,000 tokens
     with pytest.raises(ValueError) as info:
-        C.parse_topology(text)
+        T.parse_topology(text)
     msg = str(info.value)
-    assert f"is longer than {C.MAX_TOPOLOGY_CHARS} characters" in msg
+    assert f"is longer than {T.MAX_TOPOLOGY_CHARS} characters" in msg
     assert repr(text[:60]) + "... (199999 characters)" in msg and len(msg) < 600
-    with pytest.raises(ValueError, match=rf"has 100 tokens, more than {C.MAX_TOPOLOGY_TOKENS}"):
-        C.parse_topology("w" + "X" * 98 + "t")
+    with pytest.raises(ValueError, match=rf"has 100 tokens, more than {T.MAX_TOPOLOGY_TOKENS}"):
+        T.parse_topology("w" + "X" * 98 + "t")
 
 
 def test_the_topology_cap_is_on_the_characters_and_messages_quote_an_excerpt():
-    padded = "w C b X Y Z B t".ljust(C.MAX_TOPOLOGY_CHARS)
-    assert C.parse_topology(padded).axes == ("C", "X", "Y", "Z", "B")
+    padded = "w C b X Y Z B t".ljust(T.MAX_TOPOLOGY_CHARS)
+    assert T.parse_topology(padded).axes == ("C", "X", "Y", "Z", "B")
     with pytest.raises(ValueError, match="longer than 200 characters"):
-        C.parse_topology(padded + " ")
+        T.parse_topology(padded + " ")
     text = "w b X X" + " " * 150 + "t"
     with pytest.raises(ValueError, match=r"axis \['X'\] appears more than once in topology "
                                          r"'w b X X {53}'\.\.\. \(158 characters\)$"):
-        C.parse_topology(text)
+        T.parse_topology(text)
 
 
 def test_topology_parsing_is_linear(monkeypatch):
     # with the caps lifted, the repeated-axis check of a 100,000-token string (quadratic: about
     # 40 s on the project machine; linear: hundredths of a second)
-    monkeypatch.setattr(C, "MAX_TOPOLOGY_CHARS", 10**9)
-    monkeypatch.setattr(C, "MAX_TOPOLOGY_TOKENS", 10**9)
+    monkeypatch.setattr(T, "MAX_TOPOLOGY_CHARS", 10**9)
+    monkeypatch.setattr(T, "MAX_TOPOLOGY_TOKENS", 10**9)
     text = " ".join(["w", "b", *["X"] * 99_997, "t"])
     with pytest.raises(ValueError, match=r"axis \['X'\] appears more than once .*\.\.\. "
                                          r"\(199999 characters\)$"):
-        C.parse_topology(text)
+        T.parse_topology(text)
 
 
 def test_files_larger_than_any_machine_needs_are_refused_at_once(tmp_path, machine):
-    header = ",".join(C.AXIS_TABLE_COLUMNS) + "\n"
+    header = ",".join(R.AXIS_TABLE_COLUMNS) + "\n"
     f = _write(tmp_path, header + "X,-400,400,mm,,,\n" * 200_000)          # 3.4 MB
     with pytest.raises(ValueError, match=rf"^axis table '{re.escape(str(f))}' is 3400052 bytes, "
-                                         rf"more than the {C.MAX_TABLE_BYTES} bytes allowed"):
-        C.read_axis_table(f, TOPOLOGY)
+                                         rf"more than the {R.MAX_TABLE_BYTES} bytes allowed"):
+        R.read_axis_table(f, TOPOLOGY)
     f = _write(tmp_path, header + "X,0,1,mm,,,\n" * 100_000)               # 1.2 MB
     with pytest.raises(ValueError, match="has 100001 lines, more than the 10000 allowed"):
-        C.read_axis_table(f, TOPOLOGY)
+        R.read_axis_table(f, TOPOLOGY)
     f = _write(tmp_path, header + "X,0,1,mm,,,\n" * 1500)
     with pytest.raises(ValueError, match=r"line 1002: more than 1000 data rows; it should hold "
                                          "one row per axis"):
-        C.read_axis_table(f, TOPOLOGY)
+        R.read_axis_table(f, TOPOLOGY)
     f = _write(tmp_path, "symbol,low,high,unit\n" + "EXX,-5,5,um\n" * 200_000, "ranges.csv")
     with pytest.raises(ValueError, match=r"^range file .* is 2400021 bytes, more than the"):
-        C.read_ranges(f, machine)
+        R.read_ranges(f, machine)
     f = _write(tmp_path, "symbol,low,high,unit\n" + "EXX,-5,5,um\n" * 5000, "ranges.csv")
     with pytest.raises(ValueError, match="line 1002: more than 1000 data rows; it should hold "
                                          "one row per error"):
-        C.read_ranges(f, machine)
+        R.read_ranges(f, machine)
 
 
 def test_a_message_about_many_repeats_stays_short(tmp_path):
-    f = _write(tmp_path, ",".join(C.AXIS_TABLE_COLUMNS) + "\n" + "X,0,1,mm,,,\n" * 900)
+    f = _write(tmp_path, ",".join(R.AXIS_TABLE_COLUMNS) + "\n" + "X,0,1,mm,,,\n" * 900)
     with pytest.raises(ValueError) as info:
-        C.read_axis_table(f, TOPOLOGY)
+        R.read_axis_table(f, TOPOLOGY)
     msg = str(info.value)
     assert msg.endswith(r"lines 2, 3, 4, 5, 6, ... (900 lines) (X): axis/axes ['X'] given more "
                         "than once") and len(msg) < 150 + len(str(f))
@@ -247,14 +250,14 @@ def test_a_message_about_many_repeats_stays_short(tmp_path):
 
 def test_the_checks_of_the_readers_are_linear(tmp_path, machine, monkeypatch):
     # with the caps lifted, 20,000 repeated rows (list.count per row: seconds; now linear)
-    monkeypatch.setattr(C, "MAX_TABLE_ROWS", 10**9)
-    monkeypatch.setattr(C, "MAX_TABLE_BYTES", 10**9)
+    monkeypatch.setattr(R, "MAX_TABLE_ROWS", 10**9)
+    monkeypatch.setattr(R, "MAX_TABLE_BYTES", 10**9)
     f = _write(tmp_path, "symbol,low,high,unit\n" + "EXX,-5,5,um\n" * 20_000, "ranges.csv")
     with pytest.raises(ValueError, match=r"lines 2, 3, 4, 5, 6, ... \(20000 lines\) \(EXX\)"):
-        C.read_ranges(f, machine)
-    f = _write(tmp_path, ",".join(C.AXIS_TABLE_COLUMNS) + "\n" + "Y,0,1,mm,,,\n" * 20_000)
+        R.read_ranges(f, machine)
+    f = _write(tmp_path, ",".join(R.AXIS_TABLE_COLUMNS) + "\n" + "Y,0,1,mm,,,\n" * 20_000)
     with pytest.raises(ValueError, match=r"\(20000 lines\) \(Y\): axis/axes \['Y'\] given"):
-        C.read_axis_table(f, TOPOLOGY)
+        R.read_axis_table(f, TOPOLOGY)
 
 
 # -- travels too large for any machine, and the explanations of redundant errors ------------
@@ -271,12 +274,12 @@ def test_a_travel_or_pivot_no_machine_has_is_refused(tmp_path, old, new, message
     text = AXES.replace(old, new)
     with pytest.raises(ValueError, match=rf"line {_line_of(text, new[:2])} \({new[0]}\): "
                                          + message):
-        C.read_axis_table(_write(tmp_path, text), TOPOLOGY)
+        R.read_axis_table(_write(tmp_path, text), TOPOLOGY)
 
 
 def test_the_bounds_themselves_are_accepted(tmp_path):
     text = AXES.replace("X,-400,400", "X,-1e5,1e5").replace("C,0,360", "C,-3600,3600")
-    travels, _ = C.read_axis_table(_write(tmp_path, text), TOPOLOGY)
+    travels, _ = R.read_axis_table(_write(tmp_path, text), TOPOLOGY)
     assert travels["x"] == (-1e5, 1e5) and np.allclose(travels["C"], [-20 * np.pi, 20 * np.pi])
 
 
@@ -289,7 +292,7 @@ _EFFECT = re.compile(r"the zero of \w+|the workpiece set-up (along|about) [xyz]"
 def test_an_explanation_is_never_blank(travels):
     # a travel of 1e300 mm: the squares in the norm of a Jacobian column overflowed, the unit
     # column came out all zeros and was "explained" by no term: "same effect as "
-    removed = C.iso_machine(TOPOLOGY, travels=travels).removed
+    removed = ISO.iso_machine(TOPOLOGY, travels=travels).removed
     assert removed
     for symbol, reason in removed:
         assert reason.strip() and not reason.rstrip().endswith("as"), (symbol, reason)
@@ -299,17 +302,17 @@ def test_an_explanation_is_never_blank(travels):
 
 
 def test_a_combination_the_fit_cannot_name_is_said_in_words():
-    assert C._same_effect(["the zero of x", "EA0C"]) == "same effect as the zero of x + EA0C"
-    words = C._same_effect([])
+    assert ISO._same_effect(["the zero of x", "EA0C"]) == "same effect as the zero of x + EA0C"
+    words = ISO._same_effect([])
     assert not words.rstrip().endswith("as") and "none of which could be named" in words
 
 
 def test_a_travel_beyond_floating_point_is_refused_by_the_rank_test():
     with pytest.raises(ValueError, match=r"the travel \(-inf, inf\) of x is not finite"):
-        C.iso_machine(TOPOLOGY, travels={"x": (-np.inf, np.inf)})
+        ISO.iso_machine(TOPOLOGY, travels={"x": (-np.inf, np.inf)})
     with pytest.raises(ValueError, match=r"travel \(-1e\+308, 1e\+308\) of x is not finite "
                                          r"\(or its width overflows\)"):
-        C.iso_machine(TOPOLOGY, travels={"x": (-1e308, 1e308)})
+        ISO.iso_machine(TOPOLOGY, travels={"x": (-1e308, 1e308)})
 
 
 # -- units: a value that makes sense only in another unit (issue 22) ------------------------
@@ -358,7 +361,7 @@ def test_a_travel_in_another_unit_is_refused_with_the_likely_unit(tmp_path, old,
     f = _write(tmp_path, text)
     with pytest.raises(ValueError, match=rf"^axis table '{re.escape(str(f))}', line "
                                          rf"{_line_of(text, new[:2])} \({new[0]}\): {message}"):
-        C.read_axis_table(f, TOPOLOGY)
+        R.read_axis_table(f, TOPOLOGY)
 
 
 @pytest.mark.parametrize("old, new, message", [
@@ -377,14 +380,14 @@ def test_a_travel_in_another_unit_is_refused_with_the_likely_unit(tmp_path, old,
 def test_a_travel_only_a_rare_machine_has_is_warned_and_used(tmp_path, old, new, message):
     text = AXES.replace(old, new)
     f = _write(tmp_path, text)
-    with pytest.warns(C.SuspectUnitWarning) as record:
-        travels, _ = C.read_axis_table(f, TOPOLOGY)
+    with pytest.warns(U.SuspectUnitWarning) as record:
+        travels, _ = R.read_axis_table(f, TOPOLOGY)
     assert len(record) == 1 and record[0].filename == __file__          # the caller's line
     assert re.match(rf"^axis table '{re.escape(str(f))}', line {_line_of(text, new[:2])} "
                     rf"\({new[0]}\): {message}", str(record[0].message)), str(record[0].message)
     lo, hi = (float(x) for x in new.split(",")[1:3])
-    name = new[0].lower() if new[0] in C.LINEAR else new[0]
-    scale = 1.0 if new[0] in C.LINEAR else np.pi / 180
+    name = new[0].lower() if new[0] in T.LINEAR else new[0]
+    scale = 1.0 if new[0] in T.LINEAR else np.pi / 180
     assert travels[name] == pytest.approx((lo * scale, hi * scale))   # used as written
 
 
@@ -411,9 +414,9 @@ def _axis_table(travels, si=None):
     (still labelled mm or deg)."""
     rows = []
     for a, (lo, hi) in travels.items():
-        k = 1.0 if a != si else 1e-3 if a in C.LINEAR else np.pi / 180
-        rows.append(f"{a},{lo * k:.5g},{hi * k:.5g},{'mm' if a in C.LINEAR else 'deg'},,,")
-    return ",".join(C.AXIS_TABLE_COLUMNS) + "\n" + "\n".join(rows) + "\n"
+        k = 1.0 if a != si else 1e-3 if a in T.LINEAR else np.pi / 180
+        rows.append(f"{a},{lo * k:.5g},{hi * k:.5g},{'mm' if a in T.LINEAR else 'deg'},,,")
+    return ",".join(R.AXIS_TABLE_COLUMNS) + "\n" + "\n".join(rows) + "\n"
 
 
 @pytest.mark.parametrize("kind", REAL_MACHINES)
@@ -425,7 +428,7 @@ def test_real_machines_are_read_quietly_and_their_metres_and_radians_are_caught(
     missed = set()
     for a, (lo, hi) in travels.items():
         f = _write(tmp_path, _axis_table(travels, si=a), "si.csv")
-        linear = a in C.LINEAR
+        linear = a in T.LINEAR
         span = (hi - lo) * (1e-3 if linear else np.pi / 180)     # as the file now reads
         likely = "m" if linear else "rad"
         if span < (1 if linear else 5) or (not linear and span < 15):
@@ -433,10 +436,10 @@ def test_real_machines_are_read_quietly_and_their_metres_and_radians_are_caught(
             # as whole multiples of 5 deg in radians, true of every machine here)
             with pytest.raises(ValueError, match=rf"line \d+ \({a}\): the travel .* likely in "
                                                  rf"{likely} \(write "):
-                C.read_axis_table(f, topology)
+                R.read_axis_table(f, topology)
         elif span < (10 if linear else 15):
-            with pytest.warns(C.SuspectUnitWarning, match=rf"\({a}\): .*if it is in {likely}"):
-                C.read_axis_table(f, topology)
+            with pytest.warns(U.SuspectUnitWarning, match=rf"\({a}\): .*if it is in {likely}"):
+                R.read_axis_table(f, topology)
         else:
             _read_axes_quietly(f, topology)
             missed.add(a)
@@ -446,7 +449,7 @@ def test_real_machines_are_read_quietly_and_their_metres_and_radians_are_caught(
 def _read_axes_quietly(f, topology=TOPOLOGY):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        return C.read_axis_table(f, topology)
+        return R.read_axis_table(f, topology)
 
 
 def _edit_row(symbol, new):
@@ -494,7 +497,7 @@ def test_a_range_in_another_unit_is_refused_with_the_likely_unit(tmp_path, machi
     with pytest.raises(ValueError, match=rf"^range file '{re.escape(str(f))}', line "
                                          rf"{_line_of(text, symbol + ',')} \({symbol}\): "
                                          rf"{message}"):
-        C.read_ranges(f, machine)
+        R.read_ranges(f, machine)
 
 
 @pytest.mark.parametrize("symbol, new, message", [
@@ -522,8 +525,8 @@ def test_a_range_only_a_rare_machine_has_is_warned_and_used(tmp_path, machine, s
                                                            message):
     text = _ranges(machine, _edit_row(symbol, new))
     f = _write(tmp_path, text, "ranges.csv")
-    with pytest.warns(C.SuspectUnitWarning) as record:
-        bounds = C.read_ranges(f, machine)
+    with pytest.warns(U.SuspectUnitWarning) as record:
+        bounds = R.read_ranges(f, machine)
     assert len(record) == 1 and record[0].filename == __file__
     assert re.match(rf"^range file '{re.escape(str(f))}', line {_line_of(text, symbol + ',')} "
                     rf"\({symbol}\): {message}", str(record[0].message)), str(record[0].message)
@@ -539,15 +542,15 @@ def test_a_file_written_wholly_in_another_unit_warns_a_few_times_and_names_the_r
     text = _ranges(machine, lambda rows: [r.replace("-5,5,um", "-5,5,mm") for r in rows])
     f = _write(tmp_path, text, "ranges.csv")
     n = sum(e.translational for e in machine.catalogue)
-    with pytest.warns(C.SuspectUnitWarning) as record:
-        C.read_ranges(f, machine)
+    with pytest.warns(U.SuspectUnitWarning) as record:
+        R.read_ranges(f, machine)
     messages = [str(w.message) for w in record]
-    assert len(messages) == C.MAX_UNIT_WARNINGS + 1 and n > C.MAX_UNIT_WARNINGS
+    assert len(messages) == R.MAX_UNIT_WARNINGS + 1 and n > R.MAX_UNIT_WARNINGS
     assert all("reaches 5 mm, more than the 1 mm" in m for m in messages[:-1])
     lines = [i for i, line in enumerate(text.splitlines(), 1) if ",mm" in line]
-    assert messages[-1] == (f"range file {str(f)!r}: {n - C.MAX_UNIT_WARNINGS} more row(s) "
+    assert messages[-1] == (f"range file {str(f)!r}: {n - R.MAX_UNIT_WARNINGS} more row(s) "
                             f"with a value that suggests another unit, at "
-                            + ", ".join(f"line {i}" for i in lines[C.MAX_UNIT_WARNINGS:]))
+                            + ", ".join(f"line {i}" for i in lines[R.MAX_UNIT_WARNINGS:]))
 
 
 def test_a_refused_file_warns_of_nothing(tmp_path, machine):
@@ -556,7 +559,7 @@ def test_a_refused_file_warns_of_nothing(tmp_path, machine):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         with pytest.raises(ValueError, match=r"\(EZZ\): the range \(-50, 50\) mm reaches 50 mm"):
-            C.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
+            R.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
 
 
 def test_the_limits_themselves_and_typical_ranges_are_read_quietly(tmp_path, machine):
@@ -569,7 +572,7 @@ def test_the_limits_themselves_and_typical_ranges_are_read_quietly(tmp_path, mac
         for r in rows])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        bounds = C.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
+        bounds = R.read_ranges(_write(tmp_path, text, "ranges.csv"), machine)
     col = machine.error_names.index
     assert bounds[1, col("EXX")] == 1.0 and bounds[1, col("EBX")] == 1e-3
     assert bounds[1, col("EAX")] == pytest.approx(15 * np.pi / 180 / 3600)
@@ -594,10 +597,10 @@ def test_the_shipped_machine_files_are_read_quietly():
     folder = paths.DATA / "machines"
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        travels, pivots = C.read_axis_table(folder / "swivel_head_axes.csv", TOPOLOGY)
-        machine = C.iso_machine(TOPOLOGY, pivots=pivots, travels=travels,
+        travels, pivots = R.read_axis_table(folder / "swivel_head_axes.csv", TOPOLOGY)
+        machine = ISO.iso_machine(TOPOLOGY, pivots=pivots, travels=travels,
                                 tool_offsets=("tool_x", "tool_y", "tool_z"))
-        bounds = C.read_ranges(folder / "swivel_head_ranges.csv", machine)
+        bounds = R.read_ranges(folder / "swivel_head_ranges.csv", machine)
     assert bounds.shape == (2, machine.n_errors)
 
 
@@ -609,10 +612,10 @@ def test_a_travel_on_the_refusal_limit_is_warned_and_below_it_refused(tmp_path, 
     f = _write(tmp_path, AXES.replace(*edit))
     if refused:
         with pytest.raises(ValueError, match=rf"\({edit[1][0]}\): the travel .* less than the"):
-            C.read_axis_table(f, TOPOLOGY)
+            R.read_axis_table(f, TOPOLOGY)
     else:
-        with pytest.warns(C.SuspectUnitWarning, match=rf"\({edit[1][0]}\): the travel"):
-            C.read_axis_table(f, TOPOLOGY)
+        with pytest.warns(U.SuspectUnitWarning, match=rf"\({edit[1][0]}\): the travel"):
+            R.read_axis_table(f, TOPOLOGY)
 
 
 @pytest.mark.parametrize("row, refused", [
@@ -626,13 +629,13 @@ def test_a_range_on_the_refusal_limit_is_warned_and_beyond_it_refused(tmp_path, 
     if refused:
         with pytest.raises(ValueError, match=rf"\({row[:3]}\): the range .* more than the "
                                              r"(10 mm|0\.01 rad) "):
-            C.read_ranges(f, machine)
+            R.read_ranges(f, machine)
     else:
-        with pytest.warns(C.SuspectUnitWarning, match=rf"\({row[:3]}\): the range .* more than "
+        with pytest.warns(U.SuspectUnitWarning, match=rf"\({row[:3]}\): the range .* more than "
                                                       r"the (1 mm|1000 um \(1 mm\)|0\.001 rad|"
                                                       r"1000 urad \(0\.001 rad\)) .*used as "
                                                       r"written$"):
-            C.read_ranges(f, machine)
+            R.read_ranges(f, machine)
 
 
 def test_the_plausibility_limits_know_every_unit_the_range_file_takes():
@@ -641,4 +644,4 @@ def test_the_plausibility_limits_know_every_unit_the_range_file_takes():
     assert set(taken) == set(errors.UNIT_SCALE)
     for unit, (lim, _) in taken.items():     # the same size: mm and rad are the library's units
         assert lim.units[unit] == pytest.approx(errors.UNIT_SCALE[unit], rel=1e-15), unit
-    assert U.LINEAR_TRAVEL.bound == C.MAX_LINEAR_MM and U.ROTARY_TRAVEL.bound == C.MAX_ROTARY_DEG
+    assert U.LINEAR_TRAVEL.bound == R.MAX_LINEAR_MM and U.ROTARY_TRAVEL.bound == R.MAX_ROTARY_DEG

@@ -1,9 +1,9 @@
 """The parameter checks notebooks 02 and 04 call (compendium.rong, compendium.xu2022)."""
 
 import pytest
+from mtaccuracy.compendium.parameters import ParameterError
 
 from mtaccuracy.compendium import rong, xu2022
-from mtaccuracy.compendium.parameters import ParameterError
 
 GOOD = dict(workspace_mm=[800, 700, 600], tool_offset_mm=[0, 0, 100],
             sweep_thresholds=[0.5, 0.99, 0.01], tool_lengths_mm=[0, 300, 10], n_plot=100,

@@ -4,8 +4,6 @@ canonical pose, canonical ranking of optimiser output, least-squares fit of a kn
 import numpy as np
 import pandas as pd
 import pytest
-
-from mtaccuracy import sensitivity as S
 from mtaccuracy.compendium.zheng2024 import (
     POSE_SYMMETRIES,
     canonical_pose,
@@ -16,6 +14,8 @@ from mtaccuracy.compendium.zheng2024 import (
     rank_poses,
     ratio_interval,
 )
+
+from mtaccuracy import sensitivity as S
 from mtaccuracy.machines import build
 
 M = build("ac_double_turntable")

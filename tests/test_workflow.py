@@ -141,7 +141,7 @@ def test_normalise_removes_what_differs_between_identical_runs():
     assert "/x" not in json.dumps(shown)
 
 
-# --- publishing: only what the previous run wrote is replaced --------------------------------------
+# --- publishing: only what the previous run wrote is replaced ----------------------------------
 
 def _run_folder(path: Path, stem: str, files: dict[str, str]) -> Path:
     path.mkdir(parents=True, exist_ok=True)
@@ -224,7 +224,7 @@ def test_summarise_counts_each_verdict_per_row(tmp_path):
                                                                  "verdict_stability.csv"}
 
 
-# --- one real run of a tiny notebook ---------------------------------------------------------------
+# --- one real run of a tiny notebook -----------------------------------------------------------
 
 TINY = '''import param
 from mtaccuracy.compendium import notebook, reproduction

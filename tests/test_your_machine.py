@@ -12,7 +12,8 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
-from mtaccuracy.machines import chain  # noqa: E402
+from mtaccuracy.machines.iso import iso_machine  # noqa: E402
+from mtaccuracy.machines.readers import read_axis_table  # noqa: E402
 from mtaccuracy.papers import parameters, your_machine  # noqa: E402
 
 TOPOLOGY = "w C b X Y Z B t"
@@ -21,10 +22,10 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.fixture(scope="module")
 def swivel_head():
-    travels, pivots = chain.read_axis_table(ROOT / "data" / "machines" / "swivel_head_axes.csv",
-                                            TOPOLOGY)
-    machine = chain.iso_machine(TOPOLOGY, pivots=pivots, travels=travels,
-                                tool_offsets=("tool_x", "tool_y", "tool_z"), name="m")
+    travels, pivots = read_axis_table(ROOT / "data" / "machines" / "swivel_head_axes.csv",
+                                      TOPOLOGY)
+    machine = iso_machine(TOPOLOGY, pivots=pivots, travels=travels,
+                          tool_offsets=("tool_x", "tool_y", "tool_z"), name="m")
     return machine, travels, pivots
 
 
@@ -49,7 +50,7 @@ def test_the_chain_figure_draws_every_body_and_the_tool_over_the_head_axis(swive
 
 def test_without_a_rotary_head_axis_the_tool_panel_is_blank():
     topo = "w X b Y Z t"
-    machine = chain.iso_machine(topo, tool_offsets=("tool_x", "tool_y", "tool_z"), name="m3")
+    machine = iso_machine(topo, tool_offsets=("tool_x", "tool_y", "tool_z"), name="m3")
     travels = {a: (-100.0, 100.0) for a in "XYZ"}
     fig = your_machine.chain_figure(machine, topo, travels=travels, pivots={},
                                     tool=dict(tool_x=0.0, tool_y=0.0, tool_z=-50.0),

@@ -8,9 +8,11 @@ Where things are
 Science (usable without this repository; none of it imports :mod:`mtaccuracy.compendium`):
 
 =======================  ================================================================
-``kinematics``           homogeneous transforms, rotations, pose differences
+``kinematics``           homogeneous transforms, rotations, pose differences, the chain's
+                         kernels
 ``errors``               the geometric error catalogue (ISO 230-1 names), ranges, sampling
-``machines``             kinematic chains of any machine (``machines.chain``) and the
+``machines``             kinematic chains of any machine (``machines.chain``; topologies,
+                         ISO catalogues and file readers beside it) and the
                          three papers' machines built on it
 ``sensitivity``          Sobol' (sampling, PCE, linear closed form), Spearman, screening
 ``spindle``              multi-probe spindle error separation, probe-layout design

@@ -1,7 +1,7 @@
 """CSV records with the lines an editor shows, so that a message about a bad row names its line.
 
 The one place the readers of measurement and machine files (:mod:`mtaccuracy.thermal.io`,
-:mod:`mtaccuracy.machines.chain`) learn where a record stands.
+:mod:`mtaccuracy.machines.readers`) learn where a record stands.
 
 pandas and the csv module number records, not lines: blank lines are skipped, comment lines
 dropped, and a quoted field may span several lines.  :func:`records` reads the text with the

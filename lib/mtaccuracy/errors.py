@@ -32,7 +32,7 @@ ISO_COMPONENTS = "XYZABC"
 def iso_code(component: str, axis: str, *, zero: bool = False) -> str:
     """The ISO 230-1 code of an error: ``E``, the component, ``0`` for an axis line, the axis.
 
-    The library's one maker of codes (the catalogues here and :func:`mtaccuracy.machines.chain.
+    The library's one maker of codes (the catalogues here and :func:`mtaccuracy.machines.iso.
     iso_catalogue` use it; ``data/iso230_names.csv`` is checked against it by the tests).
 
     Parameters

@@ -3,6 +3,20 @@
 Every function takes arrays whose *last* axes carry the geometry (3-vectors, 4x4 matrices)
 and broadcasts over any leading axes, so ``(n, 3)`` error samples give ``(n, 4, 4)``
 transforms without a Python loop.  Units: mm and rad.
+
+The kernels of :class:`mtaccuracy.machines.chain.ChainMachine` use the transposed layout
+(*rows*, a structure of arrays): a 3-vector is a list of its three coordinates, each a scalar
+or an array of samples, and a 3x3 matrix a nested list of three rows of three; every product
+is written out in a fixed order (no BLAS call, so the same rounding on every CPU), and a
+scalar coordinate (one pose for every sample) keeps the arithmetic cheap.  They are
+:func:`cos_sin` (:func:`cos_sin_into` in place), :func:`exp_coefficients`,
+:func:`cross_rows`, :func:`rotation_rows`, :func:`motion_rows` and :func:`inverse_rows`;
+the last three take the ``form`` of a block of small errors (``screw``, ``rodrigues``,
+``first_order``: see :mod:`mtaccuracy.machines.chain`).  They are not :func:`rotation_exp`
+and :func:`screw_exp` rewritten: their series hold up to 1e-3 rad (those two switch to the
+closed form at 1e-8 and 1e-6 rad, where ``(1 - cos t) / t^2`` loses digits to cancellation:
+about 1e-11 of ``|d|`` in the translation of :func:`screw_exp` at 1e-5 rad) and they sum in
+another order, so the two agree closely, not bit for bit.
 """
 
 from __future__ import annotations
@@ -295,3 +309,268 @@ def matmul3(r: np.ndarray, s: np.ndarray) -> np.ndarray:
     """
     return (r[:, :, 0, None] * s[:, None, 0, :] + r[:, :, 1, None] * s[:, None, 1, :]
             + r[:, :, 2, None] * s[:, None, 2, :])
+
+
+# ------------------------------------------------------------------------------------------
+# Kernels on rows (structure of arrays): a 3-vector is a list of 3 rows, a 3x3 a list of 3 x 3
+# ------------------------------------------------------------------------------------------
+
+#: The forms of a block of errors the row kernels take (the chain's ``euler`` form is applied
+#: as elementary rotations instead, :class:`mtaccuracy.machines.chain.ChainMachine`).
+ROW_FORMS = ("screw", "rodrigues", "first_order")
+
+
+def cos_sin_into(x: np.ndarray, cos: np.ndarray, sin: np.ndarray,
+                 scratch: np.ndarray) -> None:
+    """Cosine and sine of ``x`` into the buffers ``cos`` and ``sin``, in place.
+
+    No temporaries the size of ``x``.  Below 1e-3 rad (every geometric error) by Taylor
+    polynomials whose truncation error is under half an ulp: to x^2 and x^3 below 1e-4 rad
+    (errors < x^4/24 < 5e-18 and x^5/120 < 1e-22), to x^4 and x^5 below 1e-3 rad (< x^6/720 and
+    x^7/5040): plain arithmetic, so the same rounding on every CPU (unlike vectorised sin and
+    cos), and several times faster; numpy's ``cos`` and ``sin`` when any ``|x|`` reaches
+    1e-3.
+
+    Parameters
+    ----------
+    x : ndarray of float
+        Angles (rad), any shape; left unchanged.
+    cos, sin : ndarray of float
+        Buffers of ``x``'s shape that receive the cosines and the sines.
+    scratch : ndarray of float
+        A buffer of ``x``'s shape, overwritten.
+    """
+    m = max(x.max(initial=0.0), -x.min(initial=0.0))
+    if m >= 1e-3:
+        np.cos(x, out=cos)
+        np.sin(x, out=sin)
+        return
+    x2 = scratch
+    np.multiply(x, x, out=x2)
+    if m < 1e-4:                       # c = 1 - x^2/2, s = x (1 - x^2/6)
+        np.multiply(x2, -0.5, out=cos)
+        cos += 1.0
+        np.multiply(x2, -1.0 / 6.0, out=sin)
+        sin += 1.0
+        sin *= x
+        return
+    # c = 1 - (x^2/2)(1 - x^2/12), s = x (1 - (x^2/6)(1 - x^2/20))
+    np.divide(x2, 12.0, out=cos)
+    np.subtract(1.0, cos, out=cos)
+    np.divide(x2, 20.0, out=sin)
+    np.subtract(1.0, sin, out=sin)
+    np.multiply(x2, 0.5, out=x2)
+    cos *= x2
+    np.subtract(1.0, cos, out=cos)
+    np.multiply(x, x, out=x2)
+    np.divide(x2, 6.0, out=x2)
+    sin *= x2
+    np.subtract(1.0, sin, out=sin)
+    sin *= x
+
+
+def cos_sin(x):
+    """Cosine and sine of ``x`` by :func:`cos_sin_into`, into new arrays.
+
+    Parameters
+    ----------
+    x : float or array_like
+        Angles (rad).
+
+    Returns
+    -------
+    cos, sin : float or ndarray
+        Python floats for a scalar ``x`` (the operations of one pose then multiply by
+        scalars, the fast case), else arrays of ``x``'s shape (at least 1-d).
+
+    Examples
+    --------
+    >>> c, s = cos_sin(1e-5)
+    >>> c, s
+    (0.99999999995, 9.999999999833334e-06)
+    """
+    a = np.atleast_1d(np.asarray(x, dtype=float))
+    c, s, x2 = np.empty_like(a), np.empty_like(a), np.empty_like(a)
+    cos_sin_into(a, c, s, x2)
+    return (float(c[0]), float(s[0])) if np.ndim(x) == 0 else (c, s)
+
+
+def exp_coefficients(theta_sq):
+    """The coefficients of the exponentials of rotations and twists, from the squared angle.
+
+    ``a = sin t / t``, ``b = (1 - cos t) / t^2`` and ``c = (t - sin t) / t^3`` of ``t^2 =
+    theta_sq``: Rodrigues' ``exp([w]x) = I + a [w]x + b [w]x^2`` and the twist's ``V = I + b
+    [w]x + c [w]x^2`` (:func:`screw_exp`).  Series to t^6 below t = 1e-3 (error < 1e-29),
+    numpy's sin and cos above.
+
+    Parameters
+    ----------
+    theta_sq : float or array_like
+        Squared rotation angles, rad^2 (non-negative).
+
+    Returns
+    -------
+    a, b, c : ndarray or numpy float
+        Of ``theta_sq``'s shape (numpy floats for a scalar).
+    """
+    t2 = np.asarray(theta_sq, dtype=float)
+    if t2.ndim == 0:
+        a, b, c = exp_coefficients(t2[None])
+        return a[0], b[0], c[0]
+    a = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0))
+    b = 0.5 - t2 / 24.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0))
+    c = 1.0 / 6.0 - t2 / 120.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0))
+    large = t2 >= 1e-6
+    if np.any(large):
+        t = np.sqrt(t2[large])
+        s, co = np.sin(t), np.cos(t)
+        a[large], b[large], c[large] = s / t, (1.0 - co) / t2[large], (t - s) / (t2[large] * t)
+    return a, b, c
+
+
+def cross_rows(u, v) -> list:
+    """Cross product ``u x v`` of two 3-vectors given as rows.
+
+    Parameters
+    ----------
+    u, v : sequence of 3 floats or arrays
+        The coordinates of each vector (rows broadcast with one another).
+
+    Returns
+    -------
+    list of 3 floats or arrays
+        The coordinates of ``u x v``.
+    """
+    return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+
+
+def _check_form(form: str) -> None:
+    if form not in ROW_FORMS:
+        raise ValueError(f"unknown form {form!r}; allowed: {', '.join(ROW_FORMS)}")
+
+
+def rotation_rows(w, *, form: str) -> list:
+    """The rotation of a block of small errors with rotation parameters ``w``, as rows.
+
+    ``first_order``: the small-angle matrix ``I + [w]x`` the papers print (not a rotation);
+    ``rodrigues`` and ``screw``: ``exp([w]x) = (1 - b t^2) I + a [w]x + b w w^T``, ``t = |w|``
+    (:func:`exp_coefficients`).
+
+    Parameters
+    ----------
+    w : sequence of 3 floats or arrays
+        Rotation parameters about x, y, z (rad).
+    form : {"screw", "rodrigues", "first_order"}
+        The form of the block (:data:`ROW_FORMS`).
+
+    Returns
+    -------
+    list of 3 lists of 3 floats or arrays
+        The matrix, row by row.
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``form``.
+    """
+    _check_form(form)
+    wx, wy, wz = w
+    if form == "first_order":
+        return [[1.0, -wz, wy], [wz, 1.0, -wx], [-wy, wx, 1.0]]
+    t2 = wx * wx + wy * wy + wz * wz
+    a, b, _ = exp_coefficients(t2)
+    ww = [[wx * wx, wx * wy, wx * wz], [wy * wx, wy * wy, wy * wz], [wz * wx, wz * wy, wz * wz]]
+    hat = [[0.0, -wz, wy], [wz, 0.0, -wx], [-wy, wx, 0.0]]
+    diag = 1.0 - b * t2
+    return [[(diag if i == j else 0.0) + a * hat[i][j] + b * ww[i][j] for j in range(3)]
+            for i in range(3)]
+
+
+def motion_rows(d, w, *, form: str) -> tuple[list, list]:
+    """The rigid motion ``(R, t)`` of a block of small errors, as rows.
+
+    ``R`` is :func:`rotation_rows`; ``t`` is ``d`` (``rodrigues``, ``first_order``) or, for
+    ``screw`` (the exponential of the twist ``(w, d)``), ``V d = d + b w x d + c w x (w x d)``
+    (:func:`exp_coefficients`).
+
+    Parameters
+    ----------
+    d : sequence of 3 floats or arrays
+        Translations along x, y, z (mm).
+    w : sequence of 3 floats or arrays
+        Rotation parameters about x, y, z (rad).
+    form : {"screw", "rodrigues", "first_order"}
+        The form of the block (:data:`ROW_FORMS`).
+
+    Returns
+    -------
+    R : list of 3 lists of 3 floats or arrays
+        The rotation, row by row.
+    t : list of 3 floats or arrays
+        The translation (mm).
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``form``.
+    """
+    r = rotation_rows(w, form=form)
+    if form != "screw":
+        return r, d
+    _, b, c = exp_coefficients(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    wxd = cross_rows(w, d)
+    wwxd = cross_rows(w, wxd)
+    return r, [d[i] + b * wxd[i] + c * wwxd[i] for i in range(3)]
+
+
+def inverse_rows(rotation, translation, w, *, form: str) -> tuple[list, list]:
+    """The inverse ``(R', t')`` of the motion ``(R, t)`` of a block (:func:`motion_rows`).
+
+    ``R' = R^T`` for the rigid forms; for ``first_order``, whose ``I + [w]x`` is not a
+    rotation, ``(I + [w]x)^-1 = (I - [w]x + w w^T) / (1 + |w|^2)`` exactly; ``t' = -R' t``.
+
+    Parameters
+    ----------
+    rotation : list of 3 lists of 3 floats or arrays
+        ``R``, row by row.
+    translation : sequence of 3 floats or arrays
+        ``t`` (mm).
+    w : sequence of 3 floats or arrays
+        The block's rotation parameters (rad), used by ``first_order``.
+    form : {"screw", "rodrigues", "first_order"}
+        The form of the block (:data:`ROW_FORMS`).
+
+    Returns
+    -------
+    R' : list of 3 lists of 3 floats or arrays
+        The inverse rotation, row by row.
+    t' : list of 3 floats or arrays
+        The inverse translation (mm).
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``form``.
+
+    Examples
+    --------
+    >>> r, t = motion_rows([1.0, 2.0, 3.0], [0.0, 0.0, 0.5], form="screw")
+    >>> ri, ti = inverse_rows(r, t, [0.0, 0.0, 0.5], form="screw")
+    >>> back = [sum(ri[i][j] * t[j] for j in range(3)) + ti[i] for i in range(3)]
+    >>> [round(float(x), 12) for x in back]
+    [0.0, 0.0, 0.0]
+    """
+    _check_form(form)
+    r, t = rotation, translation
+    if form == "first_order":
+        wx, wy, wz = w
+        den = 1.0 + wx * wx + wy * wy + wz * wz
+        ww = [[wx * wx, wx * wy, wx * wz], [wy * wx, wy * wy, wy * wz],
+              [wz * wx, wz * wy, wz * wz]]
+        minus_w = [[0.0, wz, -wy], [-wz, 0.0, wx], [wy, -wx, 0.0]]
+        ri = [[((1.0 if i == j else 0.0) + minus_w[i][j] + ww[i][j]) / den for j in range(3)]
+              for i in range(3)]
+    else:
+        ri = [[r[j][i] for j in range(3)] for i in range(3)]
+    ti = [-(ri[i][0] * t[0] + ri[i][1] * t[1] + ri[i][2] * t[2]) for i in range(3)]
+    return ri, ti

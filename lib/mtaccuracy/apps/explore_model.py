@@ -54,7 +54,9 @@ from .. import sensitivity as S
 from .. import spindle as SP
 from .. import thermal
 from ..machines import build
-from ..machines import chain as _chain
+from ..machines.iso import iso_machine
+from ..machines.readers import read_ranges
+from ..machines.topology import ROTARY
 from . import parameters, paths, xu2022
 
 __all__ = [
@@ -183,7 +185,7 @@ class MachineSetup:
 def _rong_half_ranges(machine, range_factor: float = 2.0) -> np.ndarray:
     """Notebook 02's ranges: +- ``range_factor`` x the acceptance band of each error in
     ``data/rong/error_ranges.csv`` (mm, rad), read as the notebook reads it."""
-    return range_factor * _chain.read_ranges(paths.DATA / "rong" / "error_ranges.csv", machine)[1]
+    return range_factor * read_ranges(paths.DATA / "rong" / "error_ranges.csv", machine)[1]
 
 
 def _guo_half_ranges(machine) -> np.ndarray:
@@ -278,10 +280,10 @@ def topology_setup(topology: str) -> MachineSetup:
         For a topology the library refuses, with the library's own message.
     """
     deg = np.rad2deg
-    m = _chain.iso_machine(topology, name="typed topology")
+    m = iso_machine(topology, name="typed topology")
     axes = []
     for a in m.axes:
-        if a in _chain.ROTARY:
+        if a in ROTARY:
             lo, hi = m.travels.get(a, (-np.pi, np.pi))
             axes.append(AxisRange(a, float(deg(lo)), float(deg(hi)),
                                   float(deg(lo + hi) / 2), "deg"))

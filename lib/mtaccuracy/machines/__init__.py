@@ -7,8 +7,9 @@ and ``.pose_error(errors, pose)``: an ``(n, n_errors)`` array (mm, rad) and a po
 ``Px, Py, Pz`` (mm) and the orientation error (rad), named by ``machine.components``: a rotation
 vector ``Rx, Ry, Rz`` (the three-axis machines) or the change of the tool-axis direction
 ``Vx, Vy, Vz`` (the five-axis machine).  Every machine is a :class:`.chain.ChainMachine`: a
-topology and an error placement (see :mod:`.chain`; :func:`.chain.iso_machine` builds any
-other topology with its ISO 230-1 catalogue).
+topology (:mod:`.topology`) and an error placement (see :mod:`.chain`; :func:`.iso.iso_machine`
+builds any other topology with its ISO 230-1 catalogue, :mod:`.readers` reads a reader's
+machine from files).
 
 One module per machine; the registry imports it on first use.
 """

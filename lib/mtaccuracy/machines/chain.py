@@ -1,18 +1,9 @@
-"""One kinematic chain for every machine: a topology string, an error placement, a pose error.
+"""One kinematic chain for every machine: a topology, an error placement, a pose error.
 
 A machine is a serial chain of linear (X, Y, Z) and rotary (A, B, C) axes between the
-workpiece and the tool, written in the spirit of ISO 10791-1 / ISO 230-1 as a string read from
-the workpiece to the tool, with ``b`` for the bed (the machine's base)::
-
-    "w C A b Y X Z t"     workpiece on C, C on A, A on the bed; bed carries Y, Y carries X,
-                          X carries Z, Z carries the spindle and the tool (Zheng et al. 2024)
-    "w Z b X Y t"         workpiece on the Z table; X column carrying the Y headstock (Rong)
-    "w b X Y Z t"         every axis on the tool side, composed X, Y, Z from the workpiece:
-                          the serial reading of Guo et al. 2016's Eq. 9
-    "w C b X Y Z B t"     a swivel-head mill on a rotary table (notebook 06)
-
-An optional ``s`` (spindle) before ``t`` is accepted and ignored.  Each axis ``K`` is the body
-that moves along (or about) the coordinate direction ``k`` of the frame it rides on.
+workpiece and the tool, given as a topology string read from the workpiece to the tool
+(:mod:`.topology`: ``"w C A b Y X Z t"`` is Zheng et al. 2024's machine, ``b`` the bed), and
+a placement of each error of its catalogue in that chain (:class:`Placement`).
 
 The chain
 ---------
@@ -52,199 +43,48 @@ rows (structure of arrays) through the factors, innermost first, in chunks of sa
 every product written out in a fixed order (no BLAS call; the same rounding on every CPU).
 :meth:`ChainMachine.jacobian` gives the exact first-order Jacobian at zero errors in
 closed form (each error is a small twist in its frame: ``R_A (w x p_B + v)``), batched over
-poses.
+poses.  The kernels on rows (cos and sin, the exponential's coefficients, the blocks'
+rotations and inverses) are :mod:`mtaccuracy.kinematics`'s.
 
 The papers' machines are three descriptions in their modules (``ac_double_turntable``,
 ``horizontal_3axis``, ``vertical_xyfz``: a topology and a placement each); they reproduced the
 hand-written chains they replace to 1e-12 (5e-13 measured) and the tests hold them to
 independent formulations (4x4 products, the literal product of exponentials, sympy).
-:func:`iso_machine` builds any topology with the ISO 230-1 catalogue generated from it and the
-redundant location errors removed by a rank test (:func:`iso_catalogue`,
-:func:`redundant_location_errors`).
+:func:`.iso.iso_machine` builds any topology with the ISO 230-1 catalogue generated from it
+and the redundant location errors removed by a rank test; :mod:`.readers` reads a reader's
+machine (travels, pivots, error ranges) from files.
 """
 
 from __future__ import annotations
 
-import os
-import re
-import warnings
-from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
 
-from .. import csvlines, validate
 from .. import errors as _errors
-from ..kinematics import homogeneous, matmul3
-from . import units as _units
-from .units import SuspectUnitWarning  # noqa: F401  (the readers' warning, here for readers)
+from .. import validate
+from ..kinematics import (
+    ROW_FORMS,
+    cos_sin,
+    cos_sin_into,
+    cross_rows,
+    exp_coefficients,
+    homogeneous,
+    inverse_rows,
+    matmul3,
+    motion_rows,
+)
+from .topology import DIRECTION, LINEAR, ROTARY, Topology, parse_topology
 
-LINEAR = "XYZ"
-ROTARY = "ABC"
-#: coordinate direction of each axis letter (A, B, C rotate about x, y, z)
-DIRECTION = {"X": 0, "Y": 1, "Z": 2, "A": 0, "B": 1, "C": 2}
-FORMS = ("euler", "screw", "rodrigues", "first_order")
+#: the forms of a block of errors: ``euler`` (elementary rotations, applied one by one) and
+#: the forms of :func:`mtaccuracy.kinematics.motion_rows`
+FORMS = ("euler", *ROW_FORMS)
 #: error components of a block: translations along x, y, z, rotations about x, y, z
 COMPONENTS = ("X", "Y", "Z", "A", "B", "C")
 SLOTS = ("motion", "pre", "post", "tilt")
 ORIENTATIONS = {"rotation_vector": ("Px", "Py", "Pz", "Rx", "Ry", "Rz"),
                 "tool_axis": ("Px", "Py", "Pz", "Vx", "Vy", "Vz")}
-
-
-# ------------------------------------------------------------------------------------------
-# Topology
-# ------------------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Topology:
-    """A parsed topology: ``work`` and ``tool`` axes, each listed from the bed outwards.
-
-    Attributes
-    ----------
-    text : str
-        The topology as given.
-    work, tool : tuple of str
-        Axes on the workpiece side and on the tool side, each from the bed outwards.
-    """
-
-    text: str
-    work: tuple[str, ...]
-    tool: tuple[str, ...]
-
-    @property
-    def axes(self) -> tuple[str, ...]:
-        """tuple of str: the workpiece-side then the tool-side axes, each from the bed out."""
-        return self.work + self.tool
-
-    def side(self, axis: str) -> int:
-        """-1 for an axis of the workpiece side, +1 for one of the tool side.
-
-        Parameters
-        ----------
-        axis : str
-            An axis letter (``X Y Z A B C``).
-
-        Returns
-        -------
-        int
-            -1 if ``axis`` is on the workpiece side, else +1.
-        """
-        return -1 if axis in self.work else 1
-
-    def describe(self) -> str:
-        """The chain in words, e.g. ``workpiece <- C <- A <- bed -> Y -> X -> Z -> tool``.
-
-        Returns
-        -------
-        str
-            One line from the workpiece through the bed to the tool.
-        """
-        work = " <- ".join(["workpiece", *reversed(self.work), "bed"])
-        return f"{work} -> " + " -> ".join([*self.tool, "tool"])
-
-
-_GRAMMAR = ("a topology is read from the workpiece to the tool: 'w', the workpiece-side axes "
-            "(the one carrying the workpiece first), 'b' (the bed), the tool-side axes (from "
-            "the bed out), an optional 's' (spindle) and 't'; axes are X, Y, Z (linear) and "
-            "A, B, C (rotary, about x, y, z), each at most once; e.g. 'w C A b Y X Z t'")
-_TOKENS = frozenset((*LINEAR, *ROTARY, "w", "b", "s", "t"))
-#: Size caps of a topology string.  The longest valid topology has 10 tokens (``w``, the six
-#: axes, ``b``, ``s``, ``t``), 19 characters with single spaces, a few more with primes.  The
-#: caps leave a wide margin for irregular spacing and refuse at once, before any parsing, a
-#: string that cannot be a topology (a file's content or a repeated string pasted by mistake),
-#: so that the parse and its messages stay small.
-MAX_TOPOLOGY_CHARS = 200
-MAX_TOPOLOGY_TOKENS = 64
-
-
-def _excerpt(text: str, n: int = 60) -> str:
-    """``repr`` of ``text``, or of its first ``n`` characters followed by ``...`` and its
-    length: what an error message quotes of an input of any size."""
-    if len(text) <= n:
-        return repr(text)
-    return f"{text[:n]!r}... ({len(text)} characters)"
-
-
-def _listed(items, n: int = 10) -> str:
-    """``['A', 'B']`` of the first ``n`` items (each cut to 20 characters), then how many
-    more: a list of any length quoted in a message."""
-    shown = [s if len(s) <= 20 else s[:20] + "..." for s in map(str, items[:n])]
-    more = f" and {len(items) - n} more" if len(items) > n else ""
-    return f"{shown}{more}"
-
-
-def parse_topology(text: str) -> Topology:
-    """Parse a topology string (ISO 10791-1 spirit; see the module docstring).
-
-    Parameters
-    ----------
-    text : str
-        The machine from the workpiece to the tool: ``w``, the workpiece-side axes (the one
-        carrying the workpiece first), ``b`` (the bed), the tool-side axes (from the bed out),
-        an optional ``s`` and ``t``; axes ``X Y Z`` (linear) and ``A B C`` (rotary about x, y,
-        z), each at most once, separated by spaces (or written without spaces, ``wCAbYXZt``);
-        a trailing prime (``C'``) is allowed and ignored.  At most
-        :data:`MAX_TOPOLOGY_CHARS` characters and :data:`MAX_TOPOLOGY_TOKENS` tokens.
-
-    Returns
-    -------
-    Topology
-        ``work`` and ``tool`` axes, each listed from the bed outwards.
-
-    Raises
-    ------
-    TypeError
-        When ``text`` is not a string.
-    ValueError
-        For a string longer than the caps, an unknown letter, a missing or repeated ``w``,
-        ``b`` or ``t``, a repeated axis or no axis, with the grammar in the message; a
-        message quotes at most the first 60 characters of ``text``.
-
-    Examples
-    --------
-    >>> topo = parse_topology("w C A b Y X Z t")
-    >>> topo.work, topo.tool
-    (('A', 'C'), ('Y', 'X', 'Z'))
-    >>> topo.describe()
-    'workpiece <- C <- A <- bed -> Y -> X -> Z -> tool'
-    """
-    if not isinstance(text, str):
-        raise TypeError(f"topology must be a string, got {type(text).__name__}; {_GRAMMAR}")
-    shown = _excerpt(text)
-    if len(text) > MAX_TOPOLOGY_CHARS:
-        raise ValueError(f"topology {shown} is longer than {MAX_TOPOLOGY_CHARS} characters; a "
-                         f"machine has at most six axes; {_GRAMMAR}")
-    stripped = text.strip()
-    tokens = stripped.split() if re.search(r"\s", stripped) else list(stripped)
-    if len(tokens) > MAX_TOPOLOGY_TOKENS:
-        raise ValueError(f"topology {shown} has {len(tokens)} tokens, more than "
-                         f"{MAX_TOPOLOGY_TOKENS}; a machine has at most six axes; {_GRAMMAR}")
-    tokens = [t.rstrip("'") for t in tokens]
-    if not tokens:
-        raise ValueError(f"empty topology; {_GRAMMAR}")
-    bad = list(dict.fromkeys(t for t in tokens if t not in _TOKENS))
-    if bad:
-        raise ValueError(f"unknown axis letter(s) {_listed(bad)} in topology {shown}; "
-                         f"{_GRAMMAR}")
-    count = Counter(tokens)
-    if tokens[0] != "w" or tokens[-1] != "t" or count["w"] != 1 or count["t"] != 1:
-        raise ValueError(f"topology {shown} must start with 'w' and end with 't'; {_GRAMMAR}")
-    if count["b"] != 1:
-        raise ValueError(f"topology {shown} must contain the bed 'b' exactly once; {_GRAMMAR}")
-    if count["s"] and (count["s"] != 1 or tokens[-2] != "s"):
-        raise ValueError(f"topology {shown}: 's' (spindle) may only come just before 't'")
-    body = [t for t in tokens[1:-1] if t != "s"]
-    cut = body.index("b")
-    work, tool = tuple(reversed(body[:cut])), tuple(body[cut + 1:])
-    axes = work + tool
-    if not axes:
-        raise ValueError(f"topology {shown} has no axis; {_GRAMMAR}")
-    dup = sorted(a for a, k in Counter(axes).items() if k > 1)
-    if dup:
-        raise ValueError(f"axis {dup} appears more than once in topology {shown}")
-    return Topology(text, work, tool)
 
 
 # ------------------------------------------------------------------------------------------
@@ -316,121 +156,6 @@ def _check_placements(topology: Topology, catalogue, placements) -> list[Placeme
     return out
 
 
-# ------------------------------------------------------------------------------------------
-# Small numerical kernels on rows (structure of arrays): V is (m, 3, k), R is 3x3 of rows
-# ------------------------------------------------------------------------------------------
-
-def _cos_sin_into(x, c, s, x2):
-    """cos and sin of ``x`` into the buffers ``c`` and ``s`` (``x2``: scratch of x's shape),
-    in place: no temporaries the size of a chunk.  Below 1e-3 rad (every geometric error) by
-    Taylor polynomials whose truncation error is under half an ulp: to x^2 and x^3 below
-    1e-4 rad (errors < x^4/24 < 5e-18 and x^5/120 < 1e-22), to x^4 and x^5 below 1e-3 rad
-    (< x^6/720 and x^7/5040): plain arithmetic, so the same rounding on every CPU (unlike
-    vectorised sin and cos), and several times faster; numpy's above."""
-    m = max(x.max(initial=0.0), -x.min(initial=0.0))
-    if m >= 1e-3:
-        np.cos(x, out=c)
-        np.sin(x, out=s)
-        return
-    np.multiply(x, x, out=x2)
-    if m < 1e-4:                       # c = 1 - x^2/2, s = x (1 - x^2/6)
-        np.multiply(x2, -0.5, out=c)
-        c += 1.0
-        np.multiply(x2, -1.0 / 6.0, out=s)
-        s += 1.0
-        s *= x
-        return
-    # c = 1 - (x^2/2)(1 - x^2/12), s = x (1 - (x^2/6)(1 - x^2/20))
-    np.divide(x2, 12.0, out=c)
-    np.subtract(1.0, c, out=c)
-    np.divide(x2, 20.0, out=s)
-    np.subtract(1.0, s, out=s)
-    np.multiply(x2, 0.5, out=x2)
-    c *= x2
-    np.subtract(1.0, c, out=c)
-    np.multiply(x, x, out=x2)
-    np.divide(x2, 6.0, out=x2)
-    s *= x2
-    np.subtract(1.0, s, out=s)
-    s *= x
-
-
-def _cos_sin(x):
-    """cos and sin of ``x`` by :func:`_cos_sin_into`; a scalar gives Python floats (the
-    operations of one pose then multiply by scalars, the fast case)."""
-    a = np.atleast_1d(np.asarray(x, dtype=float))
-    c, s, x2 = np.empty_like(a), np.empty_like(a), np.empty_like(a)
-    _cos_sin_into(a, c, s, x2)
-    return (float(c[0]), float(s[0])) if np.ndim(x) == 0 else (c, s)
-
-
-def _exp_coefficients(t2):
-    """``a = sin t / t``, ``b = (1 - cos t) / t^2``, ``c = (t - sin t) / t^3`` of ``t2 = t^2``:
-    series below t = 1e-3 (error < 1e-29), sin and cos above."""
-    t2 = np.asarray(t2, dtype=float)
-    a = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0))
-    b = 0.5 - t2 / 24.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0))
-    c = 1.0 / 6.0 - t2 / 120.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0))
-    large = t2 >= 1e-6
-    if np.any(large):
-        t = np.sqrt(t2[large])
-        s, co = np.sin(t), np.cos(t)
-        a[large], b[large], c[large] = s / t, (1.0 - co) / t2[large], (t - s) / (t2[large] * t)
-    return a, b, c
-
-
-def _rotation(form: str, w):
-    """The 3x3 (nested list of rows) of a block's rotation parameters ``w`` (3 rows), forms
-    ``first_order``, ``rodrigues`` and ``screw`` (``euler`` blocks are applied as elementary
-    rotations, :meth:`ChainMachine._ops`)."""
-    wx, wy, wz = w
-    if form == "first_order":
-        return [[1.0, -wz, wy], [wz, 1.0, -wx], [-wy, wx, 1.0]]
-    t2 = wx * wx + wy * wy + wz * wz
-    a, b, _ = _exp_coefficients(t2)
-    ww = [[wx * wx, wx * wy, wx * wz], [wy * wx, wy * wy, wy * wz], [wz * wx, wz * wy, wz * wz]]
-    hat = [[0.0, -wz, wy], [wz, 0.0, -wx], [-wy, wx, 0.0]]
-    diag = 1.0 - b * t2
-    return [[(diag if i == j else 0.0) + a * hat[i][j] + b * ww[i][j] for j in range(3)]
-            for i in range(3)]
-
-
-def _cross(u, v):
-    return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
-
-
-def _block_transform(form: str, d, w):
-    """(R, t) of a block with translations ``d`` and rotation parameters ``w`` (3 rows each)."""
-    r = _rotation(form, w)
-    if form != "screw":
-        return r, d
-    _, b, c = _exp_coefficients(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-    wxd = _cross(w, d)
-    wwxd = _cross(w, wxd)
-    return r, [d[i] + b * wxd[i] + c * wwxd[i] for i in range(3)]
-
-
-def _inverse(form: str, r, t, w):
-    """Inverse (R', t') of the block (R, t): R^T for the rigid forms; for ``first_order``,
-    ``(I + W)^-1 = (I - W + w w^T) / (1 + |w|^2)`` exactly."""
-    if form == "first_order":
-        wx, wy, wz = w
-        den = 1.0 + wx * wx + wy * wy + wz * wz
-        ww = [[wx * wx, wx * wy, wx * wz], [wy * wx, wy * wy, wy * wz],
-              [wz * wx, wz * wy, wz * wz]]
-        minus_w = [[0.0, wz, -wy], [-wz, 0.0, wx], [wy, -wx, 0.0]]
-        ri = [[((1.0 if i == j else 0.0) + minus_w[i][j] + ww[i][j]) / den for j in range(3)]
-              for i in range(3)]
-    else:
-        ri = [[r[j][i] for j in range(3)] for i in range(3)]
-    ti = [-(ri[i][0] * t[0] + ri[i][1] * t[1] + ri[i][2] * t[2]) for i in range(3)]
-    return ri, ti
-
-
-def _cross_axis1(u, v):
-    """:func:`_cross` along axis 1 of (E, 3, ...) arrays (broadcast)."""
-    return np.stack(_cross(np.moveaxis(u, 1, 0), np.moveaxis(v, 1, 0)), axis=1)
-
 
 # ------------------------------------------------------------------------------------------
 # The machine
@@ -447,7 +172,7 @@ class ChainMachine:
     Parameters
     ----------
     topology : str
-        The chain from the workpiece to the tool (:func:`parse_topology`).
+        The chain from the workpiece to the tool (:func:`.topology.parse_topology`).
     catalogue : sequence of :class:`mtaccuracy.errors.ErrorSpec`
         The errors; their order is the column order of every ``(n, n_errors)`` error array.
     placements : mapping of str to :class:`Placement`
@@ -482,6 +207,23 @@ class ChainMachine:
     The error motions are ISO 230-1's (six per axis, in the frame after the motion), the
     location errors ISO 230-7's (the axis average line; before the motion, or after it in
     Zheng et al.'s reading of their Eq. 9).
+
+    Examples
+    --------
+    A quill (one Z axis carrying the tool) with two errors: a positioning error EZZ of 1 um,
+    and an angular error EAZ of 10 urad seen through a 100 mm tool (Abbe offset: 1 um in y).
+
+    >>> import numpy as np
+    >>> from mtaccuracy.errors import ErrorSpec
+    >>> ezz = ErrorSpec("EZZ", "EZZ", "positioning", "Z", "z", True, True, "um")
+    >>> eaz = ErrorSpec("EAZ", "EAZ", "angular", "Z", "x", False, True, "urad")
+    >>> m = ChainMachine("w b Z t", [ezz, eaz], {"EZZ": Placement("Z", "motion", 2),
+    ...                                          "EAZ": Placement("Z", "motion", 3)}, name="quill")
+    >>> m.describe()
+    'quill: workpiece <- bed -> Z -> tool (2 errors)'
+    >>> pe = m.pose_error(np.array([[0.001, 0.0], [0.0, 1e-5]]), {"z": 50.0, "L": 100.0})
+    >>> pe.round(9).tolist()                       # Px, Py, Pz (mm), Rx, Ry, Rz (rad)
+    [[0.0, 0.0, 0.001, 0.0, 0.0, 0.0], [0.0, -0.001, -5e-09, 1e-05, 0.0, 0.0]]
     """
 
     def __init__(self, topology: str, catalogue: Sequence, placements: Mapping[str, Placement],
@@ -545,7 +287,7 @@ class ChainMachine:
 
     # -- description -----------------------------------------------------------------------
     def describe(self) -> str:
-        """One line: the machine's name, its chain (:meth:`Topology.describe`), its errors.
+        """One line: the machine's name, its chain (:meth:`.topology.Topology.describe`), errors.
 
         Returns
         -------
@@ -672,11 +414,11 @@ class ChainMachine:
         w = [np.zeros(k) for _ in range(3)]
         for j, c, s in zip(b.cols, b.comps, b.signs, strict=True):
             w[c - 3] = e[j] if s == 1.0 else s * e[j]
-        wxe = _cross(w, unit)
+        wxe = cross_rows(w, unit)
         if self.tilt == "first_order":
             return [unit[i] + wxe[i] for i in range(3)]
-        a, bb, _ = _exp_coefficients(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-        wwxe = _cross(w, wxe)
+        a, bb, _ = exp_coefficients(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+        wwxe = cross_rows(w, wxe)
         return [unit[i] + a * wxe[i] + bb * wwxe[i] for i in range(3)]
 
     def _ops(self, e, p, side, axis, slot, k, trig=None):
@@ -692,7 +434,7 @@ class ChainMachine:
                 t = [None if (np.ndim(di) == 0 and di == 0.0) else di * sq for di in d]
                 ops = [("t", t)]
                 return [("t", [None if ti is None else -ti for ti in t])] if side < 0 else ops
-            c, sn = _cos_sin(q)
+            c, sn = cos_sin(q)
             piv = self.pivots.get(axis)
             ops = [("r", DIRECTION[axis], c, -sn if side < 0 else sn)]
             if piv is not None:
@@ -722,10 +464,10 @@ class ChainMachine:
         zero = np.zeros(k)
         dd = [zero if di is None else di for di in d]
         ww = [zero if wi is None else wi for wi in w]
-        r, t = _block_transform(self.form, dd, ww)
+        r, t = motion_rows(dd, ww, form=self.form)
         if side > 0:
             return [("m", r), ("t", t)]
-        ri, _ = _inverse(self.form, r, t, ww)
+        ri, _ = inverse_rows(r, t, ww, form=self.form)
         return [("t", [-ti for ti in t]), ("m", ri)]
 
     @staticmethod
@@ -773,7 +515,7 @@ class ChainMachine:
         trig = {}
         if cols:
             np.take(e_t, cols, axis=0, out=ang, mode="clip")
-            _cos_sin_into(ang, c_all, s_all, x2)
+            cos_sin_into(ang, c_all, s_all, x2)
             trig = {j: (c_all[i], s_all[i]) for i, j in enumerate(cols)}
         for side, axis, slot in reversed(self.factors()):
             self._run(v, self._ops(e_t, p, side, axis, slot, k, trig), scratch)
@@ -1019,11 +761,11 @@ class ChainMachine:
         u = unit[:, :, None]                                      # (E, 3, 1)
         dp = np.where(kind[:, None, None] == 0, u, 0.0)           # translations
         rotn = kind[:, None, None] == 1
-        dp = np.where(rotn, _cross_axis1(u, tip), dp)
+        dp = np.where(rotn, np.cross(u, tip, axis=1), dp)
         q = np.stack([p[self._axis_pose[a_]] if a_ else np.zeros(n) for a_ in tilt_axis])
-        dp = np.where(kind[:, None, None] == 2, _cross_axis1(u, ek[:, :, None])
+        dp = np.where(kind[:, None, None] == 2, np.cross(u, ek[:, :, None], axis=1)
                       * q[:, None, :], dp)
-        dr = (_cross_axis1(u, ax) if self.orientation == "tool_axis"
+        dr = (np.cross(u, ax, axis=1) if self.orientation == "tool_axis"
               else np.broadcast_to(u, dp.shape))
         dr = np.where(rotn, dr, 0.0)
         r_e = ra[pos]                                             # (E, n, 3, 3)
@@ -1031,724 +773,3 @@ class ChainMachine:
         jac[:, :3] = np.einsum("enij,ejn->nie", r_e, dp) * scale
         jac[:, 3:] = np.einsum("enij,ejn->nie", r_e, dr) * scale
         return jac + 0.0
-
-
-# ------------------------------------------------------------------------------------------
-# ISO 230-1 catalogue from a topology
-# ------------------------------------------------------------------------------------------
-
-def _motion_specs(axis: str) -> list[tuple[_errors.ErrorSpec, Placement]]:
-    out = []
-    for c, comp in enumerate(COMPONENTS):
-        code = _errors.iso_code(comp, axis)
-        translational = c < 3
-        if axis in LINEAR:
-            kind = ("positioning" if c == DIRECTION[axis] else "straightness") if c < 3 \
-                else "angular"
-        else:
-            kind = "error motion"
-        spec = _errors.ErrorSpec(code, code, kind, axis, "xyz"[c % 3], translational, True,
-                                 "um" if translational else "urad")
-        out.append((spec, Placement(axis, "motion", c)))
-    return out
-
-
-def iso_catalogue(topology: str):
-    """The ISO 230-1 / 230-7 errors of a topology, before redundancy is removed.
-
-    Per axis K its six error motions EXK, EYK, EZK, EAK, EBK, ECK (block after the motion); for
-    the linear axes the squareness errors with the first of X, Y, Z present as reference (the
-    second tilted about the normal of their plane, e.g. EC0Y; the third about both others, e.g.
-    EA0Z, EB0Z); per rotary axis K its four location errors (ISO 230-7): the two positions and
-    two orientations of its axis line perpendicular to k (e.g. for C: EX0C, EY0C, EA0C, EB0C),
-    as a block before its motion.  Returns ``(catalogue, placements)``.
-
-    Parameters
-    ----------
-    topology : str
-        The chain (:func:`parse_topology`).
-
-    Returns
-    -------
-    catalogue : tuple of ErrorSpec
-        Every error, in chain order.
-    placements : dict of str to Placement
-        Where each enters the chain.
-    """
-    topo = parse_topology(topology)
-    specs = []
-    for a in topo.axes:
-        specs += _motion_specs(a)
-    linear = [a for a in LINEAR if a in topo.axes]
-    for rank, a in enumerate(linear):
-        for b in linear[:rank]:
-            about = 3 - DIRECTION[a] - DIRECTION[b]            # the normal of the a-b plane
-            code = _errors.squareness_code(b, a)
-            spec = _errors.ErrorSpec(code, code, "squareness", f"{b}{a}", "xyz"[about], False,
-                                     False, "urad")
-            specs.append((spec, Placement(a, "tilt", 3 + about)))
-    for a in topo.axes:
-        if a not in ROTARY:
-            continue
-        perp = [c for c in range(3) if c != DIRECTION[a]]
-        for c in perp:
-            code = _errors.iso_code(COMPONENTS[c], a, zero=True)
-            specs.append((_errors.ErrorSpec(code, code, "location", a, "xyz"[c], True, False,
-                                            "um"), Placement(a, "pre", c)))
-        for c in perp:
-            code = _errors.iso_code(COMPONENTS[3 + c], a, zero=True)
-            specs.append((_errors.ErrorSpec(code, code, "location", a, "xyz"[c], False, False,
-                                            "urad"), Placement(a, "pre", 3 + c)))
-    return tuple(s for s, _ in specs), {s.symbol: p for s, p in specs}
-
-
-def redundant_location_errors(machine: ChainMachine, *, n_poses: int = 64, seed=0,
-                              rtol: float = 1e-9) -> list[tuple[str, str]]:
-    """Location errors that cannot be told apart from other errors (a rank test).
-
-    Those whose effect on the pose error, over random poses, is a combination of the effects of
-    the axes' zero positions (the columns of their own-direction error motions, EXX, ..., ECC),
-    of the workpiece and tool set-up (a constant rigid shift of the workpiece, a constant offset
-    of the tool) and of the location errors before them: they cannot be told apart from those
-    and are not separate errors.  Returns (symbol, reason) pairs, in catalogue order.  The test is
-    a rank test of the stacked Jacobian columns (least-squares residual of the unit column below
-    ``rtol``).
-
-    Parameters
-    ----------
-    machine : ChainMachine
-        A machine with its full catalogue (:func:`iso_catalogue`).
-    n_poses : int
-        Random poses stacked in the rank test.
-    seed : int
-        Seed of the poses.
-    rtol : float
-        Relative least-squares residual below which a column is a combination of others.
-
-    Returns
-    -------
-    list of (str, str)
-        (symbol, reason) of every redundant location error; a reason is never blank.
-
-    Raises
-    ------
-    ValueError
-        When a travel is not finite, or the tool position or the Jacobian at the sampled poses
-        is not (travels, pivots or tool offsets beyond the range of floating point).
-
-    Notes
-    -----
-    Each column is scaled by its largest entry before it is normalised: the squares of a
-    column with entries above about 1e154 (a travel of 1e300 mm) overflow, its norm is then
-    infinite and the unit column all zeros, which the least-squares fit explains with no term
-    at all.  Travels that large are not a machine (:func:`read_axis_table` refuses them), and
-    the rank test of columns mixing such entries with ordinary ones is not meaningful; the
-    scaling only keeps the arithmetic finite.
-    """
-    n_poses = validate.integer(n_poses, "n_poses", low=1)
-    rng = validate.rng(seed)
-    pose = {}
-    for a, name in machine._axis_pose.items():
-        lo, hi = machine.travels.get(name, (-300.0, 300.0) if a in LINEAR else (-np.pi, np.pi))
-        if not np.isfinite(float(hi) - float(lo)):
-            raise ValueError(f"{machine.name}: the travel {(lo, hi)} of {name} is not finite "
-                             f"(or its width overflows); no poses can be drawn from it")
-        pose[name] = rng.uniform(lo, hi, n_poses)
-    for t in machine.tool_offsets:
-        pose[t] = rng.uniform(50.0, 150.0, n_poses)
-    jac = machine.jacobian(pose)                      # (P, 6, n)
-    zero = np.zeros((n_poses, machine.n_errors))
-    rt, tt = machine.relative(zero, pose, with_errors=False)
-    if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(tt))):
-        raise ValueError(f"{machine.name}: the tool position or the first-order effects of the "
-                         f"errors are not finite at the sampled poses; check the travels, "
-                         f"pivots and tool offsets (travels {machine.travels})")
-    axis_out = machine.orientation == "tool_axis"
-
-    def as_error(dt, dr):
-        """Pose-error columns of a first-order change: tip dt, rotation vector dr (n, 3)."""
-        col = np.zeros((n_poses, 6))
-        col[:, :3] = dt
-        col[:, 3:] = np.cross(dr, rt[:, :, 2]) if axis_out else dr
-        return col
-
-    # effects that are not errors: the zero of each axis, a rigid set-up error of the
-    # workpiece (6 dof, in the workpiece frame) and a tool offset error (along the tool
-    # frame's axes)
-    nuisance, labels = [], []
-    for j, pl in enumerate(machine.placements):   # an axis' zero: its own-direction error
-        own = DIRECTION[pl.axis] + (3 if pl.axis in ROTARY else 0)
-        if pl.slot == "motion" and pl.component == own:
-            nuisance.append(jac[:, :, j])
-            labels.append(f"the zero of {machine._axis_pose[pl.axis]}")
-    unit = np.eye(3)
-    for c in range(3):
-        nuisance.append(as_error(-np.broadcast_to(unit[c], tt.shape), np.zeros_like(tt)))
-        labels.append(f"the workpiece set-up along {'xyz'[c]}")
-    for c in range(3):
-        u = np.broadcast_to(unit[c], tt.shape)
-        nuisance.append(as_error(-np.cross(u, tt), -u))
-        labels.append(f"the workpiece set-up about {'xyz'[c]}")
-    for c in range(3):
-        nuisance.append(as_error(rt[:, :, c], np.zeros_like(tt)))
-        labels.append(f"the tool offset along {'xyz'[c]}")
-    basis, names_b = [], []
-    for col, lab in zip(nuisance, labels, strict=True):
-        vec = _unit(col.reshape(-1))
-        if vec is not None:
-            basis.append(vec)
-            names_b.append(lab)
-    out = []
-
-    def explain(vec):
-        """(residual, names of the basis columns the least-squares fit uses)."""
-        m = np.stack(basis, 1)
-        coef, *_ = np.linalg.lstsq(m, vec, rcond=None)
-        used = [names_b[i] for i in np.flatnonzero(np.abs(coef) > 1e-6)]
-        return np.linalg.norm(vec - m @ coef), used
-
-    for j, spec in enumerate(machine.catalogue):
-        if spec.position_dependent:
-            continue
-        vec = _unit(jac[:, :, j].reshape(-1))
-        if vec is None:
-            out.append((spec.symbol, "no effect on the pose error"))
-            continue
-        res, used = explain(vec)
-        if res < rtol:
-            out.append((spec.symbol, _same_effect(used)))
-            continue
-        basis.append(vec)
-        names_b.append(spec.symbol)
-    return out
-
-
-def _unit(vec):
-    """``vec`` scaled to unit length, or None when it is zero.  Scaled by its largest entry
-    first: the squares in the norm of a vector with entries above about 1e154 overflow (its
-    norm is then infinite and ``vec / norm`` all zeros)."""
-    big = np.max(np.abs(vec), initial=0.0)
-    if big == 0.0:
-        return None
-    vec = vec / big
-    return vec / np.linalg.norm(vec)
-
-
-def _same_effect(used) -> str:
-    """The reason given for a redundant error: the effects its column is a combination of,
-    or, when the fit names none, that in words (never a blank reason)."""
-    if not used:
-        return ("same effect as a combination of the other effects, none of which could be "
-                "named (check the travels, pivots and tool offsets for extreme values)")
-    return "same effect as " + " + ".join(used)
-
-
-def iso_machine(topology: str, *, name: str = "iso_machine", keep_redundant: bool = False,
-                **options) -> ChainMachine:
-    """A machine of any topology with its ISO 230-1 / 230-7 catalogue.
-
-    Parameters
-    ----------
-    topology : str
-        The chain (:func:`parse_topology`).
-    name : str
-        The machine's name.
-    keep_redundant : bool
-        Keep the location errors :func:`redundant_location_errors` finds (default: removed).
-    **options
-        Passed to :class:`ChainMachine` (``form`` default ``"euler"``; ``orientation``
-        default ``"tool_axis"`` when the topology has a rotary axis, else
-        ``"rotation_vector"``; ``pivots``, ``travels``, ``tool_offsets`` ...).
-
-    Returns
-    -------
-    ChainMachine
-        With ``machine.removed``: the (symbol, reason) of every removed location error.
-        Location errors sit before their axis' motion (ISO 230-7), squareness errors tilt the
-        directions of the linear axes (:func:`iso_catalogue`).
-
-    Examples
-    --------
-    A three-axis machine with every axis on the tool side: a positioning error EXX of 1 um,
-    and an angular error EBX of 10 urad seen through a 200 mm tool (Abbe offset: 2 um).
-
-    >>> import numpy as np
-    >>> m = iso_machine("w b X Y Z t")
-    >>> m.n_errors, m.axes, m.tool_offsets
-    (21, ('x', 'y', 'z'), ('L',))
-    >>> e = np.zeros((2, m.n_errors))
-    >>> e[0, m.error_names.index("EXX")] = 0.001               # mm
-    >>> e[1, m.error_names.index("EBX")] = 1e-5                # rad
-    >>> pe = m.pose_error(e, {"x": 100.0, "y": 0.0, "z": 0.0, "L": 200.0})
-    >>> pe.shape
-    (2, 6)
-    >>> pe[:, 0].round(6).tolist(), round(float(pe[1, 4]), 9)  # Px (mm), Ry (rad)
-    ([0.001, 0.002], 1e-05)
-    """
-    cat, placements = iso_catalogue(topology)
-    topo = parse_topology(topology)
-    options.setdefault("orientation", "tool_axis" if any(a in ROTARY for a in topo.axes)
-                       else "rotation_vector")
-    full = ChainMachine(topology, cat, placements, name=name, **options)
-    removed = [] if keep_redundant else redundant_location_errors(full)
-    drop = {s for s, _ in removed}
-    if drop:
-        cat = tuple(e for e in cat if e.symbol not in drop)
-        full = ChainMachine(topology, cat, {s: placements[s] for s in (e.symbol for e in cat)},
-                            name=name, **options)
-    full.removed = removed
-    return full
-
-
-# ------------------------------------------------------------------------------------------
-# A reader's machine from files: the axis table and the error ranges, checked before any work
-# ------------------------------------------------------------------------------------------
-
-AXIS_TABLE_COLUMNS = ("axis", "low", "high", "unit", "pivot_x_mm", "pivot_y_mm", "pivot_z_mm")
-RANGE_COLUMNS = ("symbol", "low", "high", "unit")
-#: Size caps of the input files, checked before (bytes) and while (rows) they are parsed.  An
-#: axis table has one row per axis (at most six); a range file one per error of the catalogue
-#: (51 for six axes with ISO 230-1/230-7: 36 error motions, 3 squareness errors, 12 location
-#: errors).  1000 data rows leave a margin of twenty times that (a range file may hold up to
-#: twice its machine's catalogue when that is larger); 2 MiB, 2000 rows of 1000 characters,
-#: leaves ample room for comments.  A larger file is not a machine's description (a wrong
-#: file, a log, a data dump) and is refused at once, naming the file and the limit.
-MAX_TABLE_BYTES = 2 * 1024 * 1024
-MAX_TABLE_ROWS = 1000
-#: Bounds of a travel and of a pivot in the axis table.  The longest axes of machine tools
-#: (gantry mills for ship hulls and aircraft spars) travel a few tens of metres, so no
-#: coordinate of a linear axis or a pivot exceeds 100 m (1e5 mm).  A rotary axis repeats every
-#: turn; ten turns either way (3600 deg) leave room for a multi-turn count.  Values far beyond
-#: these are not a machine: from about 1e154 mm the squares in the rank test of
-#: :func:`redundant_location_errors` overflow.
-MAX_LINEAR_MM = 1e5
-MAX_ROTARY_DEG = 3600.0
-#: At most this many :class:`SuspectUnitWarning` per file, one per row, then one naming the
-#: lines of the rest (a file written wholly in another unit would otherwise give one per row).
-MAX_UNIT_WARNINGS = 5
-
-
-@dataclass(frozen=True)
-class _Row:
-    """One data record of a CSV file: its first and last physical line (1-based, as an
-    editor numbers them; a quoted field may span lines) and its values by column."""
-
-    first: int
-    last: int
-    values: dict
-
-    @property
-    def where(self) -> str:
-        return f"line {self.first}" if self.first == self.last else \
-            f"lines {self.first}-{self.last}"
-
-
-@dataclass(frozen=True)
-class _Table:
-    """A checked CSV file: its header line, its data records and where they stand."""
-
-    header_line: int
-    rows: list
-
-    def span(self) -> str:
-        """Where the header and the rows stand, for a message about a missing entry."""
-        if not self.rows:
-            return f"header on line {self.header_line}, no data rows"
-        return (f"header on line {self.header_line}, rows on lines {self.rows[0].first}-"
-                f"{self.rows[-1].last}")
-
-
-def _read_csv(path, columns, what, max_rows=None) -> _Table:
-    """Read a small CSV file with the physical line of every record, checked.
-
-    ``#`` starts a comment (outside quotes) and lines left blank are skipped, like
-    ``pandas.read_csv(comment="#", skip_blank_lines=True, skipinitialspace=True)``; records
-    whose fields are all empty are skipped too.  Values are stripped strings; a short record
-    is padded with empty strings.  The file must be UTF-8 (a byte-order mark is allowed).
-    Refused before parsing: more than :data:`MAX_TABLE_BYTES` bytes or ``10 * max_rows``
-    lines; while parsing: more than ``max_rows`` data rows (default
-    :data:`MAX_TABLE_ROWS`)."""
-    path = str(path)
-    max_rows = MAX_TABLE_ROWS if max_rows is None else max_rows
-    try:
-        size = os.path.getsize(path)
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{what} {path!r} not found") from None
-    if size > MAX_TABLE_BYTES:
-        raise ValueError(f"{what} {path!r} is {size} bytes, more than the {MAX_TABLE_BYTES} "
-                         f"bytes allowed; it should hold a few dozen rows (is it the right "
-                         f"file?)")
-    with open(path, "rb") as handle:
-        raw = handle.read(MAX_TABLE_BYTES + 1)
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{what} {path!r}, line {csvlines.bad_byte_line(raw, exc)}: not UTF-8 "
-                         f"text ({exc.reason})") from None
-    flat = text.replace("\r\n", "\n").replace("\r", "\n")  # as an editor counts lines
-    n_lines = flat.count("\n") + (not flat.endswith("\n"))
-    if n_lines > 10 * max_rows:
-        raise ValueError(f"{what} {path!r} has {n_lines} lines, more than the {10 * max_rows} "
-                         f"allowed ({max_rows} data rows, with comments); it should hold a few "
-                         f"dozen rows (is it the right file?)")
-    header, index, rows = None, {}, []
-    found = csvlines.records(text, comment="#")
-    while True:
-        try:
-            first, last, fields = next(found)
-        except StopIteration:
-            break
-        except csvlines.CSVLineError as exc:
-            raise ValueError(f"{what} {path!r}, line {exc.line}: {exc.reason}") from None
-        if header is None:
-            header = [h.strip() for h in fields]
-            header_line = first
-            where = f"{what} {path!r}, line {first} (the header)"
-            twice = sorted(c for c in columns if header.count(c) > 1)
-            if twice:
-                raise ValueError(f"{where}: column(s) {twice} given more than once")
-            missing = [c for c in columns if c not in header]
-            if missing:
-                raise ValueError(f"{where}: lacks column(s) {missing}; it needs "
-                                 f"{', '.join(columns)}")
-            index = {c: header.index(c) for c in columns}
-            continue
-        if not "".join(fields).strip():
-            continue
-        if len(rows) == max_rows:
-            raise ValueError(f"{what} {path!r}, line {first}: more than {max_rows} data rows; "
-                             f"it should hold one row per "
-                             f"{'axis' if what == 'axis table' else 'error'} (is it the right "
-                             f"file?)")
-        row = _Row(first, last, {c: fields[i].strip() if i < len(fields) else ""
-                                 for c, i in index.items()})
-        if len(fields) > len(header) and any(f.strip() for f in fields[len(header):]):
-            raise ValueError(f"{what} {path!r}, {row.where}: {len(fields)} fields, but the "
-                             f"header (line {header_line}) names {len(header)} columns")
-        rows.append(row)
-    if header is None:
-        raise ValueError(f"{what} {path!r} has no header line (it is empty or all comments); "
-                         f"it needs the columns {', '.join(columns)}")
-    return _Table(header_line, rows)
-
-
-def _at(groups, n: int = 5) -> str:
-    """Where entries stand, from ``(name, [lines])`` pairs: ``line 7 (A)``, ``lines 3 and 8
-    (X)``, ... at most ``n`` names and ``n`` lines each, then how many more."""
-    parts = []
-    for name, lines in groups[:n]:
-        name = "empty" if not name else name if len(name) <= 20 else name[:20] + "..."
-        if len(lines) == 1:
-            parts.append(f"line {lines[0]} ({name})")
-        elif len(lines) == 2:
-            parts.append(f"lines {lines[0]} and {lines[1]} ({name})")
-        else:
-            more = f", ... ({len(lines)} lines)" if len(lines) > n else ""
-            parts.append(f"lines {', '.join(map(str, lines[:n]))}{more} ({name})")
-    if len(groups) > n:
-        parts.append(f"... ({len(groups) - n} more)")
-    return ", ".join(parts)
-
-
-def _check_entries(table: _Table, column: str, wanted):
-    """How the entries of ``column`` fail to name each of ``wanted`` exactly once: the
-    unknown entries (in file order) and the repeated ones (sorted), each as ``(name, [lines
-    where it stands])``, and the missing names (in ``wanted``'s order).  Linear in the rows
-    (one dictionary of lines per name; no ``list.count`` per row)."""
-    lines: dict[str, list[int]] = {}
-    for row in table.rows:
-        lines.setdefault(row.values[column], []).append(row.first)
-    allowed = set(wanted)
-    unknown = [(s, ls) for s, ls in lines.items() if s not in allowed]
-    dup = sorted((s, ls) for s, ls in lines.items() if len(ls) > 1 and s in allowed)
-    missing = [s for s in wanted if s not in lines]
-    return unknown, dup, missing
-
-
-def _in_unit(lim: _units.Limits, v, unit: str) -> str:
-    """``; `` and what a row written in a unit the file does not take says: another spelling
-    of an accepted unit, or its numbers in an accepted unit (:func:`.units.in_unit`); or
-    ``""``."""
-    canon = _units.canonical(unit)
-    if canon in lim.accepted:
-        return f"; {unit!r} is written {canon!r}"
-    try:
-        lo, hi = float(v["low"]), float(v["high"])
-    except ValueError:
-        return ""
-    if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
-        return ""
-    text = _units.in_unit(lim, lo, hi, unit=unit)
-    return f"; {text}" if text else ""
-
-
-def _warn_rows(where: str, found: list) -> None:
-    """Emit the :class:`SuspectUnitWarning` of ``found`` (``(row, message)`` pairs): one per row
-    up to :data:`MAX_UNIT_WARNINGS`, then one naming the lines of the rest.  Attributed to the
-    reader's caller (a notebook cell shows them under it)."""
-    for _, message in found[:MAX_UNIT_WARNINGS]:
-        warnings.warn(message, _units.SuspectUnitWarning, stacklevel=3)
-    rest = found[MAX_UNIT_WARNINGS:]
-    if rest:
-        warnings.warn(f"{where}: {len(rest)} more row(s) with a value that suggests another "
-                      f"unit, at {', '.join(r.where for r, _ in rest[:20])}"
-                      + (", ..." if len(rest) > 20 else ""),
-                      _units.SuspectUnitWarning, stacklevel=3)
-
-
-def read_axis_table(path, topology: str) -> tuple[dict, dict]:
-    """The travels and rotary pivots of a topology's axes from a CSV file, checked.
-
-    Parameters
-    ----------
-    path : str or Path
-        A CSV with the columns ``axis, low, high, unit, pivot_x_mm, pivot_y_mm, pivot_z_mm``
-        (:data:`AXIS_TABLE_COLUMNS`; others are ignored, ``#`` starts a comment, blank lines
-        are skipped): one row per axis of the topology; the travel in ``mm`` (linear, within
-        +-:data:`MAX_LINEAR_MM`) or ``deg`` (rotary, within +-:data:`MAX_ROTARY_DEG`); for a
-        rotary axis a point its axis line passes through, mm, in the frame of the body it
-        rides on (empty: the origin; must be empty for a linear axis).  At most
-        :data:`MAX_TABLE_BYTES` bytes and :data:`MAX_TABLE_ROWS` rows.
-    topology : str
-        The machine's topology (:func:`parse_topology`).
-
-    Returns
-    -------
-    travels : dict
-        Pose name (``x y z``, ``A B C``) -> (low, high) in mm or rad.
-    pivots : dict
-        Rotary axis letter -> (3,) point, mm.
-
-    Raises
-    ------
-    ValueError
-        Naming the file and the line (1-based, as an editor numbers them) of the offending
-        row, for a missing or extra axis, a repeated axis (both lines), a wrong unit (with the
-        travel converted, when the unit is one of another name), a travel that is not finite
-        with low < high or beyond the bounds, a travel no machine tool has in the unit written
-        (a linear span below 1 mm, a rotary span below 5 deg, or below 15 deg with ends that
-        read as radians: :func:`.units.check`, naming the likely unit and the numbers to
-        write), a pivot on a linear axis, half a pivot, a pivot beyond the bound, a missing
-        column (the header's line), a file too large or with too many rows, a malformed CSV.
-    FileNotFoundError
-        When the file does not exist.
-
-    Warns
-    -----
-    SuspectUnitWarning
-        Once per row (at most :data:`MAX_UNIT_WARNINGS`, then one for the rest) whose travel
-        only a rare machine has in the unit written (a linear span of 1-10 mm, a rotary span
-        of 5-15 deg), naming the file, the line, the limit and the likely unit; the travel is
-        used as written.  Emitted after the whole file is checked (a refused file warns of
-        nothing).
-    """
-    topo = parse_topology(topology)
-    table = _read_csv(path, AXIS_TABLE_COLUMNS, "axis table")
-    where = f"axis table {str(path)!r}"
-    unknown, dup, missing = _check_entries(table, "axis", topo.axes)
-    if unknown:
-        raise ValueError(f"{where}, {_at(unknown)}: axis/axes {_listed([s for s, _ in unknown])}"
-                         f" not in the topology {topology!r} (its axes: "
-                         f"{', '.join(topo.axes)})")
-    if dup:
-        raise ValueError(f"{where}, {_at(dup)}: axis/axes {_listed([s for s, _ in dup])} given "
-                         f"more than once")
-    if missing:
-        raise ValueError(f"{where} ({table.span()}): no row for axis/axes {missing} of the "
-                         f"topology {topology!r}")
-    travels, pivots, suspect = {}, {}, []
-    for row in table.rows:
-        v = row.values
-        a = v["axis"]
-        line = f"{where}, {row.where} ({a})"
-        unit = v["unit"]
-        want = "mm" if a in LINEAR else "deg"
-        lim = _units.LINEAR_TRAVEL if a in LINEAR else _units.ROTARY_TRAVEL
-        if unit != want:
-            kind = "linear" if a in LINEAR else "rotary"
-            raise ValueError(f"{line}: unit must be {want!r} for a {kind} axis, got "
-                             f"{_excerpt(unit, 20)}" + _in_unit(lim, v, unit))
-        try:
-            lo, hi = float(v["low"]), float(v["high"])
-        except ValueError:
-            raise ValueError(f"{line}: low and high must be numbers, got "
-                             f"{_excerpt(v['low'], 20)}, {_excerpt(v['high'], 20)}") from None
-        if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
-            raise ValueError(f"{line}: the travel must be finite with high > low, got "
-                             f"({lo}, {hi})")
-        bound = MAX_LINEAR_MM if a in LINEAR else MAX_ROTARY_DEG
-        if max(-lo, hi) > bound:
-            why = ("no machine axis travels more than 100 m" if a in LINEAR
-                   else "a rotary axis repeats every turn; ten turns either way at most")
-            hint = _units.suggest(lim, lo, hi, unit=unit, sure=False)
-            raise ValueError(f"{line}: the travel ({lo:g}, {hi:g}) {unit} goes beyond "
-                             f"+-{bound:g} {unit} ({why})" + (f"; {hint}" if hint else ""))
-        found = _units.check(lim, lo, hi, unit=unit)
-        if found is not None and found.refuse:
-            raise ValueError(f"{line}: {found.message}")
-        if found is not None:
-            suspect.append((row, f"{line}: {found.message}"))
-        scale = 1.0 if a in LINEAR else np.pi / 180.0
-        name = a.lower() if a in LINEAR else a
-        travels[name] = (lo * scale, hi * scale)
-        piv = [v["pivot_x_mm"], v["pivot_y_mm"], v["pivot_z_mm"]]
-        given = [p != "" for p in piv]
-        if a in LINEAR:
-            if any(given):
-                raise ValueError(f"{line}: a linear axis has no pivot; leave pivot_*_mm empty")
-            continue
-        if any(given) and not all(given):
-            raise ValueError(f"{line}: give all three pivot_*_mm or none")
-        if all(given):
-            try:
-                point = np.array([float(p) for p in piv])
-            except ValueError:
-                raise ValueError(f"{line}: pivot_*_mm must be numbers, got "
-                                 f"{[_excerpt(p, 20) for p in piv]}") from None
-            if not np.all(np.isfinite(point)):
-                raise ValueError(f"{line}: pivot_*_mm must be finite, got {piv}")
-            if np.abs(point).max() > MAX_LINEAR_MM:
-                raise ValueError(f"{line}: the pivot {point.tolist()} mm lies beyond "
-                                 f"+-{MAX_LINEAR_MM:g} mm (no machine is larger than 100 m)")
-            pivots[a] = point
-    _warn_rows(where, suspect)
-    return travels, pivots
-
-
-def read_ranges(path, machine: ChainMachine) -> np.ndarray:
-    """Uniform error ranges of a machine from a CSV file, checked against its catalogue.
-
-    Parameters
-    ----------
-    path : str or Path
-        A CSV with the columns ``symbol, low, high, unit`` (:data:`RANGE_COLUMNS`; others are
-        ignored, ``#`` starts a comment, blank lines are skipped): one row per error of the
-        catalogue; units ``um``, ``mm`` for translations and ``urad``, ``rad``, ``arcsec``,
-        ``um/m`` for angles.  At most :data:`MAX_TABLE_BYTES` bytes and
-        :data:`MAX_TABLE_ROWS` rows (or twice the catalogue, when that is more).
-    machine : ChainMachine
-        Whose catalogue the rows must match.
-
-    Returns
-    -------
-    (2, n_errors) array
-        Low and high bounds in mm and rad, columns in catalogue order.
-
-    Raises
-    ------
-    ValueError
-        Naming the file and the line (1-based, as an editor numbers them) of the offending
-        row, for: an error the catalogue lacks (with why, when it is a redundant location
-        error the catalogue removed), a repeated error (both lines), an unknown unit (with
-        the units of the error's kind, and the range converted when the unit is a known one
-        the file does not take: ``deg``, ``mrad``, ``mm/m``, ``nm``, ``m``, ``µm``) or one of
-        the wrong kind (naming the units of its kind), a range that is not finite with low <
-        high, a range no machine tool has (a translation beyond 10 mm, an angle beyond 0.01
-        rad: :func:`.units.check`, naming the likely unit and the numbers to write); and for
-        a missing error, a missing column (the header's line), a file too large or with too
-        many rows, a malformed CSV.
-    FileNotFoundError
-        When the file does not exist.
-
-    Warns
-    -----
-    SuspectUnitWarning
-        Once per row (at most :data:`MAX_UNIT_WARNINGS`, then one for the rest) whose range
-        only a rare machine has in the unit written (a translation beyond 1 mm or below 0.1
-        nm, an angle beyond 1e-3 rad or below 1e-9 rad), naming the file, the line, the
-        limit and the likely unit; the range is used as written.  Emitted after the whole
-        file is checked.
-    """
-    names = machine.error_names
-    table = _read_csv(path, RANGE_COLUMNS, "range file",
-                      max_rows=max(MAX_TABLE_ROWS, 2 * len(names)))
-    where = f"range file {str(path)!r}"
-    column = {s: j for j, s in enumerate(names)}
-    removed = dict(getattr(machine, "removed", []))
-    unknown, dup, missing = _check_entries(table, "symbol", names)
-    if unknown:
-        shown = [s for s, _ in unknown]
-        why = [f"{s} (removed: {removed[s]})" for s in shown[:10] if s in removed]
-        raise ValueError(f"{where}, {_at(unknown)}: error(s) {_listed(shown)} not in the "
-                         f"catalogue of {machine.name}"
-                         + (f"; {'; '.join(why)}" if why else "")
-                         + f"; its errors: {', '.join(names)}")
-    if dup:
-        raise ValueError(f"{where}, {_at(dup)}: error(s) {_listed([s for s, _ in dup])} given "
-                         f"more than once")
-    if missing:
-        raise ValueError(f"{where} ({table.span()}): no range for error(s) {missing}")
-    bounds, suspect = np.empty((2, len(names))), []
-    for row in table.rows:
-        v = row.values
-        s = v["symbol"]
-        line = f"{where}, {row.where} ({s})"
-        unit = v["unit"]
-        spec = machine.catalogue[column[s]]
-        what = "a translation" if spec.translational else "an angle"
-        lim = _units.TRANSLATION_ERROR if spec.translational else _units.ANGULAR_ERROR
-        takes = f"{', '.join(lim.accepted[:-1])} or {lim.accepted[-1]}"
-        if unit not in _errors.UNIT_SCALE:
-            raise ValueError(f"{line}: unknown unit {_excerpt(unit, 20)}; allowed: "
-                             f"{', '.join(_errors.UNIT_SCALE)}; {s} is {what} ({spec.kind}): "
-                             f"write it in {takes}" + _in_unit(lim, v, unit))
-        if spec.translational != (unit in _units.TRANSLATION_ERROR.accepted):
-            length = "" if spec.translational else \
-                "; a deviation over a length is an angle: divide by the length, um/m"
-            raise ValueError(f"{line}: {s} is {what}, unit {unit!r} is not ({spec.kind}: write "
-                             f"it in {takes}){length}")
-        try:
-            lo, hi = float(v["low"]), float(v["high"])
-        except ValueError:
-            raise ValueError(f"{line}: low and high must be numbers, got "
-                             f"{_excerpt(v['low'], 20)}, {_excerpt(v['high'], 20)}") from None
-        if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
-            raise ValueError(f"{line}: the range must be finite with high > low, got ({lo}, {hi})")
-        found = _units.check(lim, lo, hi, unit=unit)
-        if found is not None and found.refuse:
-            raise ValueError(f"{line}: {found.message}")
-        if found is not None:
-            suspect.append((row, f"{line}: {found.message}"))
-        scale = _errors.UNIT_SCALE[unit]
-        bounds[:, column[s]] = lo * scale, hi * scale
-    _warn_rows(where, suspect)
-    return bounds
-
-
-_SLOT_TEXT = {"motion": "error motion (after the motion)", "pre": "location (before the motion)",
-              "post": "location (after the motion)", "tilt": "squareness (tilts the direction)"}
-
-
-def catalogue_table(machine: ChainMachine, bounds=None):
-    """A machine's errors as a table (a pandas DataFrame), with their ranges when given.
-
-    Symbol, kind, the axis it belongs to, where it enters the chain and its component (``X Y Z``
-    translations, ``A B C`` rotations), with the ``bounds`` (2, n) of uniform ranges in um and
-    urad when given.
-
-    Parameters
-    ----------
-    machine : ChainMachine
-        The machine.
-    bounds : array (2, n), optional
-        Uniform ranges (mm, rad) of its errors.
-
-    Returns
-    -------
-    DataFrame (n, 5 or 8)
-        symbol, kind, axis, enters (where in the chain), component and, with ``bounds``, low,
-        high and unit (um, urad).
-    """
-    table = pd.DataFrame({
-        "symbol": machine.error_names, "kind": [e.kind for e in machine.catalogue],
-        "axis": [p.axis for p in machine.placements],
-        "enters": [_SLOT_TEXT[p.slot] for p in machine.placements],
-        "component": [COMPONENTS[p.component] for p in machine.placements]})
-    if bounds is not None:
-        b = np.asarray(bounds, dtype=float)
-        if b.shape != (2, machine.n_errors):
-            raise ValueError(f"bounds must be (2, {machine.n_errors}), got {b.shape}")
-        scale = np.where([e.translational for e in machine.catalogue], 1e-3, 1e-6)
-        table["low"], table["high"] = b[0] / scale, b[1] / scale
-        table["unit"] = ["um" if e.translational else "urad" for e in machine.catalogue]
-    return table

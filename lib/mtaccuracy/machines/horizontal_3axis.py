@@ -7,7 +7,7 @@ topology) and its Eqs. 1-4 are lost from the text, so the layout is a constructo
 
 Layout
 ------
-The layout is a topology of :mod:`.chain` (:func:`~.chain.parse_topology`: ``w``, the
+The layout is a topology of :mod:`.topology` (:func:`~.topology.parse_topology`: ``w``, the
 workpiece-side axes with the one carrying the workpiece first, ``b``, the tool-side axes from the
 bed out, ``t``), or the name of one of the common ones in :data:`LAYOUTS`, written ``W/T``: the
 axes that carry the workpiece (``W``) and the spindle (``T``), each from the bed outwards.  The
@@ -71,7 +71,8 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import errors as _errors
-from .chain import ChainMachine, parse_topology
+from .chain import ChainMachine
+from .topology import parse_topology
 from .vertical_xyfz import placements
 
 AXES = ("x", "y", "z")
@@ -85,7 +86,7 @@ class Layout(NamedTuple):
     Attributes
     ----------
     topology : str
-        The chain from the workpiece to the tool (:func:`~.chain.parse_topology`).
+        The chain from the workpiece to the tool (:func:`~.topology.parse_topology`).
     description : str
         The machine it describes, for readers (tables, :meth:`Horizontal3Axis.describe`).
     """

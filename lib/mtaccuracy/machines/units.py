@@ -1,10 +1,10 @@
 """Plausibility of the units of a reader's machine data: the travels and the error ranges.
 
-The readers of notebook 06 (:func:`.chain.read_axis_table`, :func:`.chain.read_ranges`) take
-a file's ``unit`` column at its word.  A number that makes sense only in another unit (a travel
-in metres labelled ``mm``, radians labelled ``deg``, microns labelled ``mm``) would otherwise
-build a machine a thousand times too small, or errors a thousand times too large, and every
-result after it would be wrong without a word.  These checks compare each value with what
+The readers of notebook 06 (:func:`.readers.read_axis_table`, :func:`.readers.read_ranges`)
+take a file's ``unit`` column at its word.  A number that makes sense only in another unit (a
+travel in metres labelled ``mm``, radians labelled ``deg``, microns labelled ``mm``) would
+otherwise build a machine a thousand times too small, or errors a thousand times too large, and
+every result after it would be wrong without a word.  These checks compare each value with what
 machine tools are (ISO 230-1 vocabulary; the typical magnitudes of ISO 230-2 and ISO 10791
 acceptance tolerances):
 
@@ -21,7 +21,7 @@ What no such check can catch: a confusion whose result is still plausible.  The 
 20 m gantry written in metres (20 "mm"), a travel in inches or centimetres labelled mm, an
 angle in arcsec labelled urad (a factor 4.85), an error of 0.006 mm written 0.006 with the unit
 um (6 nm: an ultra-precision machine's error) all stay within the limits.  Rotary pivots are
-not checked beyond their bound (:data:`.chain.MAX_LINEAR_MM`): a pivot may lie at, or a
+not checked beyond their bound (:data:`.readers.MAX_LINEAR_MM`): a pivot may lie at, or a
 fraction of a millimetre from, the origin of its frame, so no small value tells its unit.
 """
 

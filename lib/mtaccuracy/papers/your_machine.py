@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import param
 
-from ..machines import chain
+from ..machines.topology import LINEAR, ROTARY, parse_topology
 from .figure import Caption, figures
 from .parameters import InputFile, NotebookParameters, OutputFolder, ParameterError
 
@@ -30,7 +30,7 @@ def swept_axis(topology: str) -> str | None:
     str or None
         ``"B"`` for ``w C b X Y Z B t``; None where no rotary axis carries the tool.
     """
-    return next((a for a in chain.parse_topology(topology).tool if a in chain.ROTARY), None)
+    return next((a for a in parse_topology(topology).tool if a in ROTARY), None)
 
 
 CHAIN = Caption(
@@ -60,11 +60,11 @@ def chain_figure(machine, topology: str, *, travels: dict, pivots: dict, tool: d
     Parameters
     ----------
     machine : ChainMachine
-        Built from ``topology`` (:func:`mtaccuracy.machines.chain.iso_machine`).
+        Built from ``topology`` (:func:`mtaccuracy.machines.iso.iso_machine`).
     topology : str
         The topology string, read from the workpiece to the tool.
     travels, pivots : dict
-        As :func:`mtaccuracy.machines.chain.read_axis_table` returns them (mm, rad).
+        As :func:`mtaccuracy.machines.readers.read_axis_table` returns them (mm, rad).
     tool : dict
         The tool offsets of every pose (``tool_x``, ``tool_y``, ``tool_z``, mm).
     tool_length_mm : float
@@ -74,7 +74,7 @@ def chain_figure(machine, topology: str, *, travels: dict, pivots: dict, tool: d
     -------
     matplotlib.figure.Figure
     """
-    topo = chain.parse_topology(topology)
+    topo = parse_topology(topology)
     fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(11, 3.6),
                                    gridspec_kw={"width_ratios": [2.2, 1]})
     labels = ["workpiece", *reversed(topo.work), "bed", *topo.tool, "tool"]
@@ -83,7 +83,7 @@ def chain_figure(machine, topology: str, *, travels: dict, pivots: dict, tool: d
         side = "table side" if lab in topo.work else "head side" if lab in topo.tool else ""
         c = colour.get(lab, "#1f77b4" if lab in topo.tool else "#ff7f0e")
         ax0.add_patch(plt.Rectangle((i - 0.38, -0.3), 0.76, 0.6, fc=c, alpha=0.25, ec=c))
-        kind = "linear" if lab in chain.LINEAR else "rotary"
+        kind = "linear" if lab in LINEAR else "rotary"
         ax0.text(i, 0, lab if lab in colour else f"{lab}\n{kind}", ha="center", va="center",
                  fontsize=8)
         under = side + (f"\npivot {', '.join(f'{v:g}' for v in pivots[lab])} mm"
@@ -103,7 +103,7 @@ def chain_figure(machine, topology: str, *, travels: dict, pivots: dict, tool: d
         return fig
     poses = {**{k: np.full(9, v) for k, v in {**centre, **tool}.items()},
              sweep: np.linspace(*travels[sweep], 9),
-             **{a: np.zeros(9) for a in topo.work if a in chain.ROTARY}}
+             **{a: np.zeros(9) for a in topo.work if a in ROTARY}}
     r, t = machine.relative(np.zeros((9, machine.n_errors)), poses, with_errors=False)
     back = t + r[:, :, 2] * tool_length_mm  # the tool: tip to spindle nose
     ax1.plot(np.c_[t[:, 0], back[:, 0]].T, np.c_[t[:, 2], back[:, 2]].T, "-", color="#2ca02c",
@@ -127,7 +127,7 @@ def chain_caption(topology: str, travels: dict, *, tool_length_mm: float,
     topology : str
         The topology string, read from the workpiece to the tool.
     travels : dict
-        As :func:`mtaccuracy.machines.chain.read_axis_table` returns them (mm, rad).
+        As :func:`mtaccuracy.machines.readers.read_axis_table` returns them (mm, rad).
     tool_length_mm : float
         The tool drawn.
     axis_table : str
@@ -138,7 +138,7 @@ def chain_caption(topology: str, travels: dict, *, tool_length_mm: float,
     Caption
     """
     sweep = swept_axis(topology)
-    shown = dict(topology=topology, bodies=chain.parse_topology(topology).describe(),
+    shown = dict(topology=topology, bodies=parse_topology(topology).describe(),
                  axis_table=axis_table, tool_length=tool_length_mm)
     if sweep is None:
         return CHAIN_WITHOUT_SWEEP.format(**shown)
@@ -157,7 +157,7 @@ def conclusion_numbers(catalogue, removed, key_shares, *, centred_ratio: float,
     Parameters
     ----------
     catalogue : DataFrame
-        :func:`mtaccuracy.machines.chain.catalogue_table` (column ``kind``: every error that
+        :func:`mtaccuracy.machines.readers.catalogue_table` (column ``kind``: every error that
         is not ``squareness`` or ``location`` is an error motion).
     removed : DataFrame
         The removed location errors (column ``symbol``).
@@ -224,7 +224,7 @@ class Parameters(NotebookParameters):
     def check(self) -> None:
         # the topology alone; the axis table and the range file are checked against it when read
         try:
-            chain.parse_topology(self.topology)
+            parse_topology(self.topology)
         except (TypeError, ValueError) as exc:
             raise ParameterError(f"{self.stem}: {exc}") from None
 

@@ -121,7 +121,7 @@ class Inputs:
         """Independent uniforms on a ``(2, d)`` array of lower and upper bounds.
 
         The form in which the compendium's readers and notebooks hold error ranges
-        (``machines.chain.read_ranges``, SALib's ``bounds`` transposed).
+        (``machines.readers.read_ranges``, SALib's ``bounds`` transposed).
 
         Parameters
         ----------
