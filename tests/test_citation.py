@@ -9,9 +9,8 @@ import pandas as pd
 import yaml
 
 import mtaccuracy
-from mtaccuracy.compendium import paths
+from mtaccuracy.compendium.provenance import ROOT
 
-ROOT = paths.ROOT
 
 
 def _newest_changelog_entry() -> tuple[str, str]:
@@ -45,7 +44,7 @@ def test_one_repository_everywhere():
 
 
 def test_every_papers_doi_is_where_a_reader_looks():
-    index = pd.read_csv(paths.PAPERS / "index.csv", dtype=str, keep_default_na=False)
+    index = pd.read_csv(ROOT / "data" / "papers" / "index.csv", dtype=str, keep_default_na=False)
     cff = (ROOT / "CITATION.cff").read_text(encoding="utf-8")
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     head = readme.split("## Running, in more detail")[0]  # the README's first screen

@@ -9,7 +9,7 @@ import pytest
 import sympy as sp
 
 from mtaccuracy import errors, sensitivity
-from mtaccuracy.compendium import guo2016
+from mtaccuracy.papers import guo2016
 from mtaccuracy.machines import build
 
 MACHINE = build("vertical_xyfz")

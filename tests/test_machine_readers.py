@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from mtaccuracy import errors
-from mtaccuracy.compendium import paths
+from mtaccuracy.compendium.provenance import ROOT
 from mtaccuracy.machines import iso as ISO
 from mtaccuracy.machines import readers as R
 from mtaccuracy.machines import topology as T
@@ -594,7 +594,7 @@ def test_edge_travels_of_real_axes_are_read_quietly(tmp_path):
 
 
 def test_the_shipped_machine_files_are_read_quietly():
-    folder = paths.DATA / "machines"
+    folder = ROOT / "data" / "machines"
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         travels, pivots = R.read_axis_table(folder / "swivel_head_axes.csv", TOPOLOGY)

@@ -1,30 +1,10 @@
-"""The parameter checks notebooks 02 and 04 call (compendium.rong, compendium.xu2022)."""
+"""The checks notebooks 04 and 01 make on their data and results (papers.xu2022, zheng2024);
+the checks of the parameters alone are the declarations' (tests/test_parameters.py)."""
 
 import pytest
-from mtaccuracy.compendium.parameters import ParameterError
 
-from mtaccuracy.compendium import rong, xu2022
-
-GOOD = dict(workspace_mm=[800, 700, 600], tool_offset_mm=[0, 0, 100],
-            sweep_thresholds=[0.5, 0.99, 0.01], tool_lengths_mm=[0, 300, 10], n_plot=100,
-            n_base=1000)
-
-
-def test_check_sweeps_counts_the_thresholds():
-    assert rong.check_sweeps(**GOOD) == 50
-
-
-@pytest.mark.parametrize("change, message", [
-    (dict(workspace_mm=[800, 700]), "workspace_mm and tool_offset_mm need three values"),
-    (dict(sweep_thresholds=[0.9, 0.5, 0.01]), r"0 < first <= last < 1, step > 0"),
-    (dict(tool_lengths_mm=[0, 300, 1]), "more than 200 tool lengths"),
-    (dict(tool_lengths_mm=[300, 0, 10]), "first <= last and step > 0"),
-    (dict(n_plot=2000), "n_plot = 2000 must be at most n_base = 1000"),
-    (dict(sweep_thresholds=[0.01, 0.99, 0.001]), "gives 981 thresholds; at most 200"),
-])
-def test_check_sweeps_refuses_with_a_clear_message(change, message):
-    with pytest.raises(ParameterError, match=message):   # the one type of a parameter error
-        rong.check_sweeps(**{**GOOD, **change})
+from mtaccuracy.papers import xu2022, zheng2024
+from mtaccuracy.papers.parameters import ParameterError
 
 
 def test_xu2022_checks_refuse_a_split_the_data_cannot_serve():
@@ -49,7 +29,6 @@ def test_zheng_fixed_ratio_floor_spans_every_group_not_the_last():
     import numpy as np
     import pandas as pd
 
-    from mtaccuracy.compendium import zheng2024
 
     t2 = pd.DataFrame({"comp": ["Px"] * 5, "symbol": list("abcde"),
                        "pce": [1.0, 1.2, 2.0, 2.0, 3.0], "mcs": [1.0] * 5, "lhs": [1.0] * 5})
@@ -68,7 +47,6 @@ def test_zheng_fixed_ratio_floor_spans_every_group_not_the_last():
 def test_zheng_converged_at_is_the_first_size_from_which_r_stays_small():
     import pandas as pd
 
-    from mtaccuracy.compendium import zheng2024
 
     g = pd.DataFrame({"n": [100, 200, 400, 800, 1600],
                       "R_percent": [float("nan"), 2.0, 5.0, 1.0, 0.5]})

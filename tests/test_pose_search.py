@@ -4,7 +4,7 @@ canonical pose, canonical ranking of optimiser output, least-squares fit of a kn
 import numpy as np
 import pandas as pd
 import pytest
-from mtaccuracy.compendium.zheng2024 import (
+from mtaccuracy.papers.zheng2024 import (
     POSE_SYMMETRIES,
     canonical_pose,
     fit_pose_average_to_indices,

@@ -3,7 +3,7 @@ indices and notebook 03's piecewise-constant Spearman coefficients."""
 
 import numpy as np
 import pytest
-from mtaccuracy.compendium.zheng2024 import fit_pose_to_indices
+from mtaccuracy.papers.zheng2024 import fit_pose_to_indices
 
 from mtaccuracy import sensitivity as S
 from mtaccuracy.machines import build

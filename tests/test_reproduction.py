@@ -1,9 +1,17 @@
-import json
 
 import pandas as pd
 import pytest
 
 from mtaccuracy.compendium import reproduction as R
+from mtaccuracy.compendium import scorecard
+from mtaccuracy.papers import printed
+
+
+def _write_card(rows, path):
+    """A scorecard written as a notebook's run writes it (``Run.scorecard``): checked rows, the
+    ``reproduced`` and ``tolerance`` columns held to the printed precision."""
+    df = R.card_frame(rows)
+    return R.write_table(df, path, tolerance={"reproduced": R.PRINTED, "tolerance": R.PRINTED})
 
 ROW = dict(item="Fig. 1", quantity="q", published="1.0", reproduced="1.1", unit="",
            tolerance="0.2", verdict="reproduced", basis="independent", note="")
@@ -23,33 +31,20 @@ def test_a_nan_or_infinite_value_is_never_a_verdict(pub, ours):
 def test_write_card_refuses_non_finite_results(tmp_path, value, verdict):
     basis = "unchecked" if verdict == "not reproducible" else "independent"
     with pytest.raises(R.NonFiniteResult):
-        R.write_card([dict(ROW, reproduced=value, verdict=verdict, basis=basis)],
-                     tmp_path / "r.csv")
-    assert not (tmp_path / "r.csv").exists()
+        R.card_frame([dict(ROW, reproduced=value, verdict=verdict, basis=basis)])
 
 
-def test_an_empty_result_is_allowed_only_when_not_reproducible(tmp_path):
-    R.write_card([dict(ROW, reproduced="", verdict="not reproducible", basis="unchecked")],
-                 tmp_path / "r.csv")
-
-
-def test_measured_rows_go_to_their_own_card(tmp_path):
-    rows = [ROW, dict(ROW, quantity="time, PCE (measured)", reproduced=3.2, verdict="close")]
-    R.write_card(rows, tmp_path / "reproduction.csv")
-    card = pd.read_csv(tmp_path / "reproduction.csv")
-    measured = pd.read_csv(tmp_path / R.MEASURED_CARD)
-    assert list(card.quantity) == ["q"] and list(measured.quantity) == ["time, PCE (measured)"]
-    side = json.loads((tmp_path / "provenance.json").read_text())
-    assert side["files"][R.MEASURED_CARD] == {"measured": True}
-    assert side["files"]["reproduction.csv"]["tolerance"]["reproduced"]["rel"] == 0
+def test_an_empty_result_is_kept_when_not_reproducible():
+    df = R.card_frame([dict(ROW, reproduced="", verdict="not reproducible", basis="unchecked")])
+    assert df.reproduced.tolist() == [""] and df.columns.tolist() == R.COLUMNS
 
 
 def test_save_table_refuses_infinity_and_unknown_tolerance_columns(tmp_path):
     with pytest.raises(R.NonFiniteResult, match="column\\(s\\) \\['a'\\]"):
-        R.save_table(pd.DataFrame({"a": [1.0, float("inf")]}), tmp_path / "t.csv")
+        R.write_table(pd.DataFrame({"a": [1.0, float("inf")]}), tmp_path / "t.csv")
     with pytest.raises(ValueError, match="unknown column"):
-        R.save_table(pd.DataFrame({"a": [1.0]}), tmp_path / "t.csv",
-                     tolerance={"b": R.Tolerance(abs=1.0, why="x")})
+        R.write_table(pd.DataFrame({"a": [1.0]}), tmp_path / "t.csv",
+                      tolerance={"b": R.Tolerance(abs=1.0, why="x")})
     with pytest.raises(ValueError, match="finite and >= 0"):
         R.Tolerance(rel=-1.0, why="x")
     with pytest.raises(ValueError, match="reason"):
@@ -57,10 +52,10 @@ def test_save_table_refuses_infinity_and_unknown_tolerance_columns(tmp_path):
 
 
 def _pair(tmp_path, a, b, tolerance=None):
-    R.save_table(pd.DataFrame(a), tmp_path / "new.csv", tolerance=tolerance)
-    R.save_table(pd.DataFrame(b), tmp_path / "old.csv", tolerance=tolerance)
-    tol = json.loads((tmp_path / "provenance.json").read_text())["files"]["old.csv"]
-    return R.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv", tol.get("tolerance"))
+    R.write_table(pd.DataFrame(a), tmp_path / "new.csv", tolerance=tolerance)
+    tol = R.write_table(pd.DataFrame(b), tmp_path / "old.csv", tolerance=tolerance)
+    return scorecard.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv",
+                                    tol.get("tolerance"))
 
 
 def test_compare_tables_allows_the_printed_digit_and_the_declared_tolerance(tmp_path):
@@ -82,42 +77,46 @@ def test_compare_tables_allows_the_printed_digit_and_the_declared_tolerance(tmp_
 
 def test_write_card_checks_columns_and_verdicts(tmp_path):
     with pytest.raises(ValueError, match="unknown verdict"):
-        R.write_card([dict(ROW, verdict="ok")], tmp_path / "r.csv")
+        R.card_frame([dict(ROW, verdict="ok")])
     with pytest.raises(ValueError, match="unknown basis"):
-        R.write_card([dict(ROW, basis="guessed")], tmp_path / "r.csv")
+        R.card_frame([dict(ROW, basis="guessed")])
     with pytest.raises(ValueError, match="'not reproducible' and 'unchecked' go together"):
-        R.write_card([dict(ROW, basis="unchecked")], tmp_path / "r.csv")
+        R.card_frame([dict(ROW, basis="unchecked")])
     with pytest.raises(ValueError, match="lack column"):
-        R.write_card([{k: v for k, v in ROW.items() if k != "note"}], tmp_path / "r.csv")
-    R.write_card([ROW], tmp_path / "r.csv")
+        R.card_frame([{k: v for k, v in ROW.items() if k != "note"}])
+    _write_card([ROW], tmp_path / "r.csv")
     assert (tmp_path / "r.csv").read_text().splitlines()[0] == ",".join(R.COLUMNS)
 
 
 def test_save_table_is_byte_deterministic(tmp_path):
     df = pd.DataFrame({"a": [0.1 + 0.2, 1 / 3], "b": ["x", "y"]})
-    R.save_table(df, tmp_path / "t.csv")
+    entry = R.write_table(df, tmp_path / "t.csv")
     first = (tmp_path / "t.csv").read_bytes()
-    R.save_table(df.copy(), tmp_path / "t.csv")
+    assert entry["sha256"] == __import__("hashlib").sha256(first).hexdigest()
+    R.write_table(df.copy(), tmp_path / "t.csv")
     assert (tmp_path / "t.csv").read_bytes() == first == b"a,b\n0.3,x\n0.333333,y\n"
 
 
 def test_published_refuses_malformed_files(tmp_path):
     (tmp_path / "t.csv").write_text("output,rank\nEx,\n")
     with pytest.raises(ValueError, match="missing column\\(s\\) \\['symbol'\\]"):
-        R.published("t", ["output", "symbol"], folder=tmp_path)
+        printed.published("t", ["output", "symbol"], folder=tmp_path)
     with pytest.raises(ValueError, match="column 'rank' is empty in row\\(s\\) \\[2\\]"):
-        R.published("t", ["output", "rank"], folder=tmp_path)
+        printed.published("t", ["output", "rank"], folder=tmp_path)
     with pytest.raises(FileNotFoundError, match="available: t"):
-        R.published("nope", folder=tmp_path)
+        printed.published("nope", folder=tmp_path)
+    seen = []
+    printed.published("t", ["output"], folder=tmp_path, on_read=seen.append)
+    assert seen == [tmp_path / "t.csv"]
 
 
 def test_gather_fills_the_marked_readme_section(tmp_path):
     figs = tmp_path / "figures"
-    R.write_card([ROW, dict(ROW, verdict="differs", quantity="p|q")],
-                 figs / "03_guo2016_spearman_21_errors" / "reproduction.csv")
+    _write_card([ROW, dict(ROW, verdict="differs", quantity="p|q")],
+                figs / "03_guo2016_spearman_21_errors" / "reproduction.csv")
     readme = tmp_path / "README.md"
-    readme.write_text(f"# T\n\n{R.README_START}\nold\n{R.README_END}\n\ntail\n")
-    R.gather(figs, readme)
+    readme.write_text(f"# T\n\n{scorecard.README_START}\nold\n{scorecard.README_END}\n\ntail\n")
+    scorecard.gather(figs, readme)
     text = readme.read_text()
     assert "old" not in text and text.endswith("tail\n")
     assert "| Guo et al. 2016 | `03_guo2016_spearman_21_errors` | 1 | 0 | 1 | 0 | 2 | 1 |" in text
@@ -125,18 +124,18 @@ def test_gather_fills_the_marked_readme_section(tmp_path):
     assert "| `independent` | 1 | 0 | 1 | 0 | 2 |" in text and "- `fitted`: an input" in text
     md = (figs / "REPRODUCTION.md").read_text()
     assert "p\\|q" in md and "| note |" in md and "| note |" not in text
-    R.gather(figs, readme)
+    scorecard.gather(figs, readme)
     assert readme.read_text() == text  # idempotent
     readme.write_text("# no markers\n")
     with pytest.raises(ValueError, match="lacks the scorecard markers"):
-        R.gather(figs, readme)
+        scorecard.gather(figs, readme)
 
 
 # --- the Card -------------------------------------------------------------------------------
 
 def test_tolerance_policy_takes_the_largest_justified_source():
-    assert R.printed_half_unit("0.0776") == pytest.approx(5e-5)
-    assert R.printed_half_unit("12") == 0.5 and R.printed_half_unit("1.2e-05") == \
+    assert printed.half_unit("0.0776") == pytest.approx(5e-5)
+    assert printed.half_unit("12") == 0.5 and printed.half_unit("1.2e-05") == \
         pytest.approx(5e-7)
     assert R.tolerance_for("0.0776") == (pytest.approx(5e-5), "printed")
     assert R.tolerance_for("0.0776", paper_rel=0.05) == (pytest.approx(0.00388), "paper")
@@ -286,27 +285,25 @@ def test_card_tally_and_write(tmp_path):
     card.claim("F", "b", "x", why="no data")
     t = card.tally()
     assert t.loc["independent", "reproduced"] == 1 and t.loc["total", "total"] == 2
-    card.write(tmp_path / "reproduction.csv")
-    df = pd.read_csv(tmp_path / "reproduction.csv", keep_default_na=False)
+    df = card.frame()
     assert list(df.columns) == R.COLUMNS and list(df.basis) == ["independent", "unchecked"]
-    assert (tmp_path / R.MEASURED_CARD).exists()
+    assert card.frame(measured=True).quantity.str.contains(R.MEASURED_MARK, regex=False).sum() == 1
 
 
 def test_the_tolerance_column_is_compared_by_its_number(tmp_path):
     card = R.Card()
     card.number("T", "a", "1.00", 1.04, sampling_se=0.0251)
-    card.write(tmp_path / "new.csv")
+    tol = _write_card(card.rows, tmp_path / "new.csv")["tolerance"]
     assert pd.read_csv(tmp_path / "new.csv")["tolerance"][0] == "0.05 (sampling)"
-    tol = json.loads((tmp_path / "provenance.json").read_text())["files"]["new.csv"]["tolerance"]
     other = (tmp_path / "new.csv").read_text()
     (tmp_path / "old.csv").write_text(other.replace("0.05 (sampling)", "0.049 (sampling)"))
-    assert R.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv", tol) == []
+    assert scorecard.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv", tol) == []
     (tmp_path / "old.csv").write_text(other.replace("0.05 (sampling)", "0.08 (sampling)"))
-    assert "column 'tolerance'" in R.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv",
-                                                    tol)[0]
+    assert "column 'tolerance'" in scorecard.compare_tables(tmp_path / "new.csv",
+                                                            tmp_path / "old.csv", tol)[0]
     (tmp_path / "old.csv").write_text(other.replace("0.05 (sampling)", "0.05 (paper)"))
     assert "'0.05 (sampling)' != committed '0.05 (paper)'" in \
-        R.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv", tol)[0]
+        scorecard.compare_tables(tmp_path / "new.csv", tmp_path / "old.csv", tol)[0]
 
 
 def test_a_bracket_of_defensible_inputs_is_not_reproducible_inside_and_scored_outside():

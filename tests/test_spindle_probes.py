@@ -20,7 +20,7 @@ import pytest
 
 from mtaccuracy import roundness
 from mtaccuracy import spindle as S
-from mtaccuracy.compendium import paths
+from mtaccuracy.compendium.provenance import ROOT
 from mtaccuracy.spindle import errormotion as E
 from mtaccuracy.spindle import probes as P
 
@@ -703,7 +703,7 @@ def test_max_harmonic_and_a_cancelling_layout_allowed(tmp_path):
 # ------------------------------------------------------------------ the shipped example
 
 
-EXAMPLE = paths.ROOT / "data" / "spindle"
+EXAMPLE = ROOT / "data" / "spindle"
 
 
 def test_the_shipped_example_is_what_its_generator_makes_and_is_labelled_simulated(tmp_path):

@@ -1,8 +1,6 @@
 """Thermal module (Xu et al. 2022): decoupling, fuzzy clustering, grey relational grade,
 the CSV schema and its validation, the models, and the reconstructed dataset."""
 
-import copy
-import re
 import shutil
 
 import numpy as np
@@ -12,9 +10,10 @@ import pytest
 from sklearn.linear_model import LinearRegression
 
 from mtaccuracy import thermal
-from mtaccuracy.compendium import paths, provenance, reproduction, xu2022, xu2022_reconstruction
+from mtaccuracy.compendium.notebook import NOTEBOOKS
+from mtaccuracy.papers import printed, xu2022, xu2022_reconstruction
 
-COMMITTED = paths.ROOT / xu2022.DEFAULT_DIR
+COMMITTED = xu2022.DATA
 RNG = np.random.default_rng(5)
 
 
@@ -724,7 +723,7 @@ def test_decoupling_the_reconstruction_gives_table5(recon):
 
 
 def test_the_printed_models_fit_the_reconstruction_within_the_published_residuals(recon):
-    models = reproduction.published("xu2022_models")
+    models = printed.published("xu2022_models")
     c = xu2022_reconstruction.eq9_consistency(recon, models)
     assert c.k_residual.abs().max() <= 3.6                # Table 7, largest slope residual
     assert c.b_residual.abs().max() <= 0.8                # Table 7, largest intercept residual
@@ -821,23 +820,6 @@ def test_replicate_split_on_replicate_0_is_the_notebooks_split(recon):
         thermal.replicate_split(reps, train=[1, 2, 3], test=[4], inputs={**fixed, "k": ["T99"]})
 
 
-def test_prepare_never_writes_a_readers_folder(good_dir):
-    before = {f.name: (f.read_bytes(), f.stat().st_mtime_ns) for f in good_dir.iterdir()}
-    folder, changed, what = xu2022.prepare(str(good_dir), regenerate=True, seed=7)
-    assert folder == good_dir and changed == [] and "read only" in what
-    assert {f.name: (f.read_bytes(), f.stat().st_mtime_ns) for f in good_dir.iterdir()} == before
-
-
-def test_prepare_regenerates_only_the_default_folder(tmp_path, monkeypatch):
-    monkeypatch.setenv(paths.OUTPUT_BASE_ENV, str(tmp_path))
-    folder, changed, what = xu2022.prepare("data/thermal", regenerate=True)
-    assert folder == tmp_path / "data" / "thermal" and len(changed) == 3
-    assert "seed 2022" in what
-    assert xu2022.prepare("data/thermal", regenerate=True)[1] == []   # byte-identical
-    assert xu2022.prepare("data/thermal", regenerate=False)[0] == COMMITTED
-    assert xu2022.is_default_dir(str(COMMITTED)) and not xu2022.is_default_dir("x")
-
-
 def test_write_measurements_asks_before_overwriting_and_writes_nothing_when_refused(good_dir):
     def state():
         return {f.name: (f.read_bytes(), f.stat().st_mtime_ns) for f in good_dir.iterdir()}
@@ -862,93 +844,6 @@ def test_write_measurements_asks_before_overwriting_and_writes_nothing_when_refu
     assert asked[-1] == [good_dir / "temperatures.csv"]
 
 
-@pytest.fixture
-def repository(tmp_path, monkeypatch):
-    """A repository root holding a copy of data/thermal, as ``make reproduce`` sees it: the
-    notebook's record (``provenance.start`` hashes the files of ``data_dir``) and the folder
-    ``prepare`` regenerates are the same files.  Returns that data/thermal."""
-    root = tmp_path / "repository"
-    shutil.copytree(COMMITTED, root / xu2022.DEFAULT_DIR)
-    monkeypatch.setattr(paths, "ROOT", root)
-    monkeypatch.delenv(paths.OUTPUT_BASE_ENV, raising=False)
-    monkeypatch.setattr(provenance, "_state", copy.deepcopy(provenance._state))
-    return root / xu2022.DEFAULT_DIR
-
-
-def _run_04(regenerate=True, seed=2022, out=None):
-    """What notebook 04's first cells do: start the record, then prepare."""
-    provenance.start("04_xu2022_thermal_mlr_svr", {"data_dir": "data/thermal", "seed": seed,
-                                                   "regenerate_data": regenerate})
-    return xu2022.prepare("data/thermal", regenerate=regenerate, seed=seed, out=out)
-
-
-def test_the_reconstructions_record_holds_the_hashes_of_the_bytes_on_disk(repository):
-    """A run that rewrites the compendium's own earlier files (here an older reconstruction
-    with other noise, written and recorded by the compendium) records the new bytes, in the
-    file entries and in the run's inputs (which ``provenance.start`` had hashed before the
-    files were rewritten)."""
-    assert len(thermal.write_measurements(xu2022.reconstruct(seed=7), repository,
-                                          save=reproduction.save_table)) == 2
-    folder, changed, what = _run_04()
-    assert folder == repository and "2 file(s) rewritten (temperatures.csv, errors.csv)" in what
-    side = provenance.read(folder)
-    for f in COMMITTED.glob("*.csv"):
-        disk = provenance.sha256(folder / f.name)
-        assert disk == provenance.sha256(f)                  # the committed bytes again
-        assert side["files"][f.name]["sha256"] == disk
-        assert side["run"]["inputs"][f"data/thermal/{f.name}"] == disk
-    before = (folder / provenance.SIDECAR).read_bytes()
-    assert _run_04()[1] == []                                # byte-stable, record unchanged
-    assert (folder / provenance.SIDECAR).read_bytes() == before
-
-
-def test_regenerating_never_overwrites_a_users_edit(repository):
-    def state():
-        return {f.name: (f.read_bytes(), f.stat().st_mtime_ns) for f in repository.iterdir()}
-
-    temps = repository / "temperatures.csv"
-    original = temps.read_bytes()
-    temps.write_bytes(original.replace(b"\n1,1,0,30.41,", b"\n1,1,0,30.99,", 1))
-    before = state()
-    with pytest.raises(xu2022.EditedDataError) as refused:
-        _run_04()
-    message = str(refused.value)
-    assert re.fullmatch(r"data/thermal/temperatures.csv: edited since the compendium wrote it "
-                        r"\(its SHA-256 is not the one recorded in data/thermal/provenance.json\); "
-                        r"regenerating would overwrite the edit, so nothing was written: run "
-                        r"with regenerate_data = False to use the edited data, or restore the "
-                        r"committed files with `git checkout data/thermal` and run again",
-                        message)
-    assert state() == before                                 # nothing written, not the record
-    folder, changed, _ = _run_04(regenerate=False)           # ... which reads the edit
-    assert changed == [] and xu2022.read(folder).temperatures.T1.iloc[0] == 30.99
-
-    (repository / provenance.SIDECAR).unlink()               # no record: not known to be ours
-    with pytest.raises(xu2022.EditedDataError, match="temperatures.csv: edited since"):
-        _run_04()
-    temps.write_bytes(original)                              # the generator's own bytes:
-    (repository / "errors.csv").unlink()                     # nothing overwritten; a missing
-    folder, changed, what = _run_04()                        # file is simply written
-    assert changed == [repository / "errors.csv"] and "(errors.csv)" in what
-    for f in COMMITTED.glob("*.csv"):
-        assert (folder / f.name).read_bytes() == f.read_bytes()
-    assert set(provenance.read(folder)["files"]) == {f.name for f in COMMITTED.glob("*.csv")}
-
-
-def test_another_seeds_reconstruction_is_not_overwritten_after_an_edit_either(repository,
-                                                                               tmp_path):
-    out = tmp_path / "out"
-    folder, changed, _ = _run_04(seed=7, out=out)
-    assert folder == out / "reconstruction" and len(changed) == 3
-    assert len(_run_04(seed=8, out=out)[1]) == 2             # its own files: rewritten
-    (folder / "errors.csv").write_text("edited\n")
-    with pytest.raises(xu2022.EditedDataError,
-                       match=r"^<output_dir>/reconstruction/errors.csv: edited since .* run "
-                             rf"with data_dir = '{re.escape(str(folder))}' to use the edited "
-                             r"data \(read, never written\), or delete the edited file\(s\)"):
-        _run_04(seed=7, out=out)
-
-
 def test_published_inputs_decoupled_beats_point_by_point_on_the_paper_split(recon):
     fixed = {"point": ["T1", "T11", "T12"], "k": ["T1", "T6", "T12"], "b": ["T2", "T7", "T11"]}
     r = thermal.evaluate_split(recon, train=[1, 2, 3], test=[4], kinds=("mlr",), sensors=fixed)
@@ -965,23 +860,12 @@ def test_notebook_refuses_a_malformed_data_dir_and_leaves_it_alone(good_dir, tmp
     _edit(good_dir / "errors.csv", lambda df: df.rename(columns={"error_um": "error_mm"}))
     before = {f.name: f.read_bytes() for f in good_dir.iterdir()}
     with pytest.raises(pm.PapermillExecutionError, match="error_mm"):
-        pm.execute_notebook(str(paths.NOTEBOOKS / "04_xu2022_thermal_mlr_svr.ipynb"),
-                            str(tmp_path / "nb.ipynb"), cwd=str(paths.NOTEBOOKS),
+        pm.execute_notebook(str(NOTEBOOKS / "04_xu2022_thermal_mlr_svr.ipynb"),
+                            str(tmp_path / "nb.ipynb"), cwd=str(NOTEBOOKS),
                             parameters={"data_dir": str(good_dir),
                                         "output_dir": str(tmp_path / "out")},
                             kernel_name="python3", progress_bar=False)
     assert {f.name: f.read_bytes() for f in good_dir.iterdir()} == before
-
-
-# ``stem`` names the notebook whose nbval run this checks (``make test`` runs the tests of
-# what nbval wrote in nbval's session, conftest.py ``--part``)
-@pytest.mark.parametrize("stem", ["04_xu2022_thermal_mlr_svr"])
-def test_notebook_regenerated_the_committed_dataset(nbval_output, stem):
-    """Notebook 04's run in this session (by nbval) regenerated the reconstruction
-    byte-identically (into its own output base, never over data/thermal)."""
-    fresh = nbval_output(stem) / xu2022.DEFAULT_DIR
-    for f in COMMITTED.glob("*.csv"):
-        assert (fresh / f.name).read_bytes() == f.read_bytes(), f.name
 
 
 # ------------------------------------------------------------------ scikit-learn conformance

@@ -20,7 +20,7 @@ from sklearn import config_context
 from sklearn.model_selection import GridSearchCV, GroupKFold, ParameterGrid
 
 from mtaccuracy import thermal
-from mtaccuracy.compendium import paths, xu2022
+from mtaccuracy.papers import xu2022
 
 PAPER_INPUTS = {"point": ["T1", "T11", "T12"], "k": ["T1", "T6", "T12"],
                 "b": ["T2", "T7", "T11"]}
@@ -96,7 +96,7 @@ def test_the_search_with_reuse_chooses_what_fitting_every_candidate_chooses():
 def test_on_the_reconstruction_the_search_is_the_one_before_issue_22():
     """The notebook's split: the same candidates, choices and held-out predictions, bit for
     bit, as scikit-learn's plain GridSearchCV over every fit of the full grid."""
-    data = thermal.read_measurements(paths.ROOT / xu2022.DEFAULT_DIR)
+    data = thermal.read_measurements(xu2022.DATA)
     tr, te = data.subset([1, 2, 3]), data.subset([4])
     k, b = thermal.decouple(tr.offsets_mm(), tr.errors)
     x_tr = thermal.design(tr, PAPER_INPUTS, "decoupled")

@@ -1,11 +1,11 @@
 """The XYFZ machine of Guo et al. 2016: the chain against the independent sympy product of the
-paper's matrices (:mod:`mtaccuracy.compendium.guo2016`), arms, linearity, bad input."""
+paper's matrices (:mod:`mtaccuracy.papers.guo2016`), arms, linearity, bad input."""
 
 import numpy as np
 import pytest
 import sympy as sp
 
-from mtaccuracy.compendium import guo2016
+from mtaccuracy.papers import guo2016
 from mtaccuracy.machines import build
 
 M = build("vertical_xyfz")

@@ -1,42 +1,31 @@
 """The compendium's book: ``make book`` (``python -m mtaccuracy.apps.book``).
 
-A Sphinx site with MyST-NB and the book theme (the stack under Jupyter Book 1), built from what
-is committed, never re-running a notebook:
+A Sphinx site (MyST-NB, the book theme: the stack under Jupyter Book 1) built from what is
+committed, never re-running a notebook: a home page (verdicts by basis, the papers and their
+DOIs); one chapter per notebook with the paper, the notebook's "What we conclude", its figures
+in the paper's order (the paper module's ``FIGURES``) with the captions their run recorded in
+``provenance.json``, its scorecard as a table that sorts and filters (DataTables, through
+``itables``) and, after ``make sweep``, the rows whose verdict changes with the seed, and its
+parameters as its declaration (``mtaccuracy.papers.<paper>.Parameters``) gives them; the whole
+scorecard on one page, the executed notebooks, and the science layer's reference.
 
-* a home page with the verdict x basis overview, one line per paper with its DOI, and links;
-* one chapter per notebook: the paper and its DOI, the notebook's own conclusion (its "What we
-  conclude" section), the figures in the paper's order (its paper module's ``FIGURES``) with
-  the captions their run recorded in ``provenance.json`` (numbers filled in by that run), the
-  scorecard as a table that sorts and filters (DataTables, through ``itables``) with, after
-  ``make sweep``, the rows whose verdict changes with the seed, and the notebook's parameters
-  as its declaration gives them (``mtaccuracy.papers.<paper>.Parameters``);
-* the full scorecard on one page, the executed notebooks as pages (math by MathJax), and the
-  library's reference generated from its numpydoc docstrings.
+Not Jupyter Book 2: mystmd downloads its theme and a Node.js runtime when it builds, which
+neither this project's machines nor a reader offline can do.  Everything the pages load is in
+the site (MathJax from ``jupyter-server-mathjax``, DataTables from ``itables``): served (GitHub
+Pages, ``python -m http.server -d build/book/html -b 127.0.0.1``) it works offline; opened from
+disk, the scorecards stay static tables (browsers load no module script from ``file://``).
 
-Why Sphinx + MyST-NB and not Jupyter Book 2: Jupyter Book 2 (mystmd) downloads its site theme
-and a Node.js runtime when it builds, which neither this project's machines nor a reader
-offline can do; Jupyter Book 1 is a command-line wrapper over exactly this stack.  Everything
-the pages load is in the built site: MathJax from the ``jupyter-server-mathjax`` package and
-DataTables from ``itables``, so the book reads without a network.  Served (GitHub Pages, or
-``python -m http.server -d build/book/html -b 127.0.0.1``) every page works; opened straight
-from disk, the scorecards stay a static table (browsers load no module script from
-``file://``).
-
-Before building, every output shown is checked against its folder's ``provenance.json``
+Every output shown is first checked against its folder's ``provenance.json``
 (:func:`mtaccuracy.compendium.provenance.folder_problems`; a sweep's tables against
-``sweep/provenance.json``) and every figure against its caption (:func:`chapter_figures`): a
-broken, changed or missing output, a figure whose record has no caption, or a caption in
-``FIGURES`` whose figure the run did not write is named on standard error and marked in its
-chapter, and the command exits with status 1 (the book is still written, so the problem can be
-seen).  A file the record does not list (the user's) is neither judged nor shown.
+``sweep/provenance.json``), and every figure against its caption (:func:`chapter_figures`): a
+broken, changed or missing output, a figure whose record has no caption, a caption in
+``FIGURES`` whose figure the run did not write is named on standard error and in its chapter,
+and the command exits with status 1 (the book is still written, so the problem can be seen).
+A file the record does not list (the user's) is neither judged nor shown.
 
-The site is written to ``build/book/html`` (a fresh build in ``build/book/.html-<pid>`` first,
-then moved in place, so a killed build never leaves half a site); its pages' source goes to
-``build/book/src``.  Both folders are the build's own (a marker file says so): a folder of that
-name without the marker is never deleted or overwritten.
-
-Local imports: Sphinx, itables and MathJax are imported when the book is built, so that
-the checks of the outputs against their provenance run without them.
+The site goes to ``build/book/html``, its source to ``build/book/src``: each built beside
+(``.html-<pid>``) and then moved in place, and only over a folder carrying this module's marker
+file.  Sphinx, itables and MathJax are imported only when the book is built.
 """
 
 from __future__ import annotations
@@ -95,25 +84,10 @@ def chapter_figures(stem: str, folder: Path, side: dict | None = None
                     ) -> tuple[list[dict], list[tuple[Path, str]]]:
     """The figures a chapter shows, and the problems of their captions.
 
-    Parameters
-    ----------
-    stem : str
-        The notebook.
-    folder : Path
-        Its output folder.
-    side : dict, optional
-        The folder's ``provenance.json`` (read when not given).
-
-    Returns
-    -------
-    figures : list of dict
-        ``{"figure": PNG stem, "label", "caption"}`` as the run recorded them: first in the
-        order of the paper module's ``FIGURES``, then any other figure the run wrote, in the
-        run's order.
-    problems : list of (Path, str)
-        A PNG whose record has no caption, a caption in ``FIGURES`` whose figure the run did
-        not write.
-    """
+    The figures are ``{"figure", "label", "caption"}`` as their run recorded them, in the order
+    of the paper module's ``FIGURES``, then any other in the run's order; the problems, a PNG
+    whose record has no caption and a caption in ``FIGURES`` whose figure the run did not write
+    (``side``: the folder's record, read when not given)."""
     side = provenance.read(folder) if side is None else side
     pngs = {n[:-4]: e for n, e in side.get("files", {}).items() if n.endswith(".png")}
     order = list(captions(stem))
@@ -226,7 +200,7 @@ def _label_css() -> str:
 
 
 def _fig_alt(label: str, caption: str) -> str:
-    first = re.split(r"(?<=\.)\s", caption.strip(), maxsplit=1)[0]
+    first = re.split(r"(?<=\.)\s+(?=[A-Z])", caption.strip(), maxsplit=1)[0]
     return f"{label}: {first}".replace('"', "'").replace("\n", " ")
 
 
@@ -283,8 +257,9 @@ def parameter_lines(stem: str, run: dict | None = None) -> list[str]:
 
 
 def sweep_lines(stem: str, folder: Path, bad: set[str]) -> list[str]:
-    """What ``make sweep`` found: over how many seeds the scorecard was re-run, and the rows
-    whose verdict changes with the seed (none when its tables are missing or broken)."""
+    """What ``make sweep`` found: over how many seeds, and which verdicts change with the seed.
+
+    Nothing when the sweep's tables are missing or broken (``bad``)."""
     side = sweep_record(folder, stem)
     if not side or f"{SWEEP}/verdict_stability.csv" in bad \
             or not (folder / SWEEP / "verdict_stability.csv").is_file():

@@ -1,14 +1,15 @@
 """An interactive explorer of the compendium's three topics, in the browser, on 127.0.0.1.
 
-Run ``make explore`` (``EXPLORE_ARGS="--port N"``) or ``python -m mtaccuracy.compendium.explore
-[--port N] [--show/--no-show]``: it serves the
-app on ``127.0.0.1`` only (port 0, the default, picks a free one), prints the URL and runs until
-Ctrl-C.  Three tabs:
+Run ``make explore`` (``EXPLORE_ARGS="--port N"``) or ``python -m mtaccuracy.apps.explore
+[--port N] [--show/--no-show]``: it serves the app on ``127.0.0.1`` only (port 0, the default,
+picks a free one), prints the URL and runs until Ctrl-C.  Every starting value (error ranges,
+poses, probe layout, data, split) is the default its notebook declares (``Parameters`` in
+:mod:`mtaccuracy.papers`).  Three tabs:
 
 Machine
     One of the papers' three machines (Zheng et al. 2024's AC double turntable, Rong et al.'s
     horizontal machining centre, Guo et al. 2016's vertical XYFZ) or any topology typed in
-    (:func:`mtaccuracy.machines.chain.iso_machine`; a topology the library refuses shows the
+    (:func:`mtaccuracy.machines.iso.iso_machine`; a topology the library refuses shows the
     library's message).  Sliders set the pose and the two error ranges; the closed-form Sobol
     indices of the first-order model at that pose (errors x outputs, a heat map) and the
     error with the largest index over a 25 x 25 grid of two chosen axes update at every slider
@@ -17,16 +18,16 @@ Machine
     page (Panel's 50 ms server-side debounce is cut to :data:`DEBOUNCE_MS` for these
     widgets).
 Spindle
-    Probe angles (Yang et al. 2021's four-point layout to start with) and, per harmonic, the
+    Probe angles (notebook 05's, Yang et al. 2021's four-point layout) and, per harmonic, the
     noise amplification of the two estimators of :mod:`mtaccuracy.spindle.probes` (least
     squares, and the weighted multi-point method), the harmonics the layout cancels and those
     it amplifies.
 Thermal
-    Notebook 04's train/test split on ``data/thermal``: the decoupled model of Xu et al. 2022
+    Notebook 04's train/test split on its ``data_dir``: the decoupled model of Xu et al. 2022
     (Eq. 9, MLR or SVR) predicts the test experiment's thermal error, shown against the
     measured one with its RMSE; the SVR (about 2 s) shows a spinner and its progress.
 
-What is computed is in :mod:`mtaccuracy.compendium.explore_model` (plain functions, tested
+What is computed is in :mod:`mtaccuracy.apps.explore_model` (plain functions, tested
 without a browser); this module only draws it.
 
 Why Panel (HoloViz): it is a standard app framework of the Jupyter ecosystem; an app is a
@@ -56,15 +57,13 @@ import shlex
 import socket
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
+from ..compendium import provenance
+from ..compendium.plotting import unit_symbol
+from ..papers import xu2022
 from . import explore_model as M
-from . import paths, xu2022
-from .plotting import unit_symbol
-
-__all__ = ["LOOPBACK", "create_app", "check_address", "free_port", "serve", "main"]
 
 #: The only address the explorer listens on.
 LOOPBACK = "127.0.0.1"
@@ -117,14 +116,6 @@ def _unlocked(method):
         with pn.io.unlocked():
             return method(*args, **kwargs)
     return run
-
-
-def _shown_path(source: str) -> str:
-    """A data folder as the reader knows it: relative to the repository when inside it."""
-    try:
-        return str(Path(source).resolve().relative_to(paths.ROOT))
-    except ValueError:
-        return str(source)
 
 
 def _error_html(message: str) -> str:
@@ -450,15 +441,14 @@ class SpindleTab:
                         line_color=None)
         rc = self.fig.scatter(x="k", y="y", source=self.cut_src, marker="x", size=11,
                               color=RED, line_width=2, legend_label="cancelled")
-        r1 = self.fig.line(x="k", y="q", source=self.ls_src, color=BLUE, line_width=1.5,
-                           legend_label="least squares")
+        self.fig.line(x="k", y="q", source=self.ls_src, color=BLUE, line_width=1.5,
+                      legend_label="least squares")
         c1 = self.fig.scatter(x="k", y="q", source=self.ls_src, color=BLUE, size=6,
                               legend_label="least squares")
         self.fig.line(x="k", y="q", source=self.w_src, color=ORANGE, line_width=1.5,
                       legend_label="weighted (Yang et al. 2021)")
         c2 = self.fig.scatter(x="k", y="q", source=self.w_src, color=ORANGE, size=6,
                               marker="square", legend_label="weighted (Yang et al. 2021)")
-        del r1
         self.span = Span(location=3.0, dimension="width", line_dash="dashed", line_color="#555")
         self.fig.add_layout(self.span)
         self.fig.select_one(HoverTool).update(
@@ -623,15 +613,16 @@ class ThermalTab:
         self._doc = pn.state.curdoc          # the session's document (None outside a server)
         self.label = xu2022.RECONSTRUCTED_LABEL if self.reconstructed else ""
         exps = [int(e) for e in self.data.experiments]
+        start = M.thermal_defaults(self.data, self.reconstructed)  # notebook 04's declaration
         self._generation = 0
         self.train = pn.widgets.CheckBoxGroup(label="training experiments", options=exps,
-                                              value=exps[:-1], inline=True)
-        self.test = pn.widgets.Select(label="test experiment", options=exps, value=exps[-1],
-                                      width=140)
+                                              value=start["train"], inline=True)
+        self.test = pn.widgets.Select(label="test experiment", options=exps,
+                                      value=start["test"], width=140)
         self.inputs = pn.widgets.RadioButtonGroup(
             label="inputs", options={"paper's sensors": "published",
                                     "selected on training data": "selected"},
-            value="published", width=290)
+            value=start["inputs"], width=290)
         self.kind = pn.widgets.RadioButtonGroup(
             label="model", options={"MLR": "mlr", "SVR (about 2 s)": "svr"}, value="mlr",
             width=290)
@@ -676,7 +667,7 @@ class ThermalTab:
             pn.pane.HTML("<b>Model inputs</b> (Eq. 9: k from temperatures, b from rises)"),
             self.inputs, pn.pane.HTML("<b>Decoupled model</b> (Xu et al. 2022, Eq. 9)"),
             self.kind, pn.Row(self.spinner, self.status), self.error,
-            _note(f"Data: {html.escape(_shown_path(self.data.source))}"
+            _note(f"Data: {html.escape(provenance.shown(self.data.source))}"
                   + (" - the paper's reconstruction (data/thermal/README.md), not "
                      "measurements." if self.reconstructed else " - not the paper's "
                      "reconstruction: no comparison with the paper.")), width=310)
@@ -873,7 +864,7 @@ def serve(*, port: int = 0, address: str = LOOPBACK, show: bool = False):
 
 
 def main(argv=None) -> int:
-    """``python -m mtaccuracy.compendium.explore [--port N] [--show/--no-show]``.
+    """``python -m mtaccuracy.apps.explore [--port N] [--show/--no-show]``.
 
     Parameters
     ----------
@@ -885,7 +876,7 @@ def main(argv=None) -> int:
     int
         Exit status.
     """
-    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.compendium.explore",
+    ap = argparse.ArgumentParser(prog="python -m mtaccuracy.apps.explore",
                                  description="Serve the mtaccuracy explorer on 127.0.0.1.")
     ap.add_argument("--port", type=int, default=0,
                     help="port on 127.0.0.1 (default 0: a free one)")

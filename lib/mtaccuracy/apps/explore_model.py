@@ -1,12 +1,12 @@
 """What the interactive explorer computes, as plain functions (no Panel, no Bokeh).
 
-:mod:`mtaccuracy.compendium.explore` draws these; the tests and ``make bench`` call them
-directly.  Nothing here is new science: every number comes from the library's own functions,
-with the inputs the notebooks use.
+:mod:`mtaccuracy.apps.explore` draws these; the tests and ``make bench`` call them directly.
+Nothing here is new science: every number comes from the library's own functions, with the
+inputs the notebooks declare (their ``Parameters``, :mod:`mtaccuracy.papers`).
 
 Machines (tab "Machine")
     :func:`machine_setup` builds one of the papers' three machines or any topology typed in
-    (:func:`mtaccuracy.machines.chain.iso_machine`) with the pose ranges and the default error
+    (:func:`mtaccuracy.machines.iso.iso_machine`) with the pose ranges and the default error
     ranges the explorer offers (:class:`MachineSetup` says where each came from).
     :func:`indices_at_pose` gives the closed-form Sobol indices of the first-order model at one
     pose (:func:`mtaccuracy.sensitivity.linear_indices` of ``machine.jacobian``);
@@ -15,13 +15,12 @@ Machines (tab "Machine")
     :func:`slider_update` is what one slider move computes (timed by ``make bench``).
 
 Error ranges
-    Every error is uniform on ``+- h_i``.  The default ``h_i`` are the notebooks' ranges:
-    Zheng et al. 2024 (notebook 01) +-15 um and +-10 arcsec; Rong et al. (notebook 02)
-    +-2 x the acceptance value of ``data/rong/error_ranges.csv`` (7.5 um positioning, 10 um
-    straightness, 80 urad angular, 4.75 urad squareness); Guo et al. 2016 (notebook 03) the
-    ranges [0, 3] um, [0, 4] um, [0, 3.2e-5] rad and [0, 1.9] um/m, whose half widths (the same
-    variance) are used; a typed topology +-5 um and +-3 arcsec for every error (a choice of
-    the explorer, about the illustrative ranges of notebook 06).  Two numbers scale them: the
+    Every error is uniform on ``+- h_i``.  The default ``h_i`` are the defaults the notebooks
+    declare: notebook 01's ``position_range_um`` and ``angular_range_arcsec`` (Zheng et al.
+    2024), notebook 02's ``range_factor`` x the acceptance values of its ``ranges_file`` (Rong
+    et al.), the half widths of notebook 03's ``[0, r]`` ranges (Guo et al. 2016: the same
+    variance); a typed topology +-5 um and +-3 arcsec for every error (a choice of the
+    explorer, about the illustrative ranges of notebook 06).  Two numbers scale them: the
     *position half range* (um) is the largest half range among the translational errors, the
     *angular half range* (arcsec) the largest among the angular ones; the others keep their
     ratio to it.  Indices of the linear model depend only on the ratios of the variances, so
@@ -32,13 +31,14 @@ Spindle (tab "Spindle")
     of :mod:`mtaccuracy.spindle.probes` (least squares, and the weighted multi-point method of
     Yang et al. 2021 with the weights :func:`~mtaccuracy.spindle.probes.layout_weights` finds
     or those of Eq. 5 for a given ``a3``), the harmonics the layout cancels and those it
-    amplifies.
+    amplifies; notebook 05's layout to start with.
 
 Thermal (tab "Thermal")
     :func:`thermal_prediction`: notebook 04's split (:func:`mtaccuracy.thermal.evaluate_split`)
     on chosen experiments, the decoupled model of Xu et al. 2022 (Eq. 9), MLR or SVR, with the
-    paper's sensitive points (read from ``data/papers/xu2022_models.csv``) or the ones its
-    procedure selects on the training experiments.
+    paper's sensitive points (:func:`mtaccuracy.papers.xu2022.published_inputs`) or the ones
+    its procedure selects on the training experiments; notebook 04's data and split to start
+    with (:func:`thermal_defaults`).
 """
 
 from __future__ import annotations
@@ -53,21 +53,12 @@ from .. import errors as _errors
 from .. import sensitivity as S
 from .. import spindle as SP
 from .. import thermal
+from ..compendium.notebook import input_path
 from ..machines import build
 from ..machines.iso import iso_machine
 from ..machines.readers import read_ranges
 from ..machines.topology import ROTARY
-from . import parameters, paths, xu2022
-
-__all__ = [
-    "MACHINES", "TOPOLOGY", "GRID_STEPS", "ARCSEC", "AxisRange", "MachineSetup", "PoseIndices",
-    "DominantMap", "machine_setup", "topology_setup", "error_half_ranges", "pose_of",
-    "indices_at_pose", "top_errors", "dominant_map", "default_map_axes", "slider_update",
-    "time_slider_update",
-    "YANG_POSITIONS", "YANG_SAMPLES", "YANG_A3", "yang_layout_deg", "ProbeTransfer",
-    "probe_transfer", "ThermalPrediction", "thermal_data", "published_thermal_inputs",
-    "thermal_prediction",
-]
+from ..papers import guo2016, rong, xu2022, yang2021, zheng2024
 
 #: The papers' machines offered by the explorer: registry name -> label.
 MACHINES = {
@@ -164,17 +155,7 @@ class MachineSetup:
         return np.array([e.translational for e in self.machine.catalogue])
 
     def axis(self, name: str) -> AxisRange:
-        """The :class:`AxisRange` of pose axis ``name``.
-
-        Parameters
-        ----------
-        name : str
-            A pose name of the machine.
-
-        Returns
-        -------
-        AxisRange
-        """
+        """The :class:`AxisRange` of pose axis ``name`` (a ValueError names the others)."""
         for a in self.axes:
             if a.name == name:
                 return a
@@ -182,23 +163,65 @@ class MachineSetup:
                          f"{', '.join(a.name for a in self.axes)}")
 
 
-def _rong_half_ranges(machine, range_factor: float = 2.0) -> np.ndarray:
-    """Notebook 02's ranges: +- ``range_factor`` x the acceptance band of each error in
-    ``data/rong/error_ranges.csv`` (mm, rad), read as the notebook reads it."""
-    return range_factor * read_ranges(paths.DATA / "rong" / "error_ranges.csv", machine)[1]
+def _zheng_setup() -> tuple:
+    """Notebook 01's machine: the library's travels, its check pose, its declared ranges."""
+    m, p = build("ac_double_turntable"), zheng2024.Parameters.defaults()
+    start = dict(x=120.0, y=-80.0, z=150.0, A=40.0, C=75.0)  # notebook 01's check pose
+    axes = tuple(AxisRange(a, *(np.rad2deg(m.travels[a]) if a in "AC" else m.travels[a]),
+                           start[a], "deg" if a in "AC" else "mm") for a in m.axes)
+    pos, ang = p["position_range_um"], p["angular_range_arcsec"]
+    half = np.array([pos * 1e-3 if e.translational else ang * ARCSEC for e in m.catalogue])
+    return m, axes, {}, half, (
+        "travels: the library's (ac_double_turntable.TRAVELS); starting pose: notebook 01's "
+        "check pose", f"errors: ±{pos:g} µm and ±{ang:g} arcsec (Zheng et al. 2024, notebook "
+        f"01's position_range_um and angular_range_arcsec)")
 
 
-def _guo_half_ranges(machine) -> np.ndarray:
-    """Notebook 03's ranges ([0, 3] um, [0, 4] um, [0, 3.2e-5] rad, [0, 1.9] um/m), as half
-    widths (mm, rad): a uniform on [0, r] has the variance of one on +- r / 2."""
-    b = _errors.uniform_bounds(machine.catalogue, {
-        "positioning": (0.0, 3.0), "straightness": (0.0, 4.0), "angular": (0.0, 3.2e-5),
-        "squareness": (0.0, 1.9)})
-    return (b[1] - b[0]) / 2
+def _rong_setup() -> tuple:
+    """Notebook 02's machine: its declared workspace, tool offset, ranges file and factor."""
+    m, p = build("horizontal_3axis"), rong.Parameters.defaults()
+    work = dict(zip(m.axes, p["workspace_mm"], strict=True))
+    axes = tuple(AxisRange(a, 0.0, work[a], work[a] / 2, "mm") for a in m.axes)
+    factor, ranges = p["range_factor"], p["ranges_file"]
+    half = factor * read_ranges(input_path(ranges, "ranges_file"), m)[1]
+    tool = dict(zip(m.tool_offsets, p["tool_offset_mm"], strict=True))
+    return m, axes, tool, half, (
+        "axes: notebook 02's workspace_mm (the library has no travels for this machine); "
+        "starting pose: its centre", f"errors: ±{factor:g} x the acceptance values of "
+        f"{ranges} (notebook 02's range_factor and ranges_file): {_largest_by_kind(m, half)}")
+
+
+def _guo_setup() -> tuple:
+    """Notebook 03's machine: its declared pose, grid, tool offsets and ``[0, r]`` ranges."""
+    m, p = build("vertical_xyfz"), guo2016.Parameters.defaults()
+    high = p["workspace_mm"]
+    axes = tuple(AxisRange(a, 0.0, high, p[f"{a}_mm"], "mm") for a in m.axes)
+    b = _errors.uniform_bounds(m.catalogue, {
+        k: (0.0, p[name]) for k, name in (
+            ("positioning", "positioning_um"), ("straightness", "straightness_um"),
+            ("angular", "angular_rad"), ("squareness", "squareness_um_per_m"))})
+    half = (b[1] - b[0]) / 2  # a uniform on [0, r] has the variance of one on +- r / 2
+    return m, axes, {t: p[f"{t}_mm"] for t in m.tool_offsets}, half, (
+        "axes: notebook 03's pose grid, 0 to workspace_mm (the library has no travels for "
+        "this machine); starting pose: its x_mm, y_mm, z_mm",
+        f"errors: half widths of notebook 03's [0, r] ranges: {_largest_by_kind(m, half)}")
+
+
+def _largest_by_kind(m, half: np.ndarray) -> str:
+    """The largest half range of each kind of error, in words (µm, µrad)."""
+    largest: dict[str, tuple[float, str]] = {}
+    for e, h in zip(m.catalogue, half, strict=True):
+        v = (h * 1e3, "µm") if e.translational else (h * 1e6, "µrad")
+        largest[e.kind] = max(largest.get(e.kind, v), v)
+    return ", ".join(f"±{v:.3g} {unit} {k}" for k, (v, unit) in largest.items())
 
 
 def _largest(half: np.ndarray, mask: np.ndarray, unit: float) -> float:
     return float(half[mask].max() / unit) if mask.any() else 0.0
+
+
+_PAPERS = {"ac_double_turntable": _zheng_setup, "horizontal_3axis": _rong_setup,
+           "vertical_xyfz": _guo_setup}
 
 
 def machine_setup(key: str) -> MachineSetup:
@@ -208,57 +231,28 @@ def machine_setup(key: str) -> MachineSetup:
     ----------
     key : str
         A name of :data:`MACHINES`, or a topology string (``"w C b X Y Z B t"``, read by
-        :func:`mtaccuracy.machines.chain.iso_machine`).
+        :func:`mtaccuracy.machines.iso.iso_machine`).
 
     Returns
     -------
     MachineSetup
-        Pose ranges: the machine's travels when the library knows them (Zheng et al.'s
-        ``TRAVELS``), the workspace of the notebook otherwise (Rong: 0..700, 0..600, 0..500 mm,
-        notebook 02; Guo: 0..500 mm, notebook 03's pose grid), and for a typed topology
-        (:func:`topology_setup`, used for any ``key`` not in :data:`MACHINES`) -300..300 mm
-        and -180..180 deg (the box of
-        :func:`~mtaccuracy.machines.chain.redundant_location_errors`).  Starting pose: notebook
-        01's check pose (x 120, y -80, z 150 mm, A 40, C 75 deg), the centre of Rong's
-        workspace, Guo's pose (100, 100, 100) mm, the centre for a typed topology.  Tool
-        offsets 0.
+        The papers' machines with their notebooks' declared defaults: pose ranges the
+        machine's travels when the library knows them (Zheng et al.'s ``TRAVELS``), the
+        notebook's workspace otherwise (notebook 02's ``workspace_mm``, notebook 03's pose
+        grid); starting pose notebook 01's check pose (x 120, y -80, z 150 mm, A 40, C 75 deg),
+        the centre of Rong's workspace, Guo's declared pose; tool offsets as declared (0 for
+        notebook 01's).  A typed topology (:func:`topology_setup`, used for any ``key`` not in
+        :data:`MACHINES`): -300..300 mm and -180..180 deg (the box of
+        :func:`~mtaccuracy.machines.iso.redundant_location_errors`), the centre, no offset.
 
     Raises
     ------
     ValueError
         For a topology the library refuses, with the library's own message.
     """
-    deg = np.rad2deg
-    if key == "ac_double_turntable":
-        m = build(key)
-        start = dict(x=120.0, y=-80.0, z=150.0, A=40.0, C=75.0)
-        axes = tuple(AxisRange(a, *(deg(m.travels[a]) if a in "AC" else m.travels[a]),
-                               start[a], "deg" if a in "AC" else "mm") for a in m.axes)
-        half = np.array([15e-3 if e.translational else 10.0 * ARCSEC for e in m.catalogue])
-        notes = ("travels: the library's (ac_double_turntable.TRAVELS); starting pose: "
-                 "notebook 01's check pose",
-                 "errors: ±15 µm and ±10 arcsec (Zheng et al. 2024, notebook 01)")
-    elif key == "horizontal_3axis":
-        m = build(key)
-        work = dict(x=700.0, y=600.0, z=500.0)
-        axes = tuple(AxisRange(a, 0.0, work[a], work[a] / 2, "mm") for a in m.axes)
-        half = _rong_half_ranges(m)
-        notes = ("axes: notebook 02's workspace 700 x 600 x 500 mm (the library has no "
-                 "travels for this machine); starting pose: its centre",
-                 "errors: ±2 x the acceptance values of data/rong/error_ranges.csv "
-                 "(notebook 02): 7.5 µm positioning, 10 µm straightness, 80 µrad angular, "
-                 "4.75 urad squareness")
-    elif key == "vertical_xyfz":
-        m = build(key)
-        axes = tuple(AxisRange(a, 0.0, 500.0, 100.0, "mm") for a in m.axes)
-        half = _guo_half_ranges(m)
-        notes = ("axes: 0..500 mm, notebook 03's pose grid (the library has no travels for "
-                 "this machine); starting pose: notebook 03's (100, 100, 100) mm",
-                 "errors: half widths of notebook 03's ranges [0, 3] µm positioning, [0, 4] µm "
-                 "straightness, [0, 32] µrad angular, [0, 1.9] µm/m squareness")
-    else:
+    if key not in _PAPERS:
         return topology_setup(key)
-    return _setup(key, MACHINES[key], m, axes, half, notes)
+    return _setup(key, MACHINES[key], *_PAPERS[key]())
 
 
 def topology_setup(topology: str) -> MachineSetup:
@@ -267,7 +261,7 @@ def topology_setup(topology: str) -> MachineSetup:
     Parameters
     ----------
     topology : str
-        Read by :func:`mtaccuracy.machines.chain.iso_machine` (ISO 230-1/230-7 catalogue,
+        Read by :func:`mtaccuracy.machines.iso.iso_machine` (ISO 230-1/230-7 catalogue,
         redundant location errors removed), even when it is also the name of a machine.
 
     Returns
@@ -299,15 +293,16 @@ def topology_setup(topology: str) -> MachineSetup:
              "centre",
              "errors: ±5 µm and ±3 arcsec for every error (the explorer's choice, about "
              "notebook 06's illustrative ranges)")
-    return _setup(TOPOLOGY, f"topology {topology.strip()!r} ({m.n_errors} errors)", m, axes,
+    return _setup(TOPOLOGY, f"topology {topology.strip()!r} ({m.n_errors} errors)", m, axes, {},
                   half, notes)
 
 
-def _setup(key, label, m, axes, half, notes) -> MachineSetup:
+def _setup(key, label, m, axes, tool, half, notes) -> MachineSetup:
     axes = tuple(AxisRange(a.name, float(a.low), float(a.high), float(a.default), a.unit)
                  for a in axes)
     trans = np.array([e.translational for e in m.catalogue])
-    return MachineSetup(key, label, m, axes, {t: 0.0 for t in m.tool_offsets},
+    return MachineSetup(key, label, m, axes,
+                        {t: float(tool.get(t, 0.0)) for t in m.tool_offsets},
                         np.asarray(half, dtype=float), _largest(half, trans, 1e-3),
                         _largest(half, ~trans, ARCSEC), tuple(notes))
 
@@ -612,17 +607,11 @@ def time_slider_update(setup: MachineSetup, *, repeat: int = 10, steps: int = GR
 # Spindle: what a probe layout does to each harmonic
 # ------------------------------------------------------------------------------------------
 
-def _yang_layout() -> tuple[tuple[int, ...], int, float]:
-    """Notebook 05's defaults, the paper's Section 1.3 layout: ``probe_positions``,
-    ``n_samples`` and ``a3`` (one source: the notebook's parameters cell)."""
-    p = parameters.read_parameters("05_yang2021_spindle_four_point_ga")
-    return (tuple(int(v) for v in p["probe_positions"].default), int(p["n_samples"].default),
-            float(p["a3"].default))
-
-
-#: Yang et al. 2021's four-point layout: probes at samples 0, 14, 65, 116 of 128 per
-#: revolution, and their ``a3`` (Section 1.3), as notebook 05's parameters give them.
-YANG_POSITIONS, YANG_SAMPLES, YANG_A3 = _yang_layout()
+#: Yang et al. 2021's four-point layout (Section 1.3): probes at samples 0, 14, 65, 116 of 128
+#: per revolution, and their ``a3``, as notebook 05 declares them.
+_YANG = yang2021.Parameters.defaults()
+YANG_POSITIONS = tuple(int(v) for v in _YANG["probe_positions"])
+YANG_SAMPLES, YANG_A3 = int(_YANG["n_samples"]), float(_YANG["a3"])
 
 
 def yang_layout_deg() -> np.ndarray:
@@ -633,7 +622,6 @@ def yang_layout_deg() -> np.ndarray:
     array (4,)
         deg.
     """
-
     return np.rad2deg(SP.probe_angles(list(YANG_POSITIONS), YANG_SAMPLES))
 
 
@@ -754,6 +742,10 @@ def probe_transfer(angles_deg, *, max_harmonic: int = 20, weights: str = "optima
 # Thermal: a train/test split of notebook 04
 # ------------------------------------------------------------------------------------------
 
+#: Notebook 04's declared defaults: its data, split, inputs, and the selection's settings.
+_XU = xu2022.Parameters.defaults()
+
+
 @dataclass(frozen=True)
 class ThermalPrediction:
     """The thermal error of a test experiment predicted from its temperatures.
@@ -801,28 +793,42 @@ class ThermalPrediction:
 def thermal_data(folder=None):
     """The thermal measurements and whether they are the paper's reconstruction.
 
-    The measurements default to the committed reconstruction (``data/thermal``); whether they are
-    the reconstruction is decided by content
-    (:func:`mtaccuracy.compendium.xu2022.reconstruction_seed`).
-
     Parameters
     ----------
     folder : path, optional
-        A folder in the schema of ``data/thermal/README.md``.
+        A folder in the schema of ``data/thermal/README.md`` (default: notebook 04's declared
+        ``data_dir``, the committed reconstruction); whether it holds the reconstruction is
+        decided by content (:func:`mtaccuracy.papers.xu2022.reconstruction_seed`).
 
     Returns
     -------
     data : ThermalData
     reconstructed : bool
     """
-
-    folder = paths.DATA / "thermal" if folder is None else folder
-    data = thermal.read_measurements(folder)
-    return data, xu2022.reconstruction_seed(folder, data) is not None
+    folder = input_path(_XU["data_dir"] if folder is None else folder, "data_dir")
+    return thermal.read_measurements(folder), xu2022.reconstruction_seed(folder) is not None
 
 
-#: The paper's sensitive points (:func:`mtaccuracy.compendium.xu2022.published_inputs`).
-published_thermal_inputs = xu2022.published_inputs
+def thermal_defaults(data, reconstructed: bool) -> dict:
+    """Notebook 04's declared split and inputs on ``data``: what the Thermal tab starts with.
+
+    Parameters
+    ----------
+    data : ThermalData
+        The measurements.
+    reconstructed : bool
+        Whether they are the paper's reconstruction (``inputs="auto"`` then means the paper's
+        sensitive points, else the selected ones: :func:`mtaccuracy.papers.xu2022.resolve_inputs`).
+
+    Returns
+    -------
+    dict
+        ``train``, ``test`` (:func:`mtaccuracy.papers.xu2022.resolve_split`) and ``inputs``.
+    """
+    train, test = xu2022.resolve_split(xu2022.Parameters.stem, data,
+                                       train=_XU["train_experiments"], test=_XU["test_experiment"])
+    return {"train": train, "test": test,
+            "inputs": xu2022.resolve_inputs(_XU["inputs"], reconstructed)}
 
 
 def thermal_prediction(data, *, train: Sequence[int], test: int, inputs: str = "published",
@@ -842,8 +848,9 @@ def thermal_prediction(data, *, train: Sequence[int], test: int, inputs: str = "
     test : int
         The experiment predicted from its temperatures only.
     inputs : {"published", "selected"}
-        The paper's sensitive points (:func:`published_thermal_inputs`), or those its procedure
-        (fuzzy clustering, grey relational grade) selects on the training experiments.
+        The paper's sensitive points (:func:`mtaccuracy.papers.xu2022.published_inputs`), or
+        those its procedure (fuzzy clustering, grey relational grade, notebook 04's declared
+        ``n_clusters`` and ``rho``) selects on the training experiments.
     kind : {"mlr", "svr"}
         Linear regression, or the grouped SVR (hyperparameters by leave-one-experiment-out).
     progress : callable, optional
@@ -876,7 +883,7 @@ def thermal_prediction(data, *, train: Sequence[int], test: int, inputs: str = "
                          f"{'s (its cross-validation leaves one out)' if need > 1 else ''}, "
                          f"got {train}")
     if inputs == "published":
-        sensors = published_thermal_inputs()
+        sensors = xu2022.published_inputs()
         lacking = sorted({s for v in sensors.values() for s in v} - set(data.sensors))
         if lacking:
             raise ValueError(f"the data lack the paper's sensors {lacking}; use the selected "
@@ -886,7 +893,8 @@ def thermal_prediction(data, *, train: Sequence[int], test: int, inputs: str = "
     else:
         raise ValueError(f"inputs must be 'published' or 'selected', got {inputs!r}")
     res = thermal.evaluate_split(data, train=train, test=[test], kinds=(kind,), sensors=sensors,
-                                 progress=progress, baselines=("uncompensated",))
+                                 n_clusters=_XU["n_clusters"], rho=_XU["rho"], progress=progress,
+                                 baselines=("uncompensated",))
     name = f"decoupled_{kind}"
     measured, predicted = res.measured, res.predictions[name]
     m = thermal.metrics(measured - predicted)
