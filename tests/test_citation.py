@@ -12,7 +12,6 @@ import mtaccuracy
 from mtaccuracy.compendium.provenance import ROOT
 
 
-
 def _newest_changelog_entry() -> tuple[str, str]:
     m = re.search(r"^## (\d+\.\d+\.\d+) \((\d{4}-\d{2}-\d{2})\)$",
                   (ROOT / "CHANGELOG.md").read_text(encoding="utf-8"), re.M)

@@ -9,8 +9,8 @@ import pytest
 import sympy as sp
 
 from mtaccuracy import errors, sensitivity
-from mtaccuracy.papers import guo2016
 from mtaccuracy.machines import build
+from mtaccuracy.papers import guo2016
 
 MACHINE = build("vertical_xyfz")
 NAMES = MACHINE.error_names

@@ -4,6 +4,9 @@ canonical pose, canonical ranking of optimiser output, least-squares fit of a kn
 import numpy as np
 import pandas as pd
 import pytest
+
+from mtaccuracy import sensitivity as S
+from mtaccuracy.machines import build
 from mtaccuracy.papers.zheng2024 import (
     POSE_SYMMETRIES,
     canonical_pose,
@@ -14,9 +17,6 @@ from mtaccuracy.papers.zheng2024 import (
     rank_poses,
     ratio_interval,
 )
-
-from mtaccuracy import sensitivity as S
-from mtaccuracy.machines import build
 
 M = build("ac_double_turntable")
 SD = np.array([5e-3 if e.translational else 1.6e-5 for e in M.catalogue])

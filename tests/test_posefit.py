@@ -3,11 +3,11 @@ indices and notebook 03's piecewise-constant Spearman coefficients."""
 
 import numpy as np
 import pytest
-from mtaccuracy.papers.zheng2024 import fit_pose_to_indices
 
 from mtaccuracy import sensitivity as S
 from mtaccuracy.machines import build
 from mtaccuracy.machines.ac_double_turntable import TRAVELS
+from mtaccuracy.papers.zheng2024 import fit_pose_to_indices
 
 
 def _toy(pose):

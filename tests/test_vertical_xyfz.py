@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from mtaccuracy.papers import guo2016
 from mtaccuracy.machines import build
+from mtaccuracy.papers import guo2016
 
 M = build("vertical_xyfz")
 NAMES = M.error_names
