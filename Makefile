@@ -22,6 +22,7 @@ NB ?= all
 PARAMS ?=
 SEEDS ?= 5
 CORES ?=
+PROFILE ?=
 LAB_ARGS ?=
 EXPLORE_ARGS ?=
 BENCH_ARGS ?=
@@ -51,11 +52,11 @@ $(STAMP): environment.txt pyproject.toml
 # the library modules it imports, its data or its parameters changed.
 reproduce: $(STAMP)
 	@$(WORKFLOW) reproduce --nb "$$NB" --params "$$PARAMS" $(if $(FORCE),--force) \
-	    $(if $(CORES),--cores $(CORES))
+	    $(if $(CORES),--cores $(CORES)) $(if $(PROFILE),--profile $(PROFILE))
 
 sweep: $(STAMP)
 	@$(WORKFLOW) sweep --nb "$$NB" --seeds $(SEEDS) --params "$$PARAMS" \
-	    $(if $(CORES),--cores $(CORES))
+	    $(if $(CORES),--cores $(CORES)) $(if $(PROFILE),--profile $(PROFILE))
 
 # The book (Sphinx + MyST-NB, book theme) from the committed notebooks and figures/, executing
 # nothing; every output shown is checked against its provenance.json first.

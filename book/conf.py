@@ -1,6 +1,6 @@
 """Sphinx configuration of the compendium's book (``make book``).
 
-The pages are generated into ``build/book/src`` by ``python -m mtaccuracy.compendium.book``, which
+The pages are generated into ``build/book/src`` by ``python -m mtaccuracy.apps.book``, which
 copies this file there: the executed notebooks are shown as committed (MyST-NB, never executed),
 the library's reference comes from its numpydoc docstrings, and every script the pages need
 (MathJax from the ``jupyter-server-mathjax`` package, DataTables from ``itables``) is served from

@@ -99,11 +99,15 @@ def _why(broken: dict, figures: Path, stem: str = GUO) -> list[tuple[str, str]]:
     return [(p.relative_to(figures / stem).as_posix(), why) for p, why in broken.get(stem, [])]
 
 
-def test_figures_come_in_the_paper_modules_order_with_the_runs_captions(guo_folder):
-    text, broken = _chapter(guo_folder)
+def test_figures_come_in_the_paper_modules_order_with_the_runs_captions(tmp_path):
+    figures = tmp_path / "figures"
+    extra = {"label": "Beyond the paper", "caption": "A figure FIGURES lacks.", "order": 0}
+    _write_run(figures / GUO, {**_guo_figures(), "extra": extra})
+    text, broken = _chapter(figures)
     assert broken == {}
     shown = re.findall(r"```\{figure\} \.\./figures/[^/]+/(\w+)\.png", text)
-    assert shown == list(guo2016.FIGURES)            # the module's order, not the run's
+    assert shown == [*guo2016.FIGURES, "extra"]     # the module's order, then the run's
+    assert "**Beyond the paper.** A figure FIGURES lacks." in text
     for name, cap in guo2016.FIGURES.items():
         assert f"**{cap.label}.** Run caption of {name}: n = 500." in text
         assert f'<a href="../figures/{GUO}/{name}.svg">SVG</a>' in text

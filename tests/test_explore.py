@@ -1,5 +1,6 @@
-"""The interactive explorer (``mtaccuracy.compendium.explore``): what it computes, held to
-independent formulations, and its server held to 127.0.0.1.
+"""The interactive explorer (``mtaccuracy.apps.explore``): what it computes, held to
+independent formulations, its starting values read from the notebooks' declarations, and its
+server held to 127.0.0.1.
 
 The computations (``explore_model``) are plain functions: the indices at a pose against a
 Monte Carlo regression on the exact chain, a finite-difference Jacobian and an analytic pose;
@@ -14,12 +15,15 @@ import signal
 import socket
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from mtaccuracy import sensitivity as S
-from mtaccuracy.compendium import explore_model as M
+from mtaccuracy.apps import explore_model as M
+from mtaccuracy.compendium.notebook import ROOT
 from mtaccuracy.machines.iso import iso_machine
 from mtaccuracy.machines.topology import parse_topology
+from mtaccuracy.papers import guo2016, rong, xu2022, yang2021, zheng2024
 
 TOPOLOGY = "w C b X Y Z B t"      # notebook 06's swivel-head machine
 
@@ -33,20 +37,61 @@ def setups():
 # Machines: setups and ranges
 # ------------------------------------------------------------------------------------------
 
-def test_the_default_ranges_are_the_notebooks(setups):
-    z, r, g = (setups[k] for k in ("ac_double_turntable", "horizontal_3axis", "vertical_xyfz"))
-    assert z.machine.n_errors == 41 and r.machine.n_errors == 21 and g.machine.n_errors == 21
-    h = dict(zip(z.names, M.error_half_ranges(z), strict=True))
-    assert h["d_xx"] == pytest.approx(15e-3) and h["e_xx"] == pytest.approx(10 * M.ARCSEC)
-    # Rong: +- 2 x acceptance (data/rong/error_ranges.csv)
-    h = dict(zip(r.names, M.error_half_ranges(r), strict=True))
-    assert [h[s] for s in ("dx(x)", "dy(x)", "ex(x)", "S_xy")] == pytest.approx(
-        [7.5e-3, 10e-3, 8e-5, 4.75e-6])
-    assert r.position_um == pytest.approx(10.0) and r.angular_arcsec == pytest.approx(16.5012, 1e-5)
-    # Guo: the half widths of [0, 3] um, [0, 4] um, [0, 3.2e-5] rad, [0, 1.9] um/m
-    h = dict(zip(g.names, M.error_half_ranges(g), strict=True))
-    assert [h[s] for s in ("dx(x)", "dy(x)", "ex(x)", "S_xy")] == pytest.approx(
-        [1.5e-3, 2e-3, 1.6e-5, 0.95e-6])
+@pytest.fixture
+def declare():
+    """Change a notebook's declared defaults for one test (restored after it)."""
+    saved = []
+
+    def change(declared, **values):
+        for name, value in values.items():
+            saved.append((declared.param[name], declared.param[name].default))
+            declared.param[name].default = value
+    yield change
+    for p, value in reversed(saved):
+        p.default = value
+
+
+def _half(setup) -> dict:
+    return dict(zip(setup.names, M.error_half_ranges(setup), strict=True))
+
+
+def test_the_machines_start_from_their_notebooks_declarations(declare):
+    """Ranges, workspace, pose and tool offsets are read from each notebook's ``Parameters``
+    when the machine is set up: a changed declaration changes them (nothing typed twice)."""
+    declare(zheng2024.Parameters, position_range_um=4.0, angular_range_arcsec=2.5)
+    z = M.machine_setup("ac_double_turntable")
+    assert (z.position_um, z.angular_arcsec) == (4.0, 2.5) and z.machine.n_errors == 41
+    assert _half(z)["d_xx"] == pytest.approx(4e-3) and _half(z)["e_xx"] == pytest.approx(
+        2.5 * M.ARCSEC)
+    # Rong: range_factor x the acceptance values of ranges_file (read here with pandas)
+    declare(rong.Parameters, range_factor=3.0, workspace_mm=[800.0, 600.0, 400.0],
+            tool_offset_mm=[0.0, 0.0, 50.0])
+    r = M.machine_setup("horizontal_3axis")
+    acc = pd.read_csv(ROOT / rong.Parameters.param["ranges_file"].default)
+    scale = acc.unit.map({"um": 1e-3, "rad": 1.0, "um/m": 1e-6})
+    assert _half(r) == pytest.approx(dict(zip(acc.symbol, 3.0 * acc.high * scale, strict=True)))
+    assert [(a.low, a.high, a.default) for a in r.axes] == [(0, 800, 400), (0, 600, 300),
+                                                            (0, 400, 200)]
+    assert r.tool == {"tool_x": 0.0, "tool_y": 0.0, "tool_z": 50.0}
+    # Guo: the half widths of [0, r] (the same variance), at the declared pose and grid
+    declare(guo2016.Parameters, positioning_um=6.0, x_mm=50.0, workspace_mm=300.0)
+    g = M.machine_setup("vertical_xyfz")
+    assert [_half(g)[s] for s in ("dx(x)", "dy(x)", "ex(x)", "S_xy")] == pytest.approx(
+        [3e-3, 2e-3, 1.6e-5, 0.95e-6])
+    assert [(a.high, a.default) for a in g.axes] == [(300, 50), (300, 100), (300, 100)]
+    assert all("notebook 0" in n for s in (z, r, g) for n in s.notes)
+
+
+def test_the_spindle_and_thermal_tabs_start_from_notebooks_05_and_04():
+    p = yang2021.Parameters.defaults()
+    assert (M.YANG_POSITIONS, M.YANG_SAMPLES, M.YANG_A3) == (
+        tuple(p["probe_positions"]), p["n_samples"], p["a3"])
+    data, reconstructed = M.thermal_data()
+    assert data.source == str(ROOT / xu2022.Parameters.param["data_dir"].default)
+    # notebook 04's split on the reconstruction: the paper's (train 1 2 3, test 4), its inputs
+    assert M.thermal_defaults(data, reconstructed) == {"train": [1, 2, 3], "test": 4,
+                                                      "inputs": "published"}
+    assert M.thermal_defaults(data, False)["inputs"] == "selected"
 
 
 def test_the_range_sliders_scale_their_group_only(setups):
@@ -204,7 +249,7 @@ def test_a_bad_topology_gives_the_library_message(bad):
 
 def test_the_app_shows_the_library_message_not_a_traceback():
     pytest.importorskip("panel")
-    from mtaccuracy.compendium import explore
+    from mtaccuracy.apps import explore
 
     app = explore.create_app()
     tab = app.tabs["machine"]
@@ -222,6 +267,9 @@ def test_the_app_shows_the_library_message_not_a_traceback():
     tab.machine.value = "horizontal_3axis"
     tab.sliders[0].value = 690.0
     assert tab.top.object != shown and 'data-output="Px"' in tab.top.object
+    thermal = app.tabs["thermal"]                     # notebook 04's split, fitted at once
+    assert (thermal.train.value, thermal.test.value, thermal.inputs.value) == (
+        [1, 2, 3], 4, "published") and "RMSE" in thermal.summary.object
 
 
 # ------------------------------------------------------------------------------------------
@@ -288,11 +336,6 @@ def thermal_data():
     return data
 
 
-def test_the_paper_inputs_are_read_from_its_printed_models():
-    assert M.published_thermal_inputs() == {"point": ["T1", "T11", "T12"],
-                                            "k": ["T1", "T6", "T12"], "b": ["T2", "T7", "T11"]}
-
-
 @pytest.mark.parametrize("train, test", [([1, 2, 3], 4), ([2, 4], 1)])
 def test_the_mlr_prediction_equals_a_direct_least_squares_fit(thermal_data, train, test):
     """Eq. 9 written out: per training measurement a straight line through the errors
@@ -315,6 +358,7 @@ def test_the_mlr_prediction_equals_a_direct_least_squares_fit(thermal_data, trai
     k = np.c_[np.ones(te.sum()), temps[["T1", "T6", "T12"]].to_numpy()[te]] @ ck
     b = np.c_[np.ones(te.sum()), rises[["T2", "T7", "T11"]].to_numpy()[te]] @ cb
     want = k[:, None] * x[None, :] / 1000 + b[:, None]
+    assert got.inputs == {"k": ["T1", "T6", "T12"], "b": ["T2", "T7", "T11"]}  # the paper's
     assert np.allclose(got.predicted, want, atol=1e-8)
     assert np.array_equal(got.measured, d.errors[te])
     assert got.rmse == pytest.approx(np.sqrt(np.mean((d.errors[te] - want) ** 2)), rel=1e-9)
@@ -349,7 +393,7 @@ def test_selected_inputs_come_from_the_training_data_only(thermal_data):
 @pytest.mark.parametrize("address", ["0.0.0.0", "", "::", "localhost", "192.168.1.10",
                                      "127.0.0.2"])
 def test_the_server_refuses_any_address_but_loopback(address):
-    from mtaccuracy.compendium import explore
+    from mtaccuracy.apps import explore
 
     with pytest.raises(ValueError, match="127.0.0.1 only"):
         explore.check_address(address)
@@ -358,7 +402,7 @@ def test_the_server_refuses_any_address_but_loopback(address):
 
 
 def test_the_command_refuses_a_bad_port_in_one_line(capsys):
-    from mtaccuracy.compendium import explore
+    from mtaccuracy.apps import explore
 
     assert explore.main(["--port", "70000"]) == 2
     err = capsys.readouterr().err
@@ -366,7 +410,7 @@ def test_the_command_refuses_a_bad_port_in_one_line(capsys):
 
 
 def test_the_server_listens_on_loopback_with_restricted_websocket_origins():
-    from mtaccuracy.compendium import explore
+    from mtaccuracy.apps import explore
 
     previous = signal.getsignal(signal.SIGINT)
     server, url = explore.serve(port=0)

@@ -1,4 +1,4 @@
-"""The explorer served by ``python -m mtaccuracy.compendium.explore`` and driven in a browser.
+"""The explorer served by ``python -m mtaccuracy.apps.explore`` and driven in a browser.
 
 The server runs in a subprocess on 127.0.0.1 at a free port (``--port 0``; the URL is read from
 its first line of output) and is always terminated.  Headless Chromium from the Debian package
@@ -9,20 +9,20 @@ the dominant-error map must show an error and its index; a topology typed in mus
 library's message when it is bad and its machine when it is good; the Spindle tab must list
 the harmonics four equally spaced probes cancel; the Thermal tab must show an RMSE.  Every
 request must stay on the server (Panel serves its own JavaScript: no CDN, no web font), and
-the console must show no error.  A screenshot goes to
-``$MTACCURACY_OUTPUT_BASE/explore/explore.png``.  Waits are bounded.
+the console must show no error.  A screenshot goes to ``.test-output/explore/explore.png``.
+Waits are bounded.
 """
 
-import os
 import queue
 import re
 import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 
 import pytest
+
+from mtaccuracy.compendium.notebook import ROOT
 
 playwright = pytest.importorskip("playwright.sync_api")
 
@@ -35,7 +35,7 @@ def server(tmp_path):
     """The explorer in a subprocess; yields its URL; terminated whatever happens."""
     log = tmp_path / "server.log"
     with open(log, "w") as err:
-        proc = subprocess.Popen([sys.executable, "-m", "mtaccuracy.compendium.explore",
+        proc = subprocess.Popen([sys.executable, "-m", "mtaccuracy.apps.explore",
                                  "--port", "0", "--no-show"], stdout=subprocess.PIPE,
                                 stderr=err, text=True, cwd=tmp_path)
     lines: queue.Queue = queue.Queue()
@@ -120,7 +120,7 @@ def test_the_explorer_in_a_browser(server, browser):
         values = _tooltip_values(page)
         assert re.fullmatch(r"[a-zA-Z_()]+", values[0]) and 0 <= float(values[1]) <= 1, values
 
-        shot = Path(os.environ["MTACCURACY_OUTPUT_BASE"]) / "explore" / "explore.png"
+        shot = ROOT / ".test-output" / "explore" / "explore.png"
         shot.parent.mkdir(parents=True, exist_ok=True)
         page.mouse.move(5, 5)
         page.screenshot(path=str(shot), full_page=True)
@@ -148,9 +148,10 @@ def test_the_explorer_in_a_browser(server, browser):
         expect(summary).to_contain_text("Cancelled by the layout: 3, 5, 7, 9, 11, 13, 15, 17, "
                                         "19.", timeout=10_000)
 
-        # the Thermal tab: the MLR's RMSE on experiment 4
+        # the Thermal tab: notebook 04's split (train 1 2 3, test 4), the MLR's RMSE
         page.get_by_text("Thermal", exact=True).click()
         rmse = page.locator('[data-role="thermal-summary"]')
+        expect(rmse).to_contain_text("trained on experiment(s) 1, 2, 3, predicting experiment 4")
         expect(rmse).to_contain_text("RMSE")
         assert 0 < float(rmse.get_attribute("data-rmse")) < 5
     finally:

@@ -25,7 +25,10 @@ A file the record does not list (the user's) is neither judged nor shown.
 
 The site goes to ``build/book/html``, its source to ``build/book/src``: each built beside
 (``.html-<pid>``) and then moved in place, and only over a folder carrying this module's marker
-file.  Sphinx, itables and MathJax are imported only when the book is built.
+file.
+
+Local imports: Sphinx, itables and MathJax are imported when the book is built, so that the
+checks of the outputs against their provenance run without them.
 """
 
 from __future__ import annotations
@@ -94,8 +97,8 @@ def chapter_figures(stem: str, folder: Path, side: dict | None = None
     where = f"{workflow.declaration(stem).__module__}.FIGURES"
     problems = [(folder / f"{n}.png", f"is captioned in {where} but its run did not write it")
                 for n in order if n not in pngs]
-    others = sorted((n for n in pngs if n not in order),
-                    key=lambda n: (pngs[n].get("order", math.inf), n))
+    others = sorted((n for n in pngs if n not in order), key=lambda n: (
+        o if isinstance(o := pngs[n].get("order"), int | float) else math.inf, n))
     shown = []
     for name in [*(n for n in order if n in pngs), *others]:
         entry = pngs[name]

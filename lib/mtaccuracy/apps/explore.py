@@ -67,8 +67,8 @@ from . import explore_model as M
 
 #: The only address the explorer listens on.
 LOOPBACK = "127.0.0.1"
-#: Colours: the house colours of the figures (plotting.REPRODUCED / PUBLISHED) and a red for
-#: what a layout cancels.
+#: Colours: a blue, the figures' orange of published values (``plotting.PUBLISHED``), a red for
+#: what a layout cancels, a grey for no first-order term.
 BLUE, ORANGE, RED, GREY = "#1b6ca8", "#d95f02", "#b2182b", "#cccccc"
 _CSS = """
 .mt-note {font-size: 12px; color: #555; line-height: 1.35;}
@@ -561,13 +561,10 @@ class SpindleTab:
                                  t.q_weighted[np.isfinite(t.q_weighted)], [t.amplified_above]])
         top = float(finite.max()) * 1.6
         self.fig.y_range.update(start=float(finite.min()) / 1.6, end=top * 1.6)
-        cut = ks[t.cancelled | t.cancelled_by_weights]
-        self.cut_src.data = dict(k=cut.tolist(), x0=(cut - 0.5).tolist(),
-                                 x1=(cut + 0.5).tolist(), y=[top] * cut.size,
-                                 status=[status[int(k) - 2] for k in cut],
-                                 q_ls=[common["q_ls"][int(k) - 2] for k in cut],
-                                 q_w=[common["q_w"][int(k) - 2] for k in cut],
-                                 gain=[common["gain"][int(k) - 2] for k in cut])
+        cut = np.flatnonzero(t.cancelled | t.cancelled_by_weights)
+        self.cut_src.data = dict({c: [common[c][j] for j in cut] for c in common},
+                                 x0=(ks[cut] - 0.5).tolist(), x1=(ks[cut] + 0.5).tolist(),
+                                 y=[top] * cut.size)
         phi = np.deg2rad(t.angles_deg)
         w = t.weights if t.weights is not None else np.full(phi.shape, np.nan)
         self.probe_src.data = dict(x=np.cos(phi).tolist(), y=np.sin(phi).tolist(),

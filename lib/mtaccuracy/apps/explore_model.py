@@ -166,9 +166,7 @@ class MachineSetup:
 def _zheng_setup() -> tuple:
     """Notebook 01's machine: the library's travels, its check pose, its declared ranges."""
     m, p = build("ac_double_turntable"), zheng2024.Parameters.defaults()
-    start = dict(x=120.0, y=-80.0, z=150.0, A=40.0, C=75.0)  # notebook 01's check pose
-    axes = tuple(AxisRange(a, *(np.rad2deg(m.travels[a]) if a in "AC" else m.travels[a]),
-                           start[a], "deg" if a in "AC" else "mm") for a in m.axes)
+    axes = _axes(m, dict(x=120.0, y=-80.0, z=150.0, A=40.0, C=75.0))  # notebook 01's check pose
     pos, ang = p["position_range_um"], p["angular_range_arcsec"]
     half = np.array([pos * 1e-3 if e.translational else ang * ARCSEC for e in m.catalogue])
     return m, axes, {}, half, (
@@ -205,6 +203,19 @@ def _guo_setup() -> tuple:
         "axes: notebook 03's pose grid, 0 to workspace_mm (the library has no travels for "
         "this machine); starting pose: its x_mm, y_mm, z_mm",
         f"errors: half widths of notebook 03's [0, r] ranges: {_largest_by_kind(m, half)}")
+
+
+def _axes(m, start: dict | None = None) -> tuple:
+    """The pose sliders: the machine's travels, else -300..300 mm and -180..180 deg (the box
+    of :func:`~mtaccuracy.machines.iso.redundant_location_errors`); ``start``, else centred."""
+    out = []
+    for a in m.axes:
+        rotary = a in ROTARY
+        lo, hi = m.travels.get(a, (-np.pi, np.pi) if rotary else (-300.0, 300.0))
+        lo, hi = np.rad2deg((lo, hi)) if rotary else (lo, hi)
+        out.append(AxisRange(a, lo, hi, (start or {}).get(a, (lo + hi) / 2),
+                             "deg" if rotary else "mm"))
+    return tuple(out)
 
 
 def _largest_by_kind(m, half: np.ndarray) -> str:
@@ -258,33 +269,12 @@ def machine_setup(key: str) -> MachineSetup:
 def topology_setup(topology: str) -> MachineSetup:
     """A machine typed in as a topology, with the explorer's ranges (see :func:`machine_setup`).
 
-    Parameters
-    ----------
-    topology : str
-        Read by :func:`mtaccuracy.machines.iso.iso_machine` (ISO 230-1/230-7 catalogue,
-        redundant location errors removed), even when it is also the name of a machine.
-
-    Returns
-    -------
-    MachineSetup
-
-    Raises
-    ------
-    ValueError
-        For a topology the library refuses, with the library's own message.
+    ``topology`` is read by :func:`mtaccuracy.machines.iso.iso_machine` (ISO 230-1/230-7
+    catalogue, redundant location errors removed), even when it is also a machine's name; one
+    the library refuses raises its ValueError, with its own message.
     """
-    deg = np.rad2deg
     m = iso_machine(topology, name="typed topology")
-    axes = []
-    for a in m.axes:
-        if a in ROTARY:
-            lo, hi = m.travels.get(a, (-np.pi, np.pi))
-            axes.append(AxisRange(a, float(deg(lo)), float(deg(hi)),
-                                  float(deg(lo + hi) / 2), "deg"))
-        else:
-            lo, hi = m.travels.get(a, (-300.0, 300.0))
-            axes.append(AxisRange(a, float(lo), float(hi), float(lo + hi) / 2, "mm"))
-    axes = tuple(axes)
+    axes = _axes(m)
     half = np.array([5e-3 if e.translational else 3.0 * ARCSEC for e in m.catalogue])
     removed = f"; {len(m.removed)} redundant location errors removed" if m.removed else ""
     notes = (f"{m.topology.describe()}: ISO 230-1/230-7 catalogue of {m.n_errors} errors"

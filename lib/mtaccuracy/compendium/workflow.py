@@ -337,8 +337,8 @@ def execute(notebook: Path, given: dict, run_dir: Path, log: Path, *, threads: i
                 os.environ[k] = v
         shutil.rmtree(run_dir / ".jupyter", ignore_errors=True)
     nb = normalise(json.loads(log.read_text(encoding="utf-8")), stem, given)
-    (run_dir / f"{stem}.ipynb").write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n",
-                                           encoding="utf-8")
+    (run_dir / f"{stem}.ipynb").write_text(
+        json.dumps(nb, indent=1, ensure_ascii=False, sort_keys=True) + "\n", encoding="utf-8")
     log.unlink()  # kept only when the run fails
     return time.perf_counter() - t0
 
@@ -413,6 +413,24 @@ def publish(outputs: Path, target: Path, *, notebook: tuple[Path, Path] | None =
             signal.signal(s, h)
     left = {n for n in stale if (target / n).exists()}
     return sorted(left | set(provenance.not_outputs(target, new)))
+
+
+def write_parameters_cell(stem: str) -> bool:
+    """Rewrite a notebook's cell tagged ``parameters`` as its declaration's rendering.
+
+    Nothing else of the notebook changes (its outputs are those of its last run until the next).
+    Returns whether the cell changed."""
+    import nbformat  # nbformat: only where a notebook is edited
+
+    path = NOTEBOOKS / f"{stem}.ipynb"
+    nb = nbformat.read(path, as_version=4)
+    [cell] = [c for c in nb.cells if "parameters" in c.metadata.get("tags", [])]
+    new = declaration(stem).cell()
+    if cell.source == new:
+        return False
+    cell.source = new
+    nbformat.write(nb, path)
+    return True
 
 
 # --- sweeps ----------------------------------------------------------------------------------
@@ -501,7 +519,7 @@ def decode_plan(text: str) -> dict:
 
 
 def _snakemake(config: dict, *, cores: int, mem_mb: int, force: bool, targets=(),
-               workdir: Path = ROOT) -> int:
+               workdir: Path = ROOT, profile: str | None = None) -> int:
     cmd = [sys.executable, "-m", "snakemake", "--snakefile", str(SNAKEFILE), "--directory",
            str(workdir), "--cores", str(cores), "--resources", f"mem_mb={mem_mb}",
            "--rerun-incomplete", "--quiet", "rules", "host", "reason",
@@ -512,6 +530,8 @@ def _snakemake(config: dict, *, cores: int, mem_mb: int, force: bool, targets=()
            "--config", f"plan={encode_plan(config)}", *targets]
     if force:
         cmd.append("--forceall")
+    if profile:  # a cluster: the profile's executor submits the jobs (workflow/profiles/)
+        cmd += ["--profile", str(SNAKEFILE.parent / "profiles" / profile)]
     Path(workdir).mkdir(parents=True, exist_ok=True)
     proc = subprocess.Popen(cmd, cwd=workdir)
     while True:  # Ctrl-C reaches Snakemake too: it stops its jobs; wait for it to say so
@@ -538,13 +558,17 @@ def main(argv=None) -> int:
     r.add_argument("--force", action="store_true", help="re-run every notebook")
     r.add_argument("--cores", default=None)
     r.add_argument("--workdir", type=Path, default=ROOT, help=argparse.SUPPRESS)  # the tests'
+    r.add_argument("--profile", default=None, help="a Snakemake profile of workflow/profiles/")
     s = sub.add_parser("sweep", help="run a notebook over seeds (and settings)")
     s.add_argument("--nb", required=True)
     s.add_argument("--seeds", type=int, default=5)
     s.add_argument("--params", default="")
     s.add_argument("--cores", default=None)
+    s.add_argument("--profile", default=None, help="a Snakemake profile of workflow/profiles/")
     ls = sub.add_parser("list", help="the parameters a notebook declares")
     ls.add_argument("nb")
+    c = sub.add_parser("cell", help="write each notebook's parameters cell from its declaration")
+    c.add_argument("nb", nargs="?", default="all")
     e = sub.add_parser("execute")  # a Snakemake job
     e.add_argument("stem")
     e.add_argument("given")
@@ -568,6 +592,12 @@ def main(argv=None) -> int:
                 for n in decl.names():
                     print("  " + decl.describe(n))
             return 0
+        if args.command == "cell":
+            for stem in notebooks(args.nb):
+                what = ("rewritten from its declaration" if write_parameters_cell(stem)
+                        else "already its declaration")
+                print(f"notebooks/{stem}.ipynb: parameters cell {what}")
+            return 0
         if args.command == "reproduce":
             runs = plan(args.nb, args.params)
             for stem, given in runs.items():
@@ -581,7 +611,7 @@ def main(argv=None) -> int:
             cores = _cores(args.cores)
             mem = check_memory(runs, cores)
             return _snakemake({"runs": runs}, cores=cores, mem_mb=mem, force=args.force,
-                              workdir=args.workdir)
+                              workdir=args.workdir, profile=args.profile)
         if args.command == "sweep":
             [stem] = notebooks(args.nb)
             runs = sweep_runs(stem, args.seeds, args.params)
@@ -591,7 +621,8 @@ def main(argv=None) -> int:
             cores = _cores(args.cores)
             mem = check_memory({stem: max(runs.values(), key=lambda g: memory_mb(stem, g))}, cores)
             return _snakemake({"sweep": {"stem": stem, "runs": runs, "out": str(out)}},
-                              cores=cores, mem_mb=mem, force=False, targets=["sweep"])
+                              cores=cores, mem_mb=mem, force=False, targets=["sweep"],
+                              profile=args.profile)
         if args.command == "execute":
             seconds = execute(NOTEBOOKS / f"{args.stem}.ipynb", json.loads(args.given),
                               args.run_dir, args.log)
