@@ -6,8 +6,10 @@ One submodule per method; everything is re-exported here, so notebooks write
 | submodule | what |
 | --- | --- |
 | ``inputs`` | :class:`Inputs`: names and marginal laws of independent inputs, their samples (MC,
-  Latin hypercube, Sobol'), moments and standard variables; what every estimator takes |
-| ``spearman`` | Latin hypercube sampling (scipy.qmc), Spearman ranking (Guo et al. 2016) |
+  Latin hypercube, Sobol': the package's one sampler, which every design is drawn by), moments
+  and standard variables; what every estimator takes |
+| ``spearman`` | Spearman ranking (Guo et al. 2016); ``latin_hypercube``, a design given by
+  bounds drawn through ``Inputs.sample`` |
 | ``sobol`` | Sobol first-order and total indices (Saltelli/Jansen), designs drawn and run in
   blocks of base rows (memory flat in N) |
 | ``linear`` | closed-form Sobol indices of the first-order model J(pose) e: at poses, pose uniform

@@ -184,10 +184,7 @@ def sample_at_pose(model: Callable[[np.ndarray], np.ndarray], jacobian: np.ndarr
     n = validate.integer(n, "n", low=2)
     n_boot = validate.integer(n_boot, "n_boot", low=1)
     bounds = np.asarray(bounds, dtype=float)
-    d = bounds.shape[1]
-    ua, ub = base_samples(n, d, method="mc", seed=seed)
-    inputs = Inputs.from_bounds(bounds)
-    a, b = inputs.from_unit(ua), inputs.from_unit(ub)
+    a, b = base_samples(n, Inputs.from_bounds(bounds), method="mc", seed=seed)
     ya, yb, yab = sobol_evaluate(model, a, b)
     _, st = sobol_estimate(ya, yb, yab)
     _, half = sobol_bootstrap(ya, yb, yab, n_boot=n_boot, seed=seed + 10)

@@ -4,7 +4,8 @@ The estimators are SALib's (``SALib.analyze.sobol`` with ``calc_second_order=Fal
 Saltelli et al. 2010 for the first order, Jansen 1999 for the total index, on outputs
 standardised over all N(D+2) runs.  SALib's sampler materialises every run at once (at D=41,
 N=2^17 it takes 44 s and 1.8 GB).  Here :func:`sobol_indices` takes the base rows
-:data:`BASE_ROWS` at a time: given a :class:`SobolDesign` it draws them block by block (the
+:data:`BASE_ROWS` at a time: given a :class:`SobolDesign` it draws them block by block
+through :meth:`~mtaccuracy.sensitivity.Inputs.sample_blocks`, the package's one sampler (the
 Monte Carlo stream and the Sobol' sequence continue exactly where the previous block ended),
 builds and evaluates each AB_i block chunk by chunk, and keeps per-block sums, so the model sees
 one batched call per chunk and memory is flat in N.  A test checks these numbers against
@@ -25,14 +26,12 @@ __all__ = ["base_samples", "base_blocks", "BASE_ROWS", "SobolDesign", "SobolIndi
            "FLOAT_NOISE"]
 
 import copy
-import warnings
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
 import pandas as pd
 from scipy import stats
-from scipy.stats import qmc
 
 from ..validate import integer
 from ..validate import rng as _rng
@@ -44,9 +43,6 @@ from .inputs import Inputs
 #: is one block, computed with exactly the arithmetic of the whole-array estimate (the
 #: notebooks' N <= 1e5 are).
 BASE_ROWS = 2**17
-
-_SOBOL_BALANCE = "The balance properties of Sobol' points require n to be a power of 2."
-
 
 def _check_method(n, method):
     n = integer(n, "n", low=2)
@@ -88,15 +84,16 @@ def base_blocks(n: int, d: int | Inputs, *, method: str, seed, rows: int = BASE_
     Yields ``(a, b)`` blocks, (m, d) each with m <= rows, as they are needed; their
     concatenation is bitwise :func:`base_samples`' A and B (same arguments).
 
-    ``mc``: A continues one stream of ``numpy.random.default_rng(seed)``; B, which the whole
-    draw takes after all of A, comes from a copy of the generator advanced by ``n d`` draws
-    (PCG64's ``advance``).  ``sobol``: successive blocks of one scrambled 2d-dimensional
-    sequence (``scipy.stats.qmc.Sobol.random`` continues where it stopped).  ``lhs``: a Latin
-    hypercube is not a stream: each column is one random permutation of all n strata, so no
-    row is known before the whole permutation is drawn; both designs are drawn whole (2 n d
-    floats, 16 d bytes per row) and handed out in blocks.  A generator passed as ``seed`` ends
-    where :func:`base_samples` leaves it once every block is drawn.  Given an
-    :class:`Inputs` for ``d``, every block is mapped through its laws (:meth:`Inputs.from_unit`).
+    Every design is drawn by :meth:`Inputs.sample_blocks` (the package's one sampler); this
+    function only pairs them.  ``mc``: A and B are two successive designs of one generator
+    ``numpy.random.default_rng(seed)``; B, which the whole draw takes after all of A, comes
+    from a copy of the generator advanced by ``n d`` draws (PCG64's ``advance``), so both
+    stream.  ``lhs``: two successive Latin hypercubes of the generator, each drawn whole
+    (2 n d floats, 16 d bytes per row) and handed out in blocks.  ``sobol``: one scrambled
+    2d-dimensional Sobol' sequence split in halves, as SALib's Saltelli sampler does, drawn
+    block by block.  A generator passed as ``seed`` ends where :func:`base_samples` leaves it
+    once every block is drawn.  Given an :class:`Inputs` for ``d``, the designs are of its
+    laws; given a number, of :meth:`Inputs.unit` (the unit cube itself, bitwise).
 
     Parameters
     ----------
@@ -119,38 +116,22 @@ def base_blocks(n: int, d: int | Inputs, *, method: str, seed, rows: int = BASE_
     n = _check_method(n, method)
     rows = integer(rows, "rows", low=1)
     d, inputs = _dim(d)
-    blocks = _blocks(n, d, method, _rng(seed), rows)
-    return blocks if inputs is None else ((inputs.from_unit(a), inputs.from_unit(b))
-                                          for a, b in blocks)
+    return _pairs(n, inputs if inputs is not None else Inputs.unit(d), method, _rng(seed), rows)
 
 
-def _blocks(n, d, method, rng, rows):
-    if method == "lhs":
-        a, b = (qmc.LatinHypercube(d=d, rng=rng).random(n),
-                qmc.LatinHypercube(d=d, rng=rng).random(n))
-        for s in range(0, n, rows):
-            yield a[s:s + rows], b[s:s + rows]
-    elif method == "mc":
-        rng_b = _skip_ahead(rng, n * d)
-        for s in range(0, n, rows):
-            m = min(rows, n - s)
-            yield rng.random((m, d)), rng_b.random((m, d))
+def _pairs(n, inputs, method, rng, rows):
+    """(A, B) blocks of :func:`base_blocks`, every design drawn by ``Inputs.sample_blocks``."""
+    d = inputs.dim
+    if method == "sobol":
+        for u in Inputs.unit(2 * d).sample_blocks(n, method="sobol", seed=rng, rows=rows):
+            yield inputs.from_unit(u[:, :d]), inputs.from_unit(u[:, d:])
+            del u
+        return
+    rng_b = _skip_ahead(rng, n * d) if method == "mc" else rng
+    yield from zip(inputs.sample_blocks(n, method=method, seed=rng, rows=rows),
+                   inputs.sample_blocks(n, method=method, seed=rng_b, rows=rows), strict=True)
+    if method == "mc":
         rng.bit_generator.state = rng_b.bit_generator.state   # where the whole draw ends
-    else:
-        if n > rows and n & (n - 1):   # the whole draw's first call would warn
-            warnings.warn(_SOBOL_BALANCE, UserWarning, stacklevel=3)
-        seq = qmc.Sobol(d=2 * d, scramble=True, rng=rng)
-        for s in range(0, n, rows):
-            yield _sobol_halves(seq, min(rows, n - s), d, quiet=n > rows)
-
-
-def _sobol_halves(seq, m, d, quiet):
-    """The next m points of ``seq`` as (A, B) halves (no name left holding the block)."""
-    with warnings.catch_warnings():
-        if quiet:   # said above for the whole design, not for the block
-            warnings.filterwarnings("ignore", message="The balance properties")
-        u = seq.random(m)
-    return u[:, :d], u[:, d:]
 
 
 def base_samples(n: int, d: int | Inputs, *, method: str, seed) -> tuple[np.ndarray, np.ndarray]:

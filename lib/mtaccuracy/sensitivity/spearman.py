@@ -1,8 +1,9 @@
 """Samplers and sensitivity measures, batched over samples (and over repeats).
 
 Spearman ranking (Guo et al. 2016) lives here; Sobol estimators, sparse polynomial chaos and
-key-error rules join it with the later papers.  Latin hypercube sampling is scipy's
-``scipy.stats.qmc.LatinHypercube``; ranks are ``scipy.stats.rankdata``.
+key-error rules join it with the later papers.  Latin hypercubes are drawn by
+:meth:`~mtaccuracy.sensitivity.Inputs.sample` (``scipy.stats.qmc.LatinHypercube``), the
+package's one sampler; ranks are ``scipy.stats.rankdata``.
 """
 
 from __future__ import annotations
@@ -14,22 +15,28 @@ __all__ = ["latin_hypercube", "repeated_latin_hypercube", "average_ranks",
 
 import numpy as np
 from scipy import stats
-from scipy.stats import qmc
 
 from mtaccuracy import validate
+
+from .inputs import Inputs
 
 
 def latin_hypercube(n: int, bounds: np.ndarray, seed) -> np.ndarray:
     """``n`` Latin hypercube samples (n, d) of independent uniforms on ``bounds`` (2, d).
 
-    Uses ``scipy.stats.qmc.LatinHypercube`` (random placement within strata).
+    The design is :meth:`Inputs.sample` of the unit cube (``method="lhs"``,
+    ``scipy.stats.qmc.LatinHypercube``: random placement within strata), mapped to the
+    bounds as ``lower + u (upper - lower)`` (what :meth:`Inputs.from_unit` computes for a
+    uniform, bitwise).  A thin adaptor for designs given by bounds: unlike
+    :meth:`Inputs.from_bounds` it takes a zero-width column (``lower == upper``, an input held
+    at one value), which no probability law describes.
 
     Parameters
     ----------
     n : int
         Samples (>= 2), one per stratum of every input.
     bounds : array (2, d)
-        Lower and upper bounds of the d inputs (mm, rad).
+        Lower and upper bounds of the d inputs (mm, rad), ``lower <= upper``.
     seed : int, SeedSequence, Generator or None
         The randomness (:func:`mtaccuracy.validate.rng`); a Generator is used as it is, so the
         caller's stream continues.
@@ -38,12 +45,19 @@ def latin_hypercube(n: int, bounds: np.ndarray, seed) -> np.ndarray:
     -------
     array (n, d)
         The design, in the units of ``bounds``.
+
+    Raises
+    ------
+    ValueError
+        If ``n`` < 2, ``bounds`` is not (2, d), not finite, or has ``upper < lower``.
     """
     bounds = np.asarray(bounds, dtype=float)
     if bounds.ndim != 2 or bounds.shape[0] != 2:
         raise ValueError(f"bounds must have shape (2, d), got {bounds.shape}")
     n = validate.integer(n, "n", low=2)
-    u = qmc.LatinHypercube(d=bounds.shape[1], rng=validate.rng(seed)).random(n)
+    if not np.all(np.isfinite(bounds)) or np.any(bounds[1] < bounds[0]):
+        raise ValueError("bounds must be finite with lower <= upper")
+    u = Inputs.unit(bounds.shape[1]).sample(n, method="lhs", seed=seed)
     return bounds[0] + u * (bounds[1] - bounds[0])
 
 
