@@ -11,7 +11,9 @@ One submodule per method; everything is re-exported here, so notebooks write
 | ``spearman`` | Spearman ranking (Guo et al. 2016); ``latin_hypercube``, a design given by
   bounds drawn through ``Inputs.sample`` |
 | ``sobol`` | Sobol first-order and total indices (Saltelli/Jansen), designs drawn and run in
-  blocks of base rows (memory flat in N) |
+  blocks of base rows (memory flat in N), with streamed bootstrap intervals (``n_boot=``) |
+| ``bootstrap`` | bootstrap intervals of the indices: held (resamples of the stored runs,
+  SALib's) and streamed (Poisson weights accumulated block by block) |
 | ``linear`` | closed-form Sobol indices of the first-order model J(pose) e: at poses, pose uniform
   in a box (Gauss-Legendre), and the size of the nonlinear remainder it misses |
 | ``checks`` | the closed form over a workspace (atlas, dominant errors) and checked against
@@ -35,6 +37,7 @@ output's ``(d,)``.  Labelled tables: ``SobolIndices.to_df()`` and ``SparsePCE.to
 """
 
 from . import benchmarks  # noqa: F401
+from .bootstrap import *  # noqa: F403
 from .checks import *  # noqa: F403
 from .inputs import *  # noqa: F403
 from .linear import *  # noqa: F403

@@ -45,7 +45,7 @@ import pandas as pd
 
 from mtaccuracy import validate
 
-from .sobol import FLOAT_NOISE
+from .sobol import FLOAT_NOISE, SobolIndices
 
 #: A share counts as exceeding the threshold only if it is larger by more than this (so that a
 #: share equal to the threshold up to rounding, e.g. 0.6 + 0.3 against 0.9, does not count).
@@ -658,8 +658,10 @@ def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str
     """How stable is the key set: :func:`key_errors` applied to each bootstrap re-estimate.
 
     ``st_samples`` (n_boot, >= D, q) are total indices re-estimated on resamples of the base
-    rows, e.g. the second array of :func:`mtaccuracy.sensitivity.sobol_bootstrap_samples`, so
-    that the key-set frequencies come from the very resamples of the confidence intervals.
+    rows, e.g. the second array of :func:`mtaccuracy.sensitivity.sobol_bootstrap_samples` or
+    the ``st_boot`` of a bootstrapped ``sobol_indices(..., n_boot=)`` (a
+    :class:`~mtaccuracy.sensitivity.SobolIndices` may be given itself), so that the key-set
+    frequencies come from the very resamples of the confidence intervals.
     Only the first ``len(names)`` inputs are candidates (further inputs, e.g. the pose, are left
     out of the rule).  Each resample is clipped at 0 and its ties merged
     (:func:`merge_ties`: indices within the floating-point resolution are equal, and equal
@@ -668,8 +670,9 @@ def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str
 
     Parameters
     ----------
-    st_samples : array (n_boot, >= D, q)
-        Re-estimated total indices, one (D, q) table per resample.
+    st_samples : array (n_boot, >= D, q) or SobolIndices
+        Re-estimated total indices, one (D, q) table per resample (of a ``SobolIndices``: its
+        ``st_boot``).
     names : sequence of str (D,)
         The candidate inputs (the first ``len(names)`` of axis 1), unique.
     outputs : sequence of str (q,), optional
@@ -684,6 +687,11 @@ def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str
     counts : DataFrame (n_boot, q + 1)
         Key errors per output and in the union, per resample.
     """
+    if isinstance(st_samples, SobolIndices):
+        if st_samples.st_boot is None:
+            raise ValueError("these Sobol indices carry no bootstrap re-estimates: compute "
+                             "them with sobol_indices(..., n_boot=, seed=)")
+        st_samples = st_samples.st_boot
     st = np.asarray(st_samples, dtype=float)
     names = list(names)
     if st.ndim != 3 or st.shape[0] < 1:

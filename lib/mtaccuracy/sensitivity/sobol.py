@@ -8,8 +8,9 @@ N=2^17 it takes 44 s and 1.8 GB).  Here :func:`sobol_indices` takes the base row
 through :meth:`~mtaccuracy.sensitivity.Inputs.sample_blocks`, the package's one sampler (the
 Monte Carlo stream and the Sobol' sequence continue exactly where the previous block ended),
 builds and evaluates each AB_i block chunk by chunk, and keeps per-block sums, so the model sees
-one batched call per chunk and memory is flat in N.  A test checks these numbers against
-SALib's at small N.
+one batched call per chunk and memory is flat in N; with ``n_boot=`` it accumulates the
+bootstrap intervals the same way (:mod:`~mtaccuracy.sensitivity.bootstrap`, the Poisson
+bootstrap).  A test checks these numbers against SALib's at small N.
 
 Layout: ``ya``, ``yb`` are (N, q); ``yab`` is (D, N, q) with ``yab[i]`` the model on AB_i (A
 with column i taken from B); indices are (D, q), inputs by outputs.  Given an
@@ -20,10 +21,8 @@ drawn through its laws and :func:`sobol_indices` labels its result (:class:`Sobo
 
 from __future__ import annotations
 
-__all__ = ["base_samples", "base_blocks", "BASE_ROWS", "SobolDesign", "SobolIndices",
-           "sobol_evaluate", "sobol_estimate", "bootstrap_counts",
-           "sobol_bootstrap_samples", "ci_half_width", "sobol_bootstrap", "sobol_indices",
-           "FLOAT_NOISE"]
+__all__ = ["base_samples", "base_blocks", "BASE_ROWS", "BOOT_FLOATS", "SobolDesign",
+           "SobolIndices", "sobol_evaluate", "sobol_estimate", "sobol_indices", "FLOAT_NOISE"]
 
 import copy
 from collections.abc import Callable, Iterator, Sequence
@@ -31,10 +30,10 @@ from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..validate import integer
 from ..validate import rng as _rng
+from .bootstrap import StreamedBootstrap, ci_half_width
 from .inputs import Inputs
 
 #: Base rows (of A and of B) drawn and run at a time by :func:`sobol_indices`.  Peak memory
@@ -377,169 +376,25 @@ def sobol_estimate(ya: np.ndarray, yb: np.ndarray, yab: np.ndarray
     return s1 / var, st / var
 
 
-def bootstrap_counts(n: int, n_boot: int, *, seed, chunk: int = 20, block: int = 2**21):
-    """The ``n_boot`` bootstrap resamples of ``n`` rows as counts, a few resamples at a time.
-
-    Yields (k, n) float arrays ``w`` with ``w[b, i]`` = how often row i is drawn in resample
-    b, about ``block / n`` resamples at a time (one matrix product each; many small products
-    are slow when a multi-threaded BLAS shares a busy machine).
-
-    The draws are ``rng.integers(0, n, size=(k, n))`` for successive chunks of ``k <= chunk``
-    resamples of one generator ``mtaccuracy.validate.rng(seed)``: the resamples that
-    :func:`sobol_bootstrap` has always used (and the key-set frequencies of
-    ``screening.key_set_bootstrap``, which take its re-estimates).
-
-    Parameters
-    ----------
-    n : int
-        Rows (>= 1).
-    n_boot : int
-        Resamples (>= 1).
-    seed : None, int, SeedSequence or numpy.random.Generator
-        The randomness (:func:`mtaccuracy.validate.rng`).
-    chunk : int
-        Resamples per draw (>= 1).
-    block : int
-        Counts held at a time.
-
-    Yields
-    ------
-    array (k, n)
-        Counts of k resamples.
-    """
-    n = integer(n, "n", low=1)
-    n_boot = integer(n_boot, "n_boot", low=1)
-    chunk = integer(chunk, "chunk", low=1)
-    rng = _rng(seed)
-    per_block = max(chunk, block // max(n, 1))
-    drawn = []
-    for start in range(0, int(n_boot), chunk):
-        drawn.append(rng.integers(0, n, size=(min(chunk, int(n_boot) - start), n)))
-        if sum(len(d) for d in drawn) >= per_block or start + chunk >= n_boot:
-            idx = np.concatenate(drawn)
-            drawn = []
-            k = idx.shape[0]
-            flat = (idx + n * np.arange(k)[:, None]).ravel()
-            yield np.bincount(flat, minlength=k * n).reshape(k, n).astype(float)
-
-
-def sobol_bootstrap_samples(ya, yb, yab, *, n_boot: int, seed, chunk: int = 20,
-                            block: int = 2**21) -> tuple[np.ndarray, np.ndarray]:
-    """S1 and ST re-estimated on ``n_boot`` resamples of the N base rows: (n_boot, D, q) each.
-
-    The same estimates as :func:`sobol_estimate` on ``ya[idx], yb[idx], yab[:, idx]`` for the
-    resamples of :func:`bootstrap_counts`, computed without copying the resampled rows: every
-    term of the estimator is a mean over rows, so a resample is a weight vector (the counts)
-    and all resamples of a chunk are one matrix product of the counts with the per-row terms
-    (``ya``, ``yb``, their squares, ``sum_i yab_i``, and per input ``yab_i - ya``,
-    ``yb (yab_i - ya)``, ``(yab_i - ya)^2``).  Outputs are centred on their overall mean first
-    (the indices do not change), so the variance ``E[y^2] - E[y]^2`` has no cancellation.
-    Memory: N x (3 + 3 D) q floats, and ``block`` counts at a time.  Sums in a different order
-    than :func:`sobol_estimate`: equal to it within floating-point rounding (a test checks
-    1e-12).
-
-    Parameters
-    ----------
-    ya, yb : arrays (N, q)
-        The outputs on A and on B.
-    yab : array (D, N, q)
-        As :func:`sobol_evaluate` returns them.
-    n_boot : int
-        Resamples.
-    seed : None, int, SeedSequence or numpy.random.Generator
-        The randomness of the resampling (:func:`mtaccuracy.validate.rng`).
-    chunk, block : int
-        As :func:`bootstrap_counts`.
-
-    Returns
-    -------
-    s1, st : arrays (n_boot, D, q)
-        The re-estimates, one per resample.
-    """
-    ya, yb, yab = (np.asarray(v, dtype=float) for v in (ya, yb, yab))
-    n, q = ya.shape
-    d = yab.shape[0]
-    centre = np.concatenate([ya, yb]).mean(0)
-    ya, yb, yab = ya - centre, yb - centre, yab - centre
-    diff = (yab - ya[None]).transpose(1, 0, 2).reshape(n, d * q)          # (N, D q)
-    ybd = diff * np.tile(yb, d)
-    rows = np.concatenate([ya + yb, ya**2 + yb**2, yab.sum(0) + ya + yb, diff, ybd, diff**2],
-                          axis=1)
-    s1s, sts = [], []
-    for w in bootstrap_counts(n, n_boot, seed=seed, chunk=chunk, block=block):
-        m = (w @ rows) / n                                                  # (k, 3q + 3Dq)
-        mean_y = m[:, :q] / 2
-        var = m[:, q:2 * q] / 2 - mean_y**2                                 # (k, q)
-        mu = m[:, 2 * q:3 * q] / (d + 2)
-        md, mybd, md2 = (m[:, (3 + j * d) * q:(3 + (j + 1) * d) * q].reshape(-1, d, q)
-                         for j in range(3))
-        s1s.append((mybd - mu[:, None, :] * md) / var[:, None, :])
-        sts.append(0.5 * md2 / var[:, None, :])
-    return np.concatenate(s1s), np.concatenate(sts)
-
-
-def ci_half_width(samples: np.ndarray, conf: float = 0.95) -> np.ndarray:
-    """Half-width of the ``conf`` interval from bootstrap ``samples`` (leading axis), as SALib's.
-
-    The normal quantile times their standard deviation (ddof 1), as SALib reports it.
-
-    Parameters
-    ----------
-    samples : array (n_boot, ...)
-        Bootstrap estimates.
-    conf : float
-        Confidence level, in (0, 1).
-
-    Returns
-    -------
-    array (...)
-        The half-widths, one per estimate.
-    """
-    z = stats.norm.ppf(0.5 + conf / 2)
-    return z * np.asarray(samples).std(axis=0, ddof=1)
-
-
-def sobol_bootstrap(ya, yb, yab, *, n_boot: int, seed, conf: float = 0.95, chunk: int = 20):
-    """Bootstrap half-widths of the ``conf`` confidence intervals of S1 and ST, (D, q) each.
-
-    From ``n_boot`` resamples of the N base rows (as SALib: normal quantile times the
-    bootstrap standard deviation); see :func:`sobol_bootstrap_samples`.
-
-    Parameters
-    ----------
-    ya, yb : arrays (N, q)
-        The outputs on A and on B.
-    yab : array (D, N, q)
-        As :func:`sobol_evaluate` returns them.
-    n_boot : int
-        Resamples.
-    seed : None, int, SeedSequence or numpy.random.Generator
-        The randomness of the resampling (:func:`mtaccuracy.validate.rng`).
-    conf : float
-        Confidence level.
-    chunk : int
-        As :func:`bootstrap_counts`.
-
-    Returns
-    -------
-    s1_half, st_half : arrays (D, q)
-        Half-widths of the intervals.
-    """
-    s1s, sts = sobol_bootstrap_samples(ya, yb, yab, n_boot=n_boot, seed=seed, chunk=chunk)
-    return ci_half_width(s1s, conf), ci_half_width(sts, conf)
-
-
-def _row_blocks(a, b, rows):
-    """(n, d, inputs, iterator of (a, b) row blocks) of a :class:`SobolDesign` or arrays A, B."""
+def _row_blocks(a, b, rows, cap=None):
+    """(n, d, inputs, iterator of (a, b) row blocks) of a :class:`SobolDesign` or arrays A, B;
+    ``cap(d)``, when given, bounds the rows of a block."""
     rows = integer(rows, "rows", low=1)
     if isinstance(a, SobolDesign):
         if b is not None:
             raise ValueError("give either a SobolDesign or the arrays A and B, not both")
         _check_method(a.n, a.method)
+        rows = rows if cap is None else min(rows, cap(int(a.d)))
         return int(a.n), int(a.d), a.inputs, a.blocks(rows)
     a, b = _check_ab(a, b)
     n = a.shape[0]
+    rows = rows if cap is None else min(rows, cap(a.shape[1]))
     return n, a.shape[1], None, ((a[s:s + rows], b[s:s + rows]) for s in range(0, n, rows))
+
+
+#: Floats of the bootstrap weights of one block (``n_boot`` per base row) in
+#: :func:`sobol_indices`: 32 MB.
+BOOT_FLOATS = 2**22
 
 
 def _sum(terms):
@@ -552,7 +407,8 @@ def _sum(terms):
 
 def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | None = None,
                   *, chunk: int = 200_000, progress: Callable[[int, int], None] | None = None,
-                  rows: int = BASE_ROWS, outputs: Sequence[str] | None = None) -> SobolIndices:
+                  rows: int = BASE_ROWS, outputs: Sequence[str] | None = None,
+                  n_boot: int | None = None, seed=None, conf: float = 0.95) -> SobolIndices:
     """First-order and total Sobol indices of ``model``, streaming over base rows and AB runs.
 
     The estimators are Saltelli et al. 2010 (first order) and Jansen 1999 (total), on outputs
@@ -561,6 +417,19 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
     without ever holding ``yab`` (D N q floats: 200 MB for 41 inputs, N = 1e5, six outputs).
     Given a :class:`SobolDesign`, the base rows are drawn ``rows`` at a time too, and memory is
     that of one block whatever N (``lhs`` designs excepted, see :func:`base_blocks`).
+
+    With ``n_boot``, the result carries bootstrap intervals too, streamed like the indices: the
+    Poisson bootstrap of :mod:`~mtaccuracy.sensitivity.bootstrap` (every row's count in every
+    resample an independent Poisson(1) draw of ``seed``, drawn with its block, so the resamples
+    do not depend on the blocks), whose weighted sums are accumulated block by block
+    (:class:`~mtaccuracy.sensitivity.StreamedBootstrap`): memory flat in N (about 0.2 GB at
+    D = 41, q = 6, n_boot = 500, whatever N; the held bootstrap of :func:`sobol_evaluate` and
+    :func:`~mtaccuracy.sensitivity.sobol_bootstrap_samples` needs 16 kB per base row).  A block
+    then holds at most ``min(rows, chunk // D, BOOT_FLOATS // n_boot)`` base rows (all its AB
+    runs in one model call, its weights at most :data:`BOOT_FLOATS` floats), so with more than
+    that many rows the indices differ from those without ``n_boot`` by rounding (pooled blocks).
+    The resamples are not those of :func:`~mtaccuracy.sensitivity.sobol_bootstrap` (which
+    draws N rows with replacement): the half-widths agree to their Monte Carlo noise.
 
     Parameters
     ----------
@@ -577,17 +446,27 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
     progress : callable, optional
         ``progress(done, total)`` after each call, counting runs.
     rows : int
-        Base rows per block (:data:`BASE_ROWS`).  With N <= ``rows`` the result is bitwise
-        that of a whole-array pass; with more blocks it differs by rounding only.
+        Base rows per block (:data:`BASE_ROWS`).  With N <= ``rows`` (and no ``n_boot``) the
+        result is bitwise that of a whole-array pass; with more blocks it differs by rounding
+        only.
     outputs : sequence of str (q,), optional
         Names of the model's outputs (default ``y1`` ... ``yq``), for :meth:`SobolIndices.to_df`.
+    n_boot : int, optional
+        Bootstrap resamples (>= 2) of the intervals; none by default.
+    seed : None, int, SeedSequence or numpy.random.Generator
+        The randomness of the resampling (:func:`mtaccuracy.validate.rng`), with ``n_boot``.
+    conf : float
+        Confidence level of the intervals, in (0, 1).
 
     Returns
     -------
     SobolIndices
         Unpacks as ``s1, st``, (D, q) arrays of first-order and total indices; labelled with
         the design's input names (a :class:`SobolDesign` of an :class:`Inputs`; else ``x1``
-        ... ``xD``) and ``outputs``.
+        ... ``xD``) and ``outputs``.  With ``n_boot``: the half-widths ``s1_ci``, ``st_ci``
+        (normal quantile times the bootstrap standard deviation, as SALib's) and the
+        re-estimates ``s1_boot``, ``st_boot`` (n_boot, D, q) (e.g. for
+        :func:`~mtaccuracy.sensitivity.key_set_bootstrap`).
 
     Notes
     -----
@@ -600,7 +479,16 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
     batch of ``chunk`` runs, its ``ya`` and ``yb``, and three (D, q) sums per block.
     """
     chunk = integer(chunk, "chunk", low=1)
-    n, d, inputs, blocks = _row_blocks(a, b, rows)
+    cap = None
+    if n_boot is not None:
+        n_boot = integer(n_boot, "n_boot", low=2)
+        if not 0 < conf < 1:    # an open interval: validate.probability allows 0 and 1
+            raise ValueError(f"conf must be in (0, 1), got {conf!r}")
+
+        def cap(d):
+            return max(1, min(chunk // d, BOOT_FLOATS // n_boot))
+    n, d, inputs, blocks = _row_blocks(a, b, rows, cap)
+    boot = None if n_boot is None else StreamedBootstrap(n_boot, seed, d=d)
     run = _model_runs(model, n, d, chunk, progress)
     parts = []
     for ab, bb in blocks:
@@ -611,6 +499,9 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
         centre, var = both.mean(0), both.var(0)
         ybc = yb - centre
         total = both.sum(0)
+        if boot is not None:
+            w = boot.weights(m)
+            boot.add_base(w, ya, yb)
         sd_, sbd, sd2 = np.empty((d, q)), np.empty((d, q)), np.empty((d, q))
         for i0, i1, x in _ab_blocks(ab, bb, chunk):
             y = run(x).reshape(i1 - i0, m, q)
@@ -619,15 +510,25 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
             sd_[i0:i1] = diff.sum(1)
             sbd[i0:i1] = np.einsum("inq,nq->iq", diff, ybc)
             sd2[i0:i1] = np.einsum("inq,inq->iq", diff, diff)
+            if boot is not None:
+                boot.add_inputs(w, i0, i1, diff, ya, yb)
         parts.append((m / n, centre, var, total, sd_, sbd, sd2))
         del ab, bb, x, ya, yb, both, ybc, y, diff   # before the next block is drawn
+        w = None
     w, centre, var, total, sd_, sbd, sd2 = zip(*parts, strict=True)
     mu = _sum(total) / (n * (d + 2))
     c = _sum([wk * ck for wk, ck in zip(w, centre, strict=True)])
     var = _sum([wk * (vk + (ck - c) ** 2) for wk, vk, ck in zip(w, var, centre, strict=True)])
     num = _sum([sb - (mu - ck) * s for sb, ck, s in zip(sbd, centre, sd_, strict=True)])
-    return SobolIndices(num / (n * var), 0.5 * _sum(sd2) / (n * var),
-                        names=inputs.names if inputs is not None else None, outputs=outputs)
+    names = inputs.names if inputs is not None else None
+    if boot is None:
+        return SobolIndices(num / (n * var), 0.5 * _sum(sd2) / (n * var), names=names,
+                            outputs=outputs)
+    s1_boot, st_boot = boot.estimates()
+    return SobolIndices(num / (n * var), 0.5 * _sum(sd2) / (n * var), names=names,
+                        outputs=outputs, s1_ci=ci_half_width(s1_boot, conf),
+                        st_ci=ci_half_width(st_boot, conf), conf=conf, s1_boot=s1_boot,
+                        st_boot=st_boot)
 
 
 class SobolIndices(tuple):
@@ -654,6 +555,9 @@ class SobolIndices(tuple):
         Half-widths of their ``conf`` confidence intervals.
     conf : float
         The confidence level of the half-widths (names their columns: ``S1_ci95``).
+    s1_boot, st_boot : (n_boot, D, q) array_like, optional
+        The bootstrap re-estimates the half-widths come from (e.g. for
+        :func:`~mtaccuracy.sensitivity.key_set_bootstrap`).
 
     Raises
     ------
@@ -663,7 +567,7 @@ class SobolIndices(tuple):
 
     def __new__(cls, s1, st, *, names: Sequence[str] | None = None,
                 outputs: Sequence[str] | None = None, s1_ci=None, st_ci=None,
-                conf: float = 0.95) -> SobolIndices:
+                conf: float = 0.95, s1_boot=None, st_boot=None) -> SobolIndices:
         s1, st = np.asarray(s1, dtype=float), np.asarray(st, dtype=float)
         if s1.ndim != 2 or st.shape != s1.shape:
             raise ValueError(f"s1 and st must be (D, q) arrays of one shape, got {s1.shape}, "
@@ -677,9 +581,13 @@ class SobolIndices(tuple):
         if len(names) != d or len(outputs) != q:
             raise ValueError(f"{len(names)} input and {len(outputs)} output names for "
                              f"indices of {d} inputs and {q} outputs")
+        boots = [None if x is None else np.asarray(x, dtype=float) for x in (s1_boot, st_boot)]
+        if any(x is not None and (x.ndim != 3 or x.shape[1:] != s1.shape) for x in boots):
+            raise ValueError(f"s1_boot and st_boot must be (n_boot, {d}, {q})")
         self = super().__new__(cls, (s1, st))
         self.names, self.outputs, self.conf = names, outputs, float(conf)
         self.s1_ci, self.st_ci = cis
+        self.s1_boot, self.st_boot = boots
         return self
 
     @property
