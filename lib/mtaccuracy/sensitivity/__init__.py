@@ -19,7 +19,8 @@ One submodule per method; everything is re-exported here, so notebooks write
 | ``checks`` | the closed form over a workspace (atlas, dominant errors) and checked against
   sampled indices of the exact model (family-wise bootstrap intervals plus the remainder) |
 | ``pce`` | sparse polynomial chaos (OMP/LARS, bases by input law, validated basis adaptivity) and
-  Sobol indices from its coefficients (Zheng et al.) |
+  Sobol indices from its coefficients (Zheng et al.); a package: ``basis``, ``solvers``,
+  ``fit``, ``sparse`` |
 | ``benchmarks`` | Ishigami, G function, interaction polynomial: exact indices for tests and bench |
 | ``screening`` | key-error selection rules (the 90 % rule, its bootstrap frequencies and
   margin) and reduced models (Rong et al.); imports ``sobol``, never the reverse |
