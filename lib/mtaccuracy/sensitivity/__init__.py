@@ -21,6 +21,7 @@ One submodule per method; everything is re-exported here, so notebooks write
 | ``pce`` | sparse polynomial chaos (OMP/LARS, bases by input law, validated basis adaptivity) and
   Sobol indices from its coefficients (Zheng et al.); a package: ``basis``, ``solvers``,
   ``fit``, ``sparse`` |
+| ``results`` | the one result shape: :class:`IndexArray`, a labelled ``(..., d, q)`` array |
 | ``benchmarks`` | Ishigami, G function, interaction polynomial: exact indices for tests and bench |
 | ``screening`` | key-error selection rules (the 90 % rule, its bootstrap frequencies and
   margin) and reduced models (Rong et al.); imports ``sobol``, never the reverse |
@@ -34,7 +35,17 @@ arrays put inputs before outputs, ``(..., d, q)``, with any leading axis (poses,
 resamples) first: ``sobol_indices``, ``sobol_estimate``, ``linear_indices``,
 ``indices_at_poses``, ``pose_box_indices`` and the key-set rules of ``screening`` (a Jacobian
 is ``(..., q, d)``, outputs by inputs, as a derivative is written); :func:`pce_sobol` is one
-output's ``(d,)``.  Labelled tables: ``SobolIndices.to_df()`` and ``SparsePCE.to_df()``.
+output's ``(d,)``.
+
+One result shape (:mod:`~mtaccuracy.sensitivity.results`): every analyser returns what its
+callers have always indexed or unpacked, labelled by input and output names, with ``.to_df()``
+(a long table, outputs outermost): :class:`SobolIndices` (``sobol_indices``, ``pce_sobol``;
+``s1, st = ...``), :class:`SpearmanCoefficients` (``spearman``, ``spearman_over_poses``: the
+array, its ``to_df()`` the ranking), :class:`LinearIndices` (``linear_indices``,
+``indices_at_poses``: the array), :class:`PoseBoxIndices` (``pose_box_indices``:
+``s1, st, var = ...``), :class:`KeySets` (``key_errors_by_output``: the dict),
+:class:`KeySetFrequencies` (``key_set_bootstrap``: ``freq, counts = ...``) and
+:class:`SparsePCE`.
 """
 
 from . import benchmarks  # noqa: F401
@@ -44,6 +55,7 @@ from .inputs import *  # noqa: F403
 from .linear import *  # noqa: F403
 from .pce import *  # noqa: F403
 from .posefit import *  # noqa: F403
+from .results import *  # noqa: F403
 from .screening import *  # noqa: F403
 from .sobol import *  # noqa: F403
 from .spearman import *  # noqa: F403

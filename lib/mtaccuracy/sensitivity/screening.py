@@ -29,7 +29,8 @@ the values as given.
 
 from __future__ import annotations
 
-__all__ = ["KeySet", "key_errors", "key_errors_by_output", "union_key_set",
+__all__ = ["KeySet", "KeySets", "KeySetFrequencies", "key_errors", "key_errors_by_output",
+           "union_key_set",
            "simplification_rate", "pooled_indices", "zero_non_key", "reduced_model",
            "residual_summary", "expected_rms_ratio", "threshold_sweep", "key_set_bootstrap",
            "cumulative_share_margin", "TIE_REL", "TIE_ABS", "ties", "merge_ties",
@@ -224,6 +225,11 @@ class KeySet:
         The rule's share.
     n_total : int
         The number of candidate errors.
+    values : tuple of float
+        Their indices, as the rule sorted them (empty when not given).
+    cumulative : tuple of float
+        The share of the sum of all indices after each key error in turn, the last
+        ``share`` (empty when not given).
     """
 
     names: tuple[str, ...]
@@ -231,6 +237,23 @@ class KeySet:
     share: float
     threshold: float
     n_total: int
+    values: tuple[float, ...] = ()
+    cumulative: tuple[float, ...] = ()
+
+    def to_df(self) -> pd.DataFrame:
+        """The key errors as a table, in rank order.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``rank`` (1 = largest index), ``input`` (the name), ``position`` (among
+            the candidates), ``value`` (the index) and ``cumulative_share``.
+        """
+        n = len(self.index)
+        return pd.DataFrame({"rank": np.arange(1, n + 1), "input": list(self.names),
+                             "position": list(self.index),
+                             "value": list(self.values) or [np.nan] * n,
+                             "cumulative_share": list(self.cumulative) or [np.nan] * n})
 
     @property
     def n_key(self) -> int:
@@ -320,13 +343,57 @@ def key_errors(st, *, names: Sequence[str] | None = None, threshold: float = 0.9
             k += 1
     keep = order[:k]
     return KeySet(tuple(names[i] for i in keep), tuple(int(i) for i in keep),
-                  float(share[k - 1]), t, a.size)
+                  float(share[k - 1]), t, a.size, tuple(float(v) for v in a[keep]),
+                  tuple(float(v) for v in share[:k]))
+
+
+class KeySets(dict):
+    """The key sets of every output, ``{output: KeySet}``, with the candidates' names.
+
+    What :func:`key_errors_by_output` returns: the dict it has always returned (its items,
+    keys and values as before), that also knows every candidate's name (:meth:`union`) and
+    gives itself as one table (:meth:`to_df`).
+
+    Parameters
+    ----------
+    sets : mapping of str to KeySet
+        One key set per output, in output order.
+    names : sequence of str (D,)
+        Every candidate's name, in catalogue order.
+    """
+
+    def __init__(self, sets, names: Sequence[str]):
+        super().__init__(sets)
+        self.names = tuple(names)
+
+    def union(self) -> tuple[str, ...]:
+        """The errors that are key for at least one output, in catalogue order.
+
+        Returns
+        -------
+        tuple of str
+            :func:`union_key_set` of these sets.
+        """
+        return union_key_set(self, self.names)
+
+    def to_df(self) -> pd.DataFrame:
+        """Every output's key errors as one long table, outputs outermost.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Column ``output``, then those of :meth:`KeySet.to_df`.
+        """
+        parts = [ks.to_df().assign(output=o) for o, ks in self.items()]
+        df = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(
+            columns=["rank", "input", "position", "value", "cumulative_share", "output"])
+        return df[["output", *df.columns[:-1]]]
 
 
 def key_errors_by_output(st, *, names: Sequence[str] | None = None,
                          outputs: Sequence[str] | None = None,
                          threshold: float = 0.9, tie_tol: float | None = None
-                         ) -> dict[str, KeySet]:
+                         ) -> KeySets:
     """:func:`key_errors` for every output column of ``st`` (D, q).
 
     Parameters
@@ -342,15 +409,16 @@ def key_errors_by_output(st, *, names: Sequence[str] | None = None,
 
     Returns
     -------
-    dict of str to KeySet
-        One key set per output, in the order of ``outputs``.
+    KeySets
+        One key set per output, in the order of ``outputs`` (a dict; ``.to_df()``,
+        ``.union()``).
     """
     a = _check_indices(st, 2)
     outputs = list(outputs) if outputs is not None else [f"y{k}" for k in range(a.shape[1])]
     if len(outputs) != a.shape[1]:
         raise ValueError(f"{len(outputs)} output names for {a.shape[1]} columns")
-    return {o: key_errors(a[:, k], names=names, threshold=threshold, tie_tol=tie_tol)
-            for k, o in enumerate(outputs)}
+    return KeySets({o: key_errors(a[:, k], names=names, threshold=threshold, tie_tol=tie_tol)
+                    for k, o in enumerate(outputs)}, _names(names, a.shape[0]))
 
 
 def union_key_set(sets, names: Sequence[str]) -> tuple[str, ...]:
@@ -653,8 +721,47 @@ def cumulative_share_margin(values, threshold: float) -> np.ndarray:
     return np.minimum(above, below)
 
 
+class KeySetFrequencies(tuple):
+    """How often each error is key over bootstrap resamples, and the sizes of the key sets.
+
+    What :func:`key_set_bootstrap` returns: the pair ``freq, counts`` it has always returned
+    (it unpacks as that tuple); :meth:`to_df` is ``freq``.
+
+    Parameters
+    ----------
+    freq : pandas.DataFrame (D, 2 + q)
+        ``symbol``, then the share of resamples in which it is key, per output and in the
+        union.
+    counts : pandas.DataFrame (n_boot, q + 1)
+        The number of key errors per output and in the union, per resample.
+    """
+
+    def __new__(cls, freq: pd.DataFrame, counts: pd.DataFrame) -> KeySetFrequencies:
+        return super().__new__(cls, (freq, counts))
+
+    @property
+    def freq(self) -> pd.DataFrame:
+        """pandas.DataFrame: the share of resamples in which each error is key."""
+        return self[0]
+
+    @property
+    def counts(self) -> pd.DataFrame:
+        """pandas.DataFrame: the number of key errors per resample."""
+        return self[1]
+
+    def to_df(self) -> pd.DataFrame:
+        """The frequencies, one row per error.
+
+        Returns
+        -------
+        pandas.DataFrame
+            A copy of :attr:`freq`.
+        """
+        return self.freq.copy()
+
+
 def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str] | None = None,
-                      threshold: float = 0.9) -> tuple[pd.DataFrame, pd.DataFrame]:
+                      threshold: float = 0.9) -> KeySetFrequencies:
     """How stable is the key set: :func:`key_errors` applied to each bootstrap re-estimate.
 
     ``st_samples`` (n_boot, >= D, q) are total indices re-estimated on resamples of the base
@@ -682,10 +789,10 @@ def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str
 
     Returns
     -------
-    freq : DataFrame (D, 2 + q)
-        symbol, the share of resamples in which it is key per output, and in the union.
-    counts : DataFrame (n_boot, q + 1)
-        Key errors per output and in the union, per resample.
+    KeySetFrequencies
+        Unpacks as ``freq`` (DataFrame (D, 2 + q): symbol, the share of resamples in which
+        it is key per output, and in the union) and ``counts`` (DataFrame (n_boot, q + 1):
+        key errors per output and in the union, per resample).
     """
     if isinstance(st_samples, SobolIndices):
         if st_samples.st_boot is None:
@@ -712,5 +819,5 @@ def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str
         hits["union"][[names.index(u) for u in union]] += 1
         counts.append({**{o: ks.n_key for o, ks in sets.items()}, "union": len(union)})
     freq = pd.DataFrame({"symbol": names, **{o: h / st.shape[0] for o, h in hits.items()}})
-    return freq, pd.DataFrame(counts)
+    return KeySetFrequencies(freq, pd.DataFrame(counts))
 

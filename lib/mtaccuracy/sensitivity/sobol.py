@@ -543,15 +543,18 @@ class SobolIndices(tuple):
     >>> r.to_df().to_dict("list")
     {'output': ['y1', 'y1'], 'input': ['a', 'b'], 'S1': [0.6, 0.3], 'ST': [0.7, 0.3]}
 
+    One output's indices may be given as (D,) arrays (:func:`~mtaccuracy.sensitivity.pce_sobol`
+    returns them so): they stay (D,), and the table has one output.
+
     Parameters
     ----------
-    s1, st : (D, q) array_like
+    s1, st : (D, q) or (D,) array_like
         First-order and total indices, inputs by outputs.
     names : sequence of str (D,), optional
         Input names (default ``x1`` ... ``xD``).
     outputs : sequence of str (q,), optional
         Output names (default ``y1`` ... ``yq``).
-    s1_ci, st_ci : (D, q) array_like, optional
+    s1_ci, st_ci : array_like, the shape of ``s1``, optional
         Half-widths of their ``conf`` confidence intervals.
     conf : float
         The confidence level of the half-widths (names their columns: ``S1_ci95``).
@@ -562,17 +565,17 @@ class SobolIndices(tuple):
     Raises
     ------
     ValueError
-        If the arrays are not (D, q) of one shape or the names do not match it.
+        If the arrays are not (D, q) (or (D,)) of one shape or the names do not match it.
     """
 
     def __new__(cls, s1, st, *, names: Sequence[str] | None = None,
                 outputs: Sequence[str] | None = None, s1_ci=None, st_ci=None,
                 conf: float = 0.95, s1_boot=None, st_boot=None) -> SobolIndices:
         s1, st = np.asarray(s1, dtype=float), np.asarray(st, dtype=float)
-        if s1.ndim != 2 or st.shape != s1.shape:
+        if s1.ndim not in (1, 2) or st.shape != s1.shape:
             raise ValueError(f"s1 and st must be (D, q) arrays of one shape, got {s1.shape}, "
                              f"{st.shape}")
-        d, q = s1.shape
+        d, q = s1.shape if s1.ndim == 2 else (s1.shape[0], 1)
         cis = [None if c is None else np.asarray(c, dtype=float) for c in (s1_ci, st_ci)]
         if any(c is not None and c.shape != s1.shape for c in cis):
             raise ValueError(f"s1_ci and st_ci must be {s1.shape} like the indices")
@@ -582,8 +585,10 @@ class SobolIndices(tuple):
             raise ValueError(f"{len(names)} input and {len(outputs)} output names for "
                              f"indices of {d} inputs and {q} outputs")
         boots = [None if x is None else np.asarray(x, dtype=float) for x in (s1_boot, st_boot)]
-        if any(x is not None and (x.ndim != 3 or x.shape[1:] != s1.shape) for x in boots):
-            raise ValueError(f"s1_boot and st_boot must be (n_boot, {d}, {q})")
+        if any(x is not None and (x.ndim != s1.ndim + 1 or x.shape[1:] != s1.shape)
+               for x in boots):
+            shape = ", ".join(map(str, s1.shape))
+            raise ValueError(f"s1_boot and st_boot must be (n_boot, {shape})")
         self = super().__new__(cls, (s1, st))
         self.names, self.outputs, self.conf = names, outputs, float(conf)
         self.s1_ci, self.st_ci = cis
@@ -592,12 +597,12 @@ class SobolIndices(tuple):
 
     @property
     def s1(self) -> np.ndarray:
-        """(D, q) ndarray: the first-order indices."""
+        """(D, q) (or (D,)) ndarray: the first-order indices."""
         return self[0]
 
     @property
     def st(self) -> np.ndarray:
-        """(D, q) ndarray: the total indices."""
+        """(D, q) (or (D,)) ndarray: the total indices."""
         return self[1]
 
     def to_df(self) -> pd.DataFrame:
@@ -609,7 +614,7 @@ class SobolIndices(tuple):
             Columns ``output``, ``input``, ``S1``, ``ST``, and with intervals ``S1_ci95``
             after ``S1`` and ``ST_ci95`` after ``ST`` (the level in the name: half-widths).
         """
-        d, q = self.s1.shape
+        d, q = len(self.names), len(self.outputs)
         cols = {"output": np.repeat(self.outputs, d).tolist(), "input": list(self.names) * q}
         tag = f"_ci{100 * self.conf:g}"
         for key, val, ci in (("S1", self.s1, self.s1_ci), ("ST", self.st, self.st_ci)):

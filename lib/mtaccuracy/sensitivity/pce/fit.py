@@ -11,12 +11,14 @@ from __future__ import annotations
 __all__ = ["LOO_RTOL", "TARGET", "PCEFit", "fit_pce", "fit_pce_outputs", "pce_selection_order",
            "select_pce", "pce_sobol"]
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ..screening import rank_with_ties
+from ..sobol import SobolIndices
 from .basis import design_matrix, multi_indices
 from .solvers import _solver_path, column_norms, loo_error
 
@@ -290,7 +292,8 @@ def select_pce(xi, y, *, degrees=(1, 2, 3), q_norms=(0.5, 0.75, 1.0), rtol: floa
     return fits[order[0]], table
 
 
-def pce_sobol(fit: PCEFit) -> tuple[np.ndarray, np.ndarray]:
+def pce_sobol(fit: PCEFit, *, names: Sequence[str] | None = None,
+              outputs: Sequence[str] | None = None) -> SobolIndices:
     """First-order and total Sobol indices (d,) from the coefficients of a PCE.
 
     Zheng et al. Eq. 23; Sudret 2008: the variance of an orthonormal PCE is the sum of its
@@ -301,18 +304,25 @@ def pce_sobol(fit: PCEFit) -> tuple[np.ndarray, np.ndarray]:
     ----------
     fit : PCEFit
         A fit in an orthonormal basis (constant term included).
+    names : sequence of str (d,), optional
+        Input names (default ``x1`` ... ``xd``), labels of the result.
+    outputs : sequence of one str, optional
+        The output's name (default ``y1``).
 
     Returns
     -------
-    s1, st : arrays (d,)
-        First-order and total indices, in input order.
+    SobolIndices
+        Unpacks as ``s1, st``, arrays (d,): first-order and total indices, in input order;
+        ``.to_df()`` labels them.
     """
     a = fit.alphas
     c2 = fit.coef**2
     nonconst = a.sum(axis=1) > 0
     var = c2[nonconst].sum()
     if var == 0:
-        return np.zeros(a.shape[1]), np.zeros(a.shape[1])
+        return SobolIndices(np.zeros(a.shape[1]), np.zeros(a.shape[1]), names=names,
+                            outputs=outputs)
     active = a > 0
     only = active & (active.sum(axis=1, keepdims=True) == 1)
-    return (c2[:, None] * only).sum(axis=0) / var, (c2[:, None] * active).sum(axis=0) / var
+    return SobolIndices((c2[:, None] * only).sum(axis=0) / var,
+                        (c2[:, None] * active).sum(axis=0) / var, names=names, outputs=outputs)
