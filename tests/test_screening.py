@@ -283,11 +283,13 @@ def test_functions_with_more_than_three_parameters_take_keywords_after_the_data(
         S.merge_ties([1.0, 2.0], 0.1)
 
 
-def test_tie_rule_lives_in_screening_and_sobol_does_not_import_it():
+def test_tie_rule_lives_in_tie_rule_and_sobol_does_not_import_it():
     import mtaccuracy.sensitivity.screening as screening
     import mtaccuracy.sensitivity.sobol as sobol
+    import mtaccuracy.sensitivity.tie_rule as tie_rule
 
-    assert S.merge_ties is screening.merge_ties and S.ties is screening.ties
+    assert S.merge_ties is tie_rule.merge_ties is screening.merge_ties
+    assert S.ties is tie_rule.ties and S.rank_with_ties is tie_rule.rank_with_ties
     assert not hasattr(sobol, "merge_ties") and not hasattr(sobol, "TIE_REL")
 
 

@@ -25,6 +25,7 @@ One submodule per method; everything is re-exported here, so notebooks write
 | ``benchmarks`` | Ishigami, G function, interaction polynomial: exact indices for tests and bench |
 | ``screening`` | key-error selection rules (the 90 % rule, its bootstrap frequencies and
   margin) and reduced models (Rong et al.); imports ``sobol``, never the reverse |
+| ``tie_rule`` | the one tie rule (``ties``, ``merge_ties``, ``rank_with_ties``) |
 | ``posefit`` | which pose explains a published table: candidate screening and least-squares or
   Powell refinement for any statistic (notebooks 01 and 03) |
 
@@ -59,3 +60,4 @@ from .results import *  # noqa: F403
 from .screening import *  # noqa: F403
 from .sobol import *  # noqa: F403
 from .spearman import *  # noqa: F403
+from .tie_rule import *  # noqa: F403

@@ -28,8 +28,8 @@ from mtaccuracy import validate
 from .bootstrap import sobol_bootstrap
 from .inputs import Inputs
 from .linear import indices_at_poses, nonlinear_remainder, uniform_moments
-from .screening import merge_ties
 from .sobol import base_samples, sobol_estimate, sobol_evaluate
+from .tie_rule import merge_ties
 
 #: an output whose first-order variance is below this share of the largest one has no
 #: first-order term (e.g. the change of a unit vector along itself): no closed form there

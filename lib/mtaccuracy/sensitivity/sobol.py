@@ -625,7 +625,7 @@ class SobolIndices(tuple):
 
 
 # --------------------------------------------------------------------------------------------
-# Floating-point resolution of the estimates (the tie rule built on it: screening.ties).
+# Floating-point resolution of the estimates (the tie rule built on it: tie_rule.ties).
 # --------------------------------------------------------------------------------------------
 
 #: Absolute floating-point resolution declared for Sobol indices estimated from model outputs
@@ -640,4 +640,5 @@ class SobolIndices(tuple):
 FLOAT_NOISE = 1e-11
 
 # The tie rule built on this resolution (``TIE_REL``, ``TIE_ABS``, ``merge_ties``) is a key-set
-# rule: it lives in :mod:`.screening`, which imports this module, never the reverse.
+# rule: it lives in :mod:`.tie_rule` (imported by :mod:`.screening`), which imports this module,
+# never the reverse.

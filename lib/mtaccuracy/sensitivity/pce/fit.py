@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from ..screening import rank_with_ties
 from ..sobol import SobolIndices
+from ..tie_rule import rank_with_ties
 from .basis import design_matrix, multi_indices
 from .solvers import _solver_path, column_norms, loo_error
 
