@@ -404,12 +404,8 @@ class Inputs:
             if quiet and n & (n - 1):
                 warnings.warn(_SOBOL_BALANCE, UserWarning, stacklevel=3)
             seq = qmc.Sobol(d=d, scramble=True, rng=rng)
-            for s in range(0, n, rows):
-                with warnings.catch_warnings():
-                    if quiet:
-                        warnings.filterwarnings("ignore", message="The balance properties")
-                    u = seq.random(min(rows, n - s))
-                yield self.from_unit(u)
+            for s in range(0, n, rows):       # no name keeps a block while the caller has it
+                yield self.from_unit(_sobol_points(seq, min(rows, n - s), quiet))
 
     # --- standard variables of the polynomial chaos -----------------------------------------
 
@@ -475,3 +471,12 @@ class Inputs:
             else:
                 x[:, i] = m.ppf(stats.norm.cdf(z[:, i]))
         return x
+
+
+def _sobol_points(seq, m: int, quiet: bool) -> np.ndarray:
+    """The next ``m`` points of the Sobol' sequence ``seq``, without scipy's balance warning
+    when ``quiet`` (it was given once for the whole design)."""
+    with warnings.catch_warnings():
+        if quiet:
+            warnings.filterwarnings("ignore", message="The balance properties")
+        return seq.random(m)

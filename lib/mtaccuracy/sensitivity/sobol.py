@@ -119,18 +119,30 @@ def base_blocks(n: int, d: int | Inputs, *, method: str, seed, rows: int = BASE_
 
 
 def _pairs(n, inputs, method, rng, rows):
-    """(A, B) blocks of :func:`base_blocks`, every design drawn by ``Inputs.sample_blocks``."""
+    """(A, B) blocks of :func:`base_blocks`, every design drawn by ``Inputs.sample_blocks``.
+
+    Nothing here keeps a block while the caller holds it (no loop variable, no ``zip``, whose
+    reused result tuple would hold the last pair): a block's memory goes when the caller drops
+    it."""
     d = inputs.dim
+    count = -(-n // rows)
     if method == "sobol":
-        for u in Inputs.unit(2 * d).sample_blocks(n, method="sobol", seed=rng, rows=rows):
-            yield inputs.from_unit(u[:, :d]), inputs.from_unit(u[:, d:])
-            del u
+        seq = Inputs.unit(2 * d).sample_blocks(n, method="sobol", seed=rng, rows=rows)
+        for _ in range(count):
+            yield _halves(inputs, next(seq), d)
         return
     rng_b = _skip_ahead(rng, n * d) if method == "mc" else rng
-    yield from zip(inputs.sample_blocks(n, method=method, seed=rng, rows=rows),
-                   inputs.sample_blocks(n, method=method, seed=rng_b, rows=rows), strict=True)
+    a = inputs.sample_blocks(n, method=method, seed=rng, rows=rows)
+    b = inputs.sample_blocks(n, method=method, seed=rng_b, rows=rows)
+    for _ in range(count):
+        yield next(a), next(b)
     if method == "mc":
         rng.bit_generator.state = rng_b.bit_generator.state   # where the whole draw ends
+
+
+def _halves(inputs, u, d):
+    """The A and B halves of a block of the 2d-dimensional Sobol' sequence, through ``inputs``."""
+    return inputs.from_unit(u[:, :d]), inputs.from_unit(u[:, d:])
 
 
 def base_samples(n: int, d: int | Inputs, *, method: str, seed) -> tuple[np.ndarray, np.ndarray]:
@@ -220,7 +232,11 @@ class SobolDesign:
         ------
         a, b : arrays (m, d)
         """
-        f = self.to_inputs or (self.inputs.from_unit if self.inputs is not None else lambda u: u)
+        if self.to_inputs is None:      # the inputs' own designs (or the unit cube's)
+            d = self.inputs if self.inputs is not None else self.d
+            yield from base_blocks(self.n, d, method=self.method, seed=self.seed, rows=rows)
+            return
+        f = self.to_inputs
         for ua, ub in base_blocks(self.n, self.d, method=self.method, seed=self.seed, rows=rows):
             a = np.asarray(f(ua), dtype=float)
             del ua              # the unit-cube block is not kept beside the inputs
