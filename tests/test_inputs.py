@@ -207,3 +207,67 @@ def test_sparse_pce_takes_inputs_and_labels_its_indices():
         S.fit_sparse_pce(x, b.model(x), b.inputs)          # keyword-only after the data
     with pytest.raises(ValueError, match=r"folds must be an integer in \[2, 60\], got 61"):
         S.fit_sparse_pce(x, b.model(x), inputs=b.inputs, folds=61)
+
+
+# --- one sampler per design (issue "rooms that show the architecture", item 1) ---------------
+
+@pytest.mark.parametrize("method", ["mc", "lhs", "sobol"])
+@pytest.mark.parametrize("rows", [1, 7, 64, 500])
+def test_sample_blocks_are_the_whole_sample_in_pieces(method, rows):
+    """Drawn a block at a time the design is bitwise the whole draw, and a Generator ends
+    where the whole draw leaves it (the Monte Carlo stream and the Sobol' sequence go on)."""
+    whole_rng, rng = np.random.default_rng(9), np.random.default_rng(9)
+    whole = MIXED.sample(64, method=method, seed=whole_rng)
+    blocks = list(MIXED.sample_blocks(64, method=method, seed=rng, rows=rows))
+    assert len(blocks) == -(-64 // rows) and all(len(b) <= rows for b in blocks)
+    assert np.array_equal(np.concatenate(blocks), whole)
+    assert rng.random() == whole_rng.random()
+    with pytest.raises(ValueError, match="rows must be"):
+        MIXED.sample_blocks(8, method=method, rows=0)
+
+
+def test_the_unit_cube_is_its_own_design():
+    rng = np.random.default_rng(4)
+    u = {"mc": rng.random((40, 3)), "lhs": qmc.LatinHypercube(d=3, rng=rng).random(40),
+         "sobol": qmc.Sobol(d=3, scramble=True, rng=rng).random(32)}
+    g = np.random.default_rng(4)
+    for method, ref in u.items():
+        assert np.array_equal(S.Inputs.unit(3).sample(len(ref), method=method, seed=g), ref)
+    assert S.Inputs.unit(2, names=["a", "b"]).var.tolist() == [1 / 12, 1 / 12]
+
+
+def test_every_design_of_the_package_is_drawn_by_inputs_sample():
+    """The Sobol' A and B, the Spearman Latin hypercubes and the benchmarks' samples are
+    Inputs.sample's draws: one implementation of each design."""
+    inp = S.Inputs.normal(0.0, [1.0, 2.0, 0.5])
+    for method in ("mc", "lhs"):        # A then B: two successive designs of one generator
+        g = np.random.default_rng(5)
+        a, b = S.base_samples(50, inp, method=method, seed=5)
+        assert np.array_equal(a, inp.sample(50, method=method, seed=g))
+        assert np.array_equal(b, inp.sample(50, method=method, seed=g))
+    # sobol: one 2d-dimensional sequence, its halves
+    u = S.Inputs.unit(6).sample(64, method="sobol", seed=5)
+    a, b = S.base_samples(64, inp, method="sobol", seed=5)
+    assert np.array_equal(a, inp.from_unit(u[:, :3])) and np.array_equal(b, inp.from_unit(u[:, 3:]))
+    # the Spearman designs: the uniform laws of the bounds, bitwise
+    bounds = np.array([[0.0, -1.0, 2e-5], [3e-3, 1.0, 4e-5]])
+    x = S.latin_hypercube(30, bounds, 8)
+    assert np.array_equal(x, S.Inputs.from_bounds(bounds).sample(30, method="lhs", seed=8))
+    assert np.array_equal(S.repeated_latin_hypercube(30, bounds, repeats=2, seed=1)[1],
+                          S.Inputs.from_bounds(bounds).sample(
+                              30, method="lhs", seed=np.random.SeedSequence(1).spawn(2)[1]))
+
+
+def test_latin_hypercube_takes_a_zero_width_column_that_no_law_describes():
+    bounds = np.array([[0.0, 5.0, -1.0], [2.0, 5.0, 1.0]])      # the middle input held at 5
+    x = S.latin_hypercube(20, bounds, 3)
+    assert np.all(x[:, 1] == 5.0)
+    # the other columns: the unit-cube design of all three columns, mapped
+    u = S.Inputs.unit(3).sample(20, method="lhs", seed=3)
+    assert np.array_equal(x[:, [0, 2]], (bounds[0] + u * (bounds[1] - bounds[0]))[:, [0, 2]])
+    for c in (x[:, 0], x[:, 2] + 1):        # one point per stratum of width 0.1
+        assert np.array_equal(np.sort(np.floor(10 * c)), np.arange(20))
+    with pytest.raises(ValueError, match="lower < upper"):
+        S.Inputs.from_bounds(bounds)
+    with pytest.raises(ValueError, match="lower <= upper"):
+        S.latin_hypercube(20, bounds[::-1], 3)

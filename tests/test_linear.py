@@ -246,3 +246,42 @@ def test_bad_input_messages():
         S.indices_at_poses(np.zeros((6, 41)), var=np.ones(41))
     with pytest.raises(ValueError, match=r"model must return \(10, 2\)"):
         S.nonlinear_remainder(lambda x: x, np.zeros((2, 3)), np.zeros((10, 3)))
+
+
+# --- one result shape: labelled, with to_df ------------------------------------------------------
+
+def test_linear_indices_are_labelled_and_tabulate_as_a_sampled_estimate():
+    inp = S.Inputs.normal(0.0, ZHENG_SD, names=ZHENG.error_names)
+    jac = ZHENG.jacobian(ZHENG_POSE)                        # (1, 6, 41)
+    out = ["Px", "Py", "Pz", "Vx", "Vy", "Vz"]
+    lin = S.linear_indices(jac, inp, outputs=out)
+    assert isinstance(lin, S.LinearIndices) and lin.names == tuple(ZHENG.error_names)
+    assert np.array_equal(lin, S.linear_indices(jac, sd=ZHENG_SD))   # the numbers as before
+    assert type(lin[0]) is np.ndarray and lin[0].shape == (41, 6)
+    df = lin.to_df()
+    assert list(df.columns) == ["pose", "output", "input", "S1", "ST"]
+    assert (df.S1 == df.ST).all() and np.allclose(df.groupby("output").ST.sum(), 1.0)
+    # the table of a sampled estimate of the same linear model joins it row by row
+    model = lambda e: e @ jac[0].T  # noqa: E731
+    est = S.sobol_indices(model, S.SobolDesign(2**12, inp, method="sobol", seed=2), outputs=out)
+    both = est.to_df().merge(S.linear_indices(jac[0], inp, outputs=out).to_df(),
+                             on=["output", "input"], suffixes=("", "_linear"))
+    assert len(both) == 41 * 6 and np.abs(both.ST - both.ST_linear).max() < 0.02
+    at_poses = S.indices_at_poses(ZHENG.jacobian({k: np.repeat(v, 3) for k, v in
+                                                  ZHENG_POSE.items()}), inp, outputs=out)
+    assert at_poses.to_df().pose.max() == 2 and at_poses.outputs == tuple(out)
+
+
+def test_pose_box_indices_unpack_as_before_and_tabulate():
+    bounds = np.vstack([-SCALE, SCALE])
+    inp = S.Inputs.from_bounds(bounds, names=H3.error_names)
+    res = S.pose_box_indices(H3.jacobian, inp, poses=dict(tool_z=np.array([-80.0, 0.0])),
+                             pose_bounds=dict(x=(0.0, 500.0), y=(0.0, 400.0), z=(0.0, 300.0)),
+                             components=3, outputs=["Ex", "Ey", "Ez"])
+    s1, st, var = res
+    assert s1.shape == st.shape == (2, 21, 3) and var.shape == (2, 3)
+    assert res.s1 is s1 and res.var is var and res.names == tuple(H3.error_names)
+    df = res.to_df()
+    assert list(df.columns) == ["case", "output", "input", "S1", "ST", "var"] and len(df) == 126
+    row = df[(df.case == 1) & (df.output == "Ey") & (df.input == H3.error_names[4])].iloc[0]
+    assert row.ST == st[1, 4, 1] and row.S1 == s1[1, 4, 1] and row["var"] == var[1, 1]

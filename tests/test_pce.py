@@ -316,3 +316,16 @@ def test_validation_curve_refuses_bad_arguments():
         P.validation_curve(psi, z[:, 0], method="lasso", length=3)
     with pytest.raises(ValueError, match=r"folds must be an integer in \[2, 20\], got 30"):
         P.validation_curve(psi, z[:, 0], method="omp", length=3, folds=30)
+
+
+def test_pce_sobol_is_labelled_and_unpacks_as_before():
+    z = RNG.standard_normal((60, 3))
+    fit = P.fit_pce(z, 1.0 + 2.0 * z[:, 0] + z[:, 1] * z[:, 2], degree=2)
+    res = S.pce_sobol(fit, names=["a", "b", "c"], outputs=["f"])
+    s1, st = res
+    assert s1.shape == st.shape == (3,)
+    # exact: V = 4 + 1, S1 = (4/5, 0, 0), ST = (4/5, 1/5, 1/5)
+    assert np.allclose(s1, [0.8, 0, 0], atol=1e-10) and np.allclose(st, [0.8, 0.2, 0.2])
+    df = res.to_df()
+    assert df.input.tolist() == ["a", "b", "c"] and (df.output == "f").all()
+    assert np.array_equal(df.ST, st)

@@ -283,11 +283,13 @@ def test_functions_with_more_than_three_parameters_take_keywords_after_the_data(
         S.merge_ties([1.0, 2.0], 0.1)
 
 
-def test_tie_rule_lives_in_screening_and_sobol_does_not_import_it():
+def test_tie_rule_lives_in_tie_rule_and_sobol_does_not_import_it():
     import mtaccuracy.sensitivity.screening as screening
     import mtaccuracy.sensitivity.sobol as sobol
+    import mtaccuracy.sensitivity.tie_rule as tie_rule
 
-    assert S.merge_ties is screening.merge_ties and S.ties is screening.ties
+    assert S.merge_ties is tie_rule.merge_ties is screening.merge_ties
+    assert S.ties is tie_rule.ties and S.rank_with_ties is tie_rule.rank_with_ties
     assert not hasattr(sobol, "merge_ties") and not hasattr(sobol, "TIE_REL")
 
 
@@ -299,3 +301,31 @@ def test_simplification_rate_checks_through_validate():
     assert S.simplification_rate(np.int64(3), 6.0) == 0.5
     with pytest.raises(ValueError, match="threshold must be a share"):
         S.cumulative_share_margin(np.ones(3), 1.0)
+
+
+# --- one result shape: the key sets and their bootstrap frequencies, labelled --------------------
+
+def test_key_sets_tabulate_with_their_values_and_cumulative_shares():
+    st = np.array([[0.15, 0.1], [0.5, 0.2], [0.05, 0.6], [0.3, 0.1]])
+    sets = S.key_errors_by_output(st, names=NAMES, outputs=["f", "g"], threshold=0.9)
+    assert isinstance(sets, dict) and list(sets) == ["f", "g"]          # a dict, as before
+    assert sets.union() == S.union_key_set(sets, NAMES)
+    df = sets.to_df()
+    assert list(df.columns) == ["output", "rank", "input", "position", "value",
+                                "cumulative_share"]
+    f = df[df.output == "f"]
+    assert f.input.tolist() == ["b", "d", "a"] and f.position.tolist() == [1, 3, 0]
+    assert f.value.tolist() == [0.5, 0.3, 0.15]
+    # the shares are the cumulative sums of the sorted indices over their total, bitwise
+    assert np.array_equal(f.cumulative_share, np.cumsum(st[[1, 3, 0], 0]) / st[:, 0].sum())
+    assert f.cumulative_share.iloc[-1] == sets["f"].share
+
+
+def test_key_set_bootstrap_unpacks_as_before_and_tabulates_its_frequencies():
+    rng = np.random.default_rng(3)
+    boot = np.abs(np.array([[0.5, 0.3, 0.15, 0.05]]).T[None] + 0.05 * rng.standard_normal(
+        (50, 4, 1)))
+    res = S.key_set_bootstrap(boot, names=NAMES, threshold=0.9)
+    freq, counts = res
+    assert res.freq is freq and res.counts is counts and res.to_df().equals(freq)
+    assert len(counts) == 50 and freq.symbol.tolist() == NAMES

@@ -25,15 +25,11 @@ from scipy import stats
 
 from mtaccuracy import validate
 
+from .bootstrap import sobol_bootstrap
 from .inputs import Inputs
 from .linear import indices_at_poses, nonlinear_remainder, uniform_moments
-from .screening import merge_ties
-from .sobol import (
-    base_samples,
-    sobol_bootstrap,
-    sobol_estimate,
-    sobol_evaluate,
-)
+from .sobol import base_samples, sobol_estimate, sobol_evaluate
+from .tie_rule import merge_ties
 
 #: an output whose first-order variance is below this share of the largest one has no
 #: first-order term (e.g. the change of a unit vector along itself): no closed form there
@@ -184,10 +180,7 @@ def sample_at_pose(model: Callable[[np.ndarray], np.ndarray], jacobian: np.ndarr
     n = validate.integer(n, "n", low=2)
     n_boot = validate.integer(n_boot, "n_boot", low=1)
     bounds = np.asarray(bounds, dtype=float)
-    d = bounds.shape[1]
-    ua, ub = base_samples(n, d, method="mc", seed=seed)
-    inputs = Inputs.from_bounds(bounds)
-    a, b = inputs.from_unit(ua), inputs.from_unit(ub)
+    a, b = base_samples(n, Inputs.from_bounds(bounds), method="mc", seed=seed)
     ya, yb, yab = sobol_evaluate(model, a, b)
     _, st = sobol_estimate(ya, yb, yab)
     _, half = sobol_bootstrap(ya, yb, yab, n_boot=n_boot, seed=seed + 10)

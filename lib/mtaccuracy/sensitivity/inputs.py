@@ -3,8 +3,10 @@
 :class:`Inputs` is what the estimators of this package take in place of bounds, standard
 deviations, variances or a bare tuple of laws (issue 25 item 2), in the spirit of SALib's
 ``ProblemSpec`` and of chaospy's joint distributions: a name and a frozen ``scipy.stats`` law
-per input.  It draws designs (:meth:`Inputs.sample`: Monte Carlo, Latin hypercube or a scrambled
-Sobol' sequence, every point the inverse CDF of a unit-cube point), gives the moments the closed
+per input.  It draws designs (:meth:`Inputs.sample`, :meth:`Inputs.sample_blocks`: Monte
+Carlo, Latin hypercube or a scrambled Sobol' sequence, every point the inverse CDF of a
+unit-cube point: the package's one implementation of each design, which the Sobol' designs, the
+Spearman designs and the benchmarks draw through), gives the moments the closed
 forms need (:attr:`Inputs.mean`, :attr:`Inputs.var`, :attr:`Inputs.sd`) and the map to the
 standard variables of the polynomial chaos (:meth:`Inputs.to_standard`).
 
@@ -19,7 +21,9 @@ from __future__ import annotations
 
 __all__ = ["Inputs"]
 
-from collections.abc import Sequence
+
+import warnings
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 from scipy import stats
@@ -31,6 +35,8 @@ from ..validate import rng as _rng
 
 #: Sampling methods of :meth:`Inputs.sample`.
 METHODS = ("mc", "lhs", "sobol")
+
+_SOBOL_BALANCE = "The balance properties of Sobol' points require n to be a power of 2."
 
 
 def _loc_scale(m) -> tuple[float, float]:
@@ -115,6 +121,31 @@ class Inputs:
             raise ValueError("uniform bounds must be finite with lower < upper")
         return cls([stats.uniform(a, b - a) for a, b in zip(lo.ravel(), hi.ravel(), strict=True)],
                    names)
+
+    @classmethod
+    def unit(cls, d: int, names: Sequence[str] | None = None) -> Inputs:
+        """``d`` independent uniforms on [0, 1]: the unit hypercube.
+
+        Its designs are the unit-cube points themselves (:meth:`from_unit` is ``0 + 1 u``,
+        the identity to the bit), so a caller that maps the cube its own way (a row map of a
+        :class:`~mtaccuracy.sensitivity.SobolDesign`, bounds with zero-width columns in
+        :func:`~mtaccuracy.sensitivity.latin_hypercube`) still draws through
+        :meth:`sample_blocks`.
+
+        Parameters
+        ----------
+        d : int
+            Number of inputs (>= 1).
+        names : sequence of str (d,), optional
+            Input names (default ``x1`` ... ``xd``).
+
+        Returns
+        -------
+        Inputs
+            ``d`` inputs, each ``scipy.stats.uniform(0, 1)``.
+        """
+        d = integer(d, "d", low=1)
+        return cls([stats.uniform(0.0, 1.0)] * d, names)
 
     @classmethod
     def from_bounds(cls, bounds, names: Sequence[str] | None = None) -> Inputs:
@@ -286,6 +317,8 @@ class Inputs:
     def sample(self, n: int, *, method: str = "mc", seed=None) -> np.ndarray:
         """``n`` points of the inputs: unit-cube points through :meth:`from_unit`.
 
+        The whole design of :meth:`sample_blocks` (one block): the same numbers, bitwise.
+
         Parameters
         ----------
         n : int
@@ -309,16 +342,70 @@ class Inputs:
             If ``n`` is not a positive integer or ``method`` is unknown.
         """
         n = integer(n, "n", low=1)
+        (x,) = self.sample_blocks(n, method=method, seed=seed, rows=n)
+        return x
+
+    def sample_blocks(self, n: int, *, method: str = "mc", seed=None, rows: int
+                      ) -> Iterator[np.ndarray]:
+        """The design of :meth:`sample`, handed out ``rows`` points at a time.
+
+        The one implementation of each design in this package; blocks are drawn as they are
+        asked for, and their concatenation is :meth:`sample`'s design, bitwise:
+
+        * ``mc``: each block continues one stream, ``Generator.random((m, d))`` (numpy draws
+          the floats of a C-ordered array one after the other, so the pieces are the whole);
+        * ``sobol``: successive points of one ``scipy.stats.qmc.Sobol`` sequence (``random``
+          continues where it stopped); when ``n`` is not a power of 2 the warning scipy gives
+          for the whole draw is given once here;
+        * ``lhs``: a Latin hypercube is not a stream (each column is one random permutation
+          of all n strata, so no point is known before the whole permutation is drawn): it is
+          drawn whole when the first block is asked for (n d floats) and handed out in blocks.
+
+        Parameters
+        ----------
+        n : int
+            Number of points (>= 1).
+        method : {"mc", "lhs", "sobol"}
+            The design, as :meth:`sample`.
+        seed : None, int, SeedSequence or numpy.random.Generator
+            The randomness (:func:`mtaccuracy.validate.rng`); a Generator's stream continues
+            as the blocks are drawn.
+        rows : int
+            Points per block (>= 1).
+
+        Yields
+        ------
+        (m, d) ndarray
+            The next ``m <= rows`` points, in the inputs' units.
+
+        Raises
+        ------
+        ValueError
+            If ``n`` or ``rows`` is not a positive integer or ``method`` is unknown (when
+            called, before any block is drawn).
+        """
+        n = integer(n, "n", low=1)
+        rows = integer(rows, "rows", low=1)
         if method not in METHODS:
             raise ValueError(f"unknown sampling method {method!r}; allowed: {', '.join(METHODS)}")
-        rng = _rng(seed)
-        if method == "mc":
-            u = rng.random((n, self.dim))
-        elif method == "lhs":
-            u = qmc.LatinHypercube(d=self.dim, rng=rng).random(n)
+        return self._blocks(n, method, _rng(seed), rows)
+
+    def _blocks(self, n, method, rng, rows):
+        d = self.dim
+        if method == "lhs":
+            u = qmc.LatinHypercube(d=d, rng=rng).random(n)
+            for s in range(0, n, rows):
+                yield self.from_unit(u[s:s + rows])
+        elif method == "mc":
+            for s in range(0, n, rows):
+                yield self.from_unit(rng.random((min(rows, n - s), d)))
         else:
-            u = qmc.Sobol(d=self.dim, scramble=True, rng=rng).random(n)
-        return self.from_unit(u)
+            quiet = n > rows                   # the whole draw warns, not each block
+            if quiet and n & (n - 1):
+                warnings.warn(_SOBOL_BALANCE, UserWarning, stacklevel=3)
+            seq = qmc.Sobol(d=d, scramble=True, rng=rng)
+            for s in range(0, n, rows):       # no name keeps a block while the caller has it
+                yield self.from_unit(_sobol_points(seq, min(rows, n - s), quiet))
 
     # --- standard variables of the polynomial chaos -----------------------------------------
 
@@ -384,3 +471,12 @@ class Inputs:
             else:
                 x[:, i] = m.ppf(stats.norm.cdf(z[:, i]))
         return x
+
+
+def _sobol_points(seq, m: int, quiet: bool) -> np.ndarray:
+    """The next ``m`` points of the Sobol' sequence ``seq``, without scipy's balance warning
+    when ``quiet`` (it was given once for the whole design)."""
+    with warnings.catch_warnings():
+        if quiet:
+            warnings.filterwarnings("ignore", message="The balance properties")
+        return seq.random(m)

@@ -32,16 +32,19 @@ same to the bit).
 
 from __future__ import annotations
 
-__all__ = ["linear_indices", "uniform_moments", "gauss_legendre_unit", "pose_box_indices",
-           "indices_at_poses", "Remainder", "nonlinear_remainder"]
+__all__ = ["LinearIndices", "linear_indices", "uniform_moments", "gauss_legendre_unit",
+           "PoseBoxIndices", "pose_box_indices", "indices_at_poses", "Remainder",
+           "nonlinear_remainder"]
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import NamedTuple
 
 import numpy as np
+import pandas as pd
 
 from ..validate import integer
 from .inputs import Inputs
+from .results import IndexArray, labels
 
 
 def _shares(v: np.ndarray) -> np.ndarray:
@@ -76,8 +79,41 @@ def _squares(c: np.ndarray, kind: str, v: np.ndarray) -> np.ndarray:
     return (c * v) ** 2 if kind == "sd" else c**2 * v
 
 
-def linear_indices(jacobian: np.ndarray, inputs: Inputs | None = None, *, sd=None, var=None
-                   ) -> np.ndarray:
+class LinearIndices(IndexArray):
+    """Closed-form Sobol indices of the first-order model, ``(..., d, q)``, labelled.
+
+    What :func:`linear_indices` and :func:`indices_at_poses` return: the array of indices
+    (indexed and computed with as any array; what is computed from it is a plain array) that
+    also knows its input and output names.  For a linear model the first-order and the total
+    index are one number, so :meth:`to_df` writes it as both ``S1`` and ``ST``: the table of
+    a sampled estimate (``SobolIndices.to_df()``), to set beside it.
+
+    >>> LinearIndices([[0.8], [0.2]], names=["ex", "ey"]).to_df().values.tolist()
+    [['y1', 'ex', 0.8, 0.8], ['y1', 'ey', 0.2, 0.2]]
+
+    Parameters
+    ----------
+    values : (..., d, q) array_like
+        The indices, inputs by outputs, after any leading axes (poses).
+    names : sequence of str (d,), optional
+        Input names (default ``x1`` ... ``xd``).
+    outputs : sequence of str (q,), optional
+        Output names (default ``y1`` ... ``yq``).
+    lead : sequence of str, optional
+        Names of the leading axes (default ``axis0``, ...).
+    """
+
+    columns = ("S1", "ST")
+
+
+def _pose_axes(ndim: int) -> tuple[str, ...]:
+    """Names of the leading (pose) axes of a Jacobian of ``ndim`` axes: ``pose`` or ``pose0``..."""
+    k = ndim - 2
+    return ("pose",) if k == 1 else tuple(f"pose{i}" for i in range(k))
+
+
+def linear_indices(jacobian: np.ndarray, inputs: Inputs | None = None, *, sd=None, var=None,
+                   outputs: Sequence[str] | None = None) -> LinearIndices:
     """Sobol indices of a linear model with independent inputs (first-order = total).
 
     For input i and output k, ``J_ki^2 sd_i^2 / sum_j J_kj^2 sd_j^2`` (any distribution).
@@ -95,11 +131,15 @@ def linear_indices(jacobian: np.ndarray, inputs: Inputs | None = None, *, sd=Non
         Standard deviations of the inputs (mm, rad), instead of ``inputs``.
     var : array (d,), optional
         Variances of the inputs (mm^2, rad^2), instead of ``inputs``.
+    outputs : sequence of str (q,), optional
+        Output names (default ``y1`` ... ``yq``), labels of the result (the inputs' are
+        ``inputs.names``, else ``x1`` ... ``xd``).
 
     Returns
     -------
-    array (..., d, q)
-        Indices; each output's column sums to 1 (0 for a zero-variance output).
+    LinearIndices (..., d, q)
+        Indices; each output's column sums to 1 (0 for a zero-variance output).  Leading axes
+        are named ``pose`` (one) or ``pose0``, ``pose1``... in ``.to_df()``.
 
     Raises
     ------
@@ -114,7 +154,12 @@ def linear_indices(jacobian: np.ndarray, inputs: Inputs | None = None, *, sd=Non
     """
     c = np.asarray(jacobian, dtype=float)
     kind, v = _spread(inputs, sd, var, c.shape[-1], "sd")
-    return np.ascontiguousarray(np.swapaxes(_shares(_squares(c, kind, v)), -1, -2))
+    return LinearIndices(np.ascontiguousarray(np.swapaxes(_shares(_squares(c, kind, v)), -1, -2)),
+                         names=_input_names(inputs), outputs=outputs, lead=_pose_axes(c.ndim))
+
+
+def _input_names(inputs) -> tuple[str, ...] | None:
+    return inputs.names if isinstance(inputs, Inputs) else None
 
 
 def uniform_moments(bounds, d: int | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -197,12 +242,81 @@ def _rows(jac: np.ndarray, components) -> np.ndarray:
     return jac[:, list(components)]
 
 
+class PoseBoxIndices(tuple):
+    """First-order and total indices ``(T, d, q)`` and output variances ``(T, q)``, labelled.
+
+    What :func:`pose_box_indices` returns: the triple ``s1, st, var`` it has always returned
+    (it unpacks and indexes as that tuple), with the input and output names and
+    :meth:`to_df`.
+
+    Parameters
+    ----------
+    s1, st : (T, d, q) array_like
+        First-order and total indices of T cases, inputs by outputs.
+    var : (T, q) array_like
+        The output variance of each case, pooled over the box.
+    names : sequence of str (d,), optional
+        Input names (default ``x1`` ... ``xd``).
+    outputs : sequence of str (q,), optional
+        Output names (default ``y1`` ... ``yq``).
+
+    Raises
+    ------
+    ValueError
+        If the shapes do not agree or the names do not match them.
+    """
+
+    def __new__(cls, s1, st, var, *, names: Sequence[str] | None = None,
+                outputs: Sequence[str] | None = None) -> PoseBoxIndices:
+        s1, st, var = (np.asarray(v, dtype=float) for v in (s1, st, var))
+        if s1.ndim != 3 or st.shape != s1.shape or var.shape != s1.shape[::2]:
+            raise ValueError(f"s1, st must be (T, d, q) and var (T, q), got {s1.shape}, "
+                             f"{st.shape}, {var.shape}")
+        self = super().__new__(cls, (s1, st, var))
+        self.names = labels(names, s1.shape[1], "x", "input")
+        self.outputs = labels(outputs, s1.shape[2], "y", "output")
+        return self
+
+    @property
+    def s1(self) -> np.ndarray:
+        """(T, d, q) ndarray: the first-order indices."""
+        return self[0]
+
+    @property
+    def st(self) -> np.ndarray:
+        """(T, d, q) ndarray: the total indices."""
+        return self[1]
+
+    @property
+    def var(self) -> np.ndarray:
+        """(T, q) ndarray: the output variances, pooled over the box."""
+        return self[2]
+
+    def to_df(self) -> pd.DataFrame:
+        """The indices as a long table: one row per (case, output, input).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``case`` (position along T), ``output``, ``input``, ``S1``, ``ST`` and
+            ``var`` (the output's variance in that case); cases outermost, then outputs.
+        """
+        t, d, q = self.s1.shape
+        return pd.DataFrame({
+            "case": np.repeat(np.arange(t), d * q),
+            "output": np.tile(np.repeat(self.outputs, d), t).tolist(),
+            "input": list(self.names) * (q * t),
+            "S1": np.swapaxes(self.s1, 1, 2).ravel(),
+            "ST": np.swapaxes(self.st, 1, 2).ravel(),
+            "var": np.repeat(self.var.ravel(), d)})
+
+
 def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
                      inputs: Inputs | None = None, *, mean=None, var=None,
                      poses: Mapping | None = None, pose_bounds: Mapping | None = None,
                      components: int | Sequence[int] | None = None, nodes: int = 2,
-                     names: Iterable[str] | None = None, required: Iterable[str] = ()
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                     names: Iterable[str] | None = None, required: Iterable[str] = (),
+                     outputs: Sequence[str] | None = None) -> PoseBoxIndices:
     """Exact Sobol indices of the first-order model with part of the pose uniform in a box.
 
     ``jacobian_fn(flat_poses)``: the (M, q_all, d) Jacobians at M poses given as a mapping of
@@ -252,13 +366,15 @@ def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
         Allowed pose names.
     required : iterable of str
         Pose names that must be given.
+    outputs : sequence of str (q,), optional
+        Names of the output rows kept (default ``y1`` ... ``yq``), labels of the result (the
+        inputs' are ``inputs.names``, else ``x1`` ... ``xd``).
 
     Returns
     -------
-    S1, ST : arrays (T, d, q)
-        First-order and total indices.
-    V : array (T, q)
-        Output variance, pooled over the box.
+    PoseBoxIndices
+        Unpacks as ``S1, ST`` (T, d, q), the first-order and total indices, and ``V`` (T, q),
+        the output variance pooled over the box.
     """
     if inputs is not None and mean is not None:
         raise ValueError("give the inputs once: an Inputs, or mean= and var=")
@@ -310,11 +426,12 @@ def pose_box_indices(jacobian_fn: Callable[[dict[str, np.ndarray]], np.ndarray],
     vv = v[..., None]
     s1 = np.divide(ec**2 * var, vv, out=np.zeros_like(ec), where=vv > 0)
     st = np.divide(ec2 * var, vv, out=np.zeros_like(ec), where=vv > 0)
-    return np.swapaxes(s1, 1, 2), np.swapaxes(st, 1, 2), v
+    return PoseBoxIndices(np.swapaxes(s1, 1, 2), np.swapaxes(st, 1, 2), v,
+                          names=_input_names(inputs), outputs=outputs)
 
 
-def indices_at_poses(jacobian: np.ndarray, inputs: Inputs | None = None, *, sd=None, var=None
-                     ) -> np.ndarray:
+def indices_at_poses(jacobian: np.ndarray, inputs: Inputs | None = None, *, sd=None, var=None,
+                     outputs: Sequence[str] | None = None) -> LinearIndices:
     """Sobol indices (first order = total) of the first-order model at each of P poses.
 
     Parameters
@@ -327,10 +444,13 @@ def indices_at_poses(jacobian: np.ndarray, inputs: Inputs | None = None, *, sd=N
         Standard deviations of the inputs, instead of ``inputs``.
     var : (d,) array, optional
         Variances of the inputs, instead of ``inputs``.
+    outputs : sequence of str (q,), optional
+        Output names (default ``y1`` ... ``yq``), labels of the result (the inputs' are
+        ``inputs.names``, else ``x1`` ... ``xd``).
 
     Returns
     -------
-    (P, d, q) array
+    LinearIndices (P, d, q)
         ``J_ki^2 var_i / sum_j J_kj^2 var_j``; an output with no variance at a pose gets zeros.
         The kernel of a pose atlas: one batched expression, no loop over poses.
     """
@@ -338,7 +458,8 @@ def indices_at_poses(jacobian: np.ndarray, inputs: Inputs | None = None, *, sd=N
     if c.ndim != 3:
         raise ValueError(f"jacobian must be (P, q, d), got {c.shape}")
     kind, v = _spread(inputs, sd, var, c.shape[-1], "var")
-    return np.swapaxes(_shares(_squares(c, kind, v)), 1, 2)
+    return LinearIndices(np.swapaxes(_shares(_squares(c, kind, v)), 1, 2),
+                         names=_input_names(inputs), outputs=outputs, lead=("pose",))
 
 
 class Remainder(NamedTuple):

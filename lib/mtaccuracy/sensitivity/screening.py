@@ -16,27 +16,22 @@ indices therefore leaves an RMS residual of ``sqrt(1 - s)`` of the full model's 
 Written by hand because the rule is the paper's own (a few lines); the indices come from
 :mod:`.sobol` (this module imports it, never the reverse).
 
-Ties: one rule, :func:`ties`, says when two values are equal (within a relative and an absolute
-tolerance); every ranking in the compendium is built on it.  :func:`merge_ties` applies it to
-estimated indices at their floating-point resolution (:data:`TIE_REL`, :data:`TIE_ABS`), so that
-errors entering the model identically are ordered by catalogue position on every machine (the
-90 % rule's bootstrap, :func:`key_set_bootstrap`, and its margin,
-:func:`cumulative_share_margin`, merge first); :func:`rank_with_ties` applies it with a
-tolerance the caller states (optimiser minima, competing models) and breaks ties by a canonical
-key.  :func:`key_errors` itself breaks exact ties by catalogue order (a stable sort) and takes
-the values as given.
+Ties: the compendium's one tie rule lives in :mod:`.tie_rule` (:func:`~.tie_rule.ties`,
+:func:`~.tie_rule.merge_ties`, :func:`~.tie_rule.rank_with_ties`).  The 90 % rule's bootstrap,
+:func:`key_set_bootstrap`, and its margin, :func:`cumulative_share_margin`, merge estimated
+indices at their floating-point resolution first, so that errors entering the model identically
+are ordered by catalogue position on every machine; :func:`key_errors` itself breaks exact ties
+by catalogue order (a stable sort) and takes the values as given.
 """
 
 from __future__ import annotations
 
-__all__ = ["KeySet", "key_errors", "key_errors_by_output", "union_key_set",
+__all__ = ["KeySet", "KeySets", "KeySetFrequencies", "key_errors", "key_errors_by_output",
+           "union_key_set",
            "simplification_rate", "pooled_indices", "zero_non_key", "reduced_model",
            "residual_summary", "expected_rms_ratio", "threshold_sweep", "key_set_bootstrap",
-           "cumulative_share_margin", "TIE_REL", "TIE_ABS", "ties", "merge_ties",
-           "rank_with_ties"]
+           "cumulative_share_margin"]
 
-import functools
-import numbers
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -45,164 +40,12 @@ import pandas as pd
 
 from mtaccuracy import validate
 
-from .sobol import FLOAT_NOISE
+from .sobol import SobolIndices
+from .tie_rule import TIE_ABS, TIE_REL, merge_ties, rank_with_ties, ties  # noqa: F401  (as before)
 
 #: A share counts as exceeding the threshold only if it is larger by more than this (so that a
 #: share equal to the threshold up to rounding, e.g. 0.6 + 0.3 against 0.9, does not count).
 EXCEED_TOL = 1e-12
-
-
-#: Values within ``max(TIE_ABS, TIE_REL * max(|a|, |b|))`` of each other are ties for a
-#: ranking of estimated indices (:func:`merge_ties`): far above their floating-point resolution
-#: (:data:`~mtaccuracy.sensitivity.FLOAT_NOISE`, 1e-9 of an index of 0.01), far below any
-#: difference the sampling can resolve (1e-4 and more).
-TIE_REL = 1e-9
-TIE_ABS = FLOAT_NOISE
-
-
-def _check_tolerance(value, name: str) -> float:
-    ok = isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
-    if not ok or not (np.isfinite(value) and value >= 0):
-        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
-    return float(value)
-
-
-def ties(a, b, *, rtol: float = TIE_REL, atol: float = TIE_ABS) -> np.ndarray:
-    """True where ``a`` and ``b`` tie: ``|a - b| <= max(atol, rtol * max(|a|, |b|))``.
-
-    The compendium's one tie rule, and the canonical one: :func:`merge_ties` (estimated
-    indices) and :func:`rank_with_ties` (misfits, model-selection errors) group values with it
-    and nothing else, so they cannot disagree on whether two values tie.  The rule is symmetric
-    in ``a`` and ``b`` (the relative tolerance scales with the larger magnitude).  A group of
-    ties is anchored at its first value in rank order: a value joins the group when it ties with
-    that value, so a chain of small steps never merges values further apart than the tolerance.
-
-    Parameters
-    ----------
-    a, b : arrays (broadcastable)
-        The values compared, element by element.
-    rtol : float
-        Relative tolerance, a share of the larger magnitude (default :data:`TIE_REL`, the
-        floating-point resolution of estimated indices).
-    atol : float
-        Absolute tolerance, in the values' unit; it decides near zero (default
-        :data:`TIE_ABS`).
-
-    Returns
-    -------
-    array of bool (broadcast shape)
-        True where the two values count as equal.
-    """
-    rtol, atol = _check_tolerance(rtol, "rtol"), _check_tolerance(atol, "atol")
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    return np.abs(a - b) <= np.maximum(atol, rtol * np.maximum(np.abs(a), np.abs(b)))
-
-
-def _group_starts(s: np.ndarray, rtol: float, atol: float) -> np.ndarray:
-    """(..., m, q) True where an entry of ``s``, sorted along axis -2 in rank order, starts a
-    group of ties: it does not tie (:func:`ties`) with the first entry of the group before."""
-    start = np.ones(s.shape, dtype=bool)
-    if s.shape[-2] == 0:
-        return start
-    lead = s[..., 0, :]
-    for j in range(1, s.shape[-2]):  # sequential along the ranking, batched over other axes
-        new = ~ties(s[..., j, :], lead, rtol=rtol, atol=atol)
-        start[..., j, :] = new
-        lead = np.where(new, s[..., j, :], lead)
-    return start
-
-
-def merge_ties(values, *, rtol: float = TIE_REL, atol: float = TIE_ABS) -> np.ndarray:
-    """A copy of ``values`` in which every group of ties takes its largest value.
-
-    Along axis -2 (per column, per leading index): sort descending; each group of values that
-    tie (:func:`ties`) with the group's largest takes that value, so that a stable descending
-    sort orders the group by position (catalogue order) instead of by rounding noise.  Errors
-    that enter the model identically have equal indices in exact arithmetic; this makes equal
-    mean equal within the floating-point resolution of the estimates, so the 90 % rule and the
-    rankings are the same on every machine.
-
-    Parameters
-    ----------
-    values : array (D,), (D, q) or (..., D, q)
-        Indices, candidates along axis 0 of a 1-D array or along axis -2 (leading axes, e.g.
-        bootstrap resamples, are handled independently).
-    rtol, atol : float
-        The tie tolerances of :func:`ties` (default: the floating-point resolution of
-        estimated indices, :data:`TIE_REL` and :data:`TIE_ABS`).
-
-    Returns
-    -------
-    array, the shape of ``values``
-        Each value replaced by the largest value of its group of ties.
-    """
-    rtol, atol = _check_tolerance(rtol, "rtol"), _check_tolerance(atol, "atol")
-    a = np.array(values, dtype=float)
-    flat = a.ndim == 1
-    if flat:
-        a = a[:, None]
-    order = np.argsort(-a, axis=-2, kind="stable")
-    s = np.take_along_axis(a, order, axis=-2)
-    leader = np.where(_group_starts(s, rtol, atol), np.arange(s.shape[-2])[:, None], 0)
-    merged = np.take_along_axis(s, np.maximum.accumulate(leader, axis=-2), axis=-2)
-    out = np.empty_like(a)
-    np.put_along_axis(out, order, merged, axis=-2)
-    return out[:, 0] if flat else out
-
-
-def rank_with_ties(values, keys=None, *, rtol: float = 0.0, atol: float = 0.0,
-                   key_tol=0.0) -> np.ndarray:
-    """Candidate indices by ascending ``values``, ties (:func:`ties`) broken by ``keys``.
-
-    The canonical ranking of, e.g., the local minima of an optimiser or competing models,
-    independent of rounding noise.  Sorted ascending, the smallest value leads a group of every
-    value that ties with it (:func:`ties` with ``rtol``, ``atol``); the group is ordered by
-    ``keys``, compared lexicographically, two key entries counting as equal when they differ by
-    at most ``key_tol``; then by the original order.  Then the next group.  NaN values are
-    refused.
-
-    Parameters
-    ----------
-    values : array (m,)
-        What is ranked (e.g. misfits), smallest first.
-    keys : array (m,) or (m, p), optional
-        Tie-breaking keys, compared lexicographically, smallest first (default: the original
-        order breaks every tie).
-    rtol, atol : float
-        The tolerances of :func:`ties`; both 0 (the default) make only equal values ties.
-    key_tol : float or array (p,)
-        Key entries that differ by at most this count as equal (per key column).
-
-    Returns
-    -------
-    array of int (m,)
-        Candidate indices in rank order.
-    """
-    v = np.asarray(values, dtype=float)
-    if v.ndim != 1:
-        raise ValueError(f"values must be one-dimensional, got shape {v.shape}")
-    if not np.all(np.isfinite(v)):
-        raise ValueError("values contain NaN or infinite entries: nothing to rank them by")
-    rtol, atol = _check_tolerance(rtol, "rtol"), _check_tolerance(atol, "atol")
-    m = v.size
-    k = np.zeros((m, 0)) if keys is None else np.asarray(keys, dtype=float)
-    k = k[:, None] if k.ndim == 1 else k
-    if k.ndim != 2 or k.shape[0] != m:
-        raise ValueError(f"{k.shape[0]} keys for {m} values")
-    ktol = np.broadcast_to(np.asarray(key_tol, dtype=float), (k.shape[1],))
-
-    def cmp(i, j):
-        for a, b, t in zip(k[i], k[j], ktol, strict=True):
-            if abs(a - b) > t:
-                return -1 if a < b else 1
-        return (i > j) - (i < j)
-
-    ascending = np.argsort(v, kind="stable")
-    starts = np.flatnonzero(_group_starts(v[ascending][:, None], rtol, atol)[:, 0])
-    order = []
-    for members in np.split(ascending, starts[1:]):  # per group of ties: order by the keys
-        order += sorted((int(i) for i in members), key=functools.cmp_to_key(cmp))
-    return np.asarray(order, dtype=int)
 
 
 @dataclass(frozen=True)
@@ -224,6 +67,11 @@ class KeySet:
         The rule's share.
     n_total : int
         The number of candidate errors.
+    values : tuple of float
+        Their indices, as the rule sorted them (empty when not given).
+    cumulative : tuple of float
+        The share of the sum of all indices after each key error in turn, the last
+        ``share`` (empty when not given).
     """
 
     names: tuple[str, ...]
@@ -231,6 +79,23 @@ class KeySet:
     share: float
     threshold: float
     n_total: int
+    values: tuple[float, ...] = ()
+    cumulative: tuple[float, ...] = ()
+
+    def to_df(self) -> pd.DataFrame:
+        """The key errors as a table, in rank order.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``rank`` (1 = largest index), ``input`` (the name), ``position`` (among
+            the candidates), ``value`` (the index) and ``cumulative_share``.
+        """
+        n = len(self.index)
+        return pd.DataFrame({"rank": np.arange(1, n + 1), "input": list(self.names),
+                             "position": list(self.index),
+                             "value": list(self.values) or [np.nan] * n,
+                             "cumulative_share": list(self.cumulative) or [np.nan] * n})
 
     @property
     def n_key(self) -> int:
@@ -320,13 +185,57 @@ def key_errors(st, *, names: Sequence[str] | None = None, threshold: float = 0.9
             k += 1
     keep = order[:k]
     return KeySet(tuple(names[i] for i in keep), tuple(int(i) for i in keep),
-                  float(share[k - 1]), t, a.size)
+                  float(share[k - 1]), t, a.size, tuple(float(v) for v in a[keep]),
+                  tuple(float(v) for v in share[:k]))
+
+
+class KeySets(dict):
+    """The key sets of every output, ``{output: KeySet}``, with the candidates' names.
+
+    What :func:`key_errors_by_output` returns: the dict it has always returned (its items,
+    keys and values as before), that also knows every candidate's name (:meth:`union`) and
+    gives itself as one table (:meth:`to_df`).
+
+    Parameters
+    ----------
+    sets : mapping of str to KeySet
+        One key set per output, in output order.
+    names : sequence of str (D,)
+        Every candidate's name, in catalogue order.
+    """
+
+    def __init__(self, sets, names: Sequence[str]):
+        super().__init__(sets)
+        self.names = tuple(names)
+
+    def union(self) -> tuple[str, ...]:
+        """The errors that are key for at least one output, in catalogue order.
+
+        Returns
+        -------
+        tuple of str
+            :func:`union_key_set` of these sets.
+        """
+        return union_key_set(self, self.names)
+
+    def to_df(self) -> pd.DataFrame:
+        """Every output's key errors as one long table, outputs outermost.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Column ``output``, then those of :meth:`KeySet.to_df`.
+        """
+        parts = [ks.to_df().assign(output=o) for o, ks in self.items()]
+        df = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(
+            columns=["rank", "input", "position", "value", "cumulative_share", "output"])
+        return df[["output", *df.columns[:-1]]]
 
 
 def key_errors_by_output(st, *, names: Sequence[str] | None = None,
                          outputs: Sequence[str] | None = None,
                          threshold: float = 0.9, tie_tol: float | None = None
-                         ) -> dict[str, KeySet]:
+                         ) -> KeySets:
     """:func:`key_errors` for every output column of ``st`` (D, q).
 
     Parameters
@@ -342,15 +251,16 @@ def key_errors_by_output(st, *, names: Sequence[str] | None = None,
 
     Returns
     -------
-    dict of str to KeySet
-        One key set per output, in the order of ``outputs``.
+    KeySets
+        One key set per output, in the order of ``outputs`` (a dict; ``.to_df()``,
+        ``.union()``).
     """
     a = _check_indices(st, 2)
     outputs = list(outputs) if outputs is not None else [f"y{k}" for k in range(a.shape[1])]
     if len(outputs) != a.shape[1]:
         raise ValueError(f"{len(outputs)} output names for {a.shape[1]} columns")
-    return {o: key_errors(a[:, k], names=names, threshold=threshold, tie_tol=tie_tol)
-            for k, o in enumerate(outputs)}
+    return KeySets({o: key_errors(a[:, k], names=names, threshold=threshold, tie_tol=tie_tol)
+                    for k, o in enumerate(outputs)}, _names(names, a.shape[0]))
 
 
 def union_key_set(sets, names: Sequence[str]) -> tuple[str, ...]:
@@ -653,13 +563,54 @@ def cumulative_share_margin(values, threshold: float) -> np.ndarray:
     return np.minimum(above, below)
 
 
+class KeySetFrequencies(tuple):
+    """How often each error is key over bootstrap resamples, and the sizes of the key sets.
+
+    What :func:`key_set_bootstrap` returns: the pair ``freq, counts`` it has always returned
+    (it unpacks as that tuple); :meth:`to_df` is ``freq``.
+
+    Parameters
+    ----------
+    freq : pandas.DataFrame (D, 2 + q)
+        ``symbol``, then the share of resamples in which it is key, per output and in the
+        union.
+    counts : pandas.DataFrame (n_boot, q + 1)
+        The number of key errors per output and in the union, per resample.
+    """
+
+    def __new__(cls, freq: pd.DataFrame, counts: pd.DataFrame) -> KeySetFrequencies:
+        return super().__new__(cls, (freq, counts))
+
+    @property
+    def freq(self) -> pd.DataFrame:
+        """pandas.DataFrame: the share of resamples in which each error is key."""
+        return self[0]
+
+    @property
+    def counts(self) -> pd.DataFrame:
+        """pandas.DataFrame: the number of key errors per resample."""
+        return self[1]
+
+    def to_df(self) -> pd.DataFrame:
+        """The frequencies, one row per error.
+
+        Returns
+        -------
+        pandas.DataFrame
+            A copy of :attr:`freq`.
+        """
+        return self.freq.copy()
+
+
 def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str] | None = None,
-                      threshold: float = 0.9) -> tuple[pd.DataFrame, pd.DataFrame]:
+                      threshold: float = 0.9) -> KeySetFrequencies:
     """How stable is the key set: :func:`key_errors` applied to each bootstrap re-estimate.
 
     ``st_samples`` (n_boot, >= D, q) are total indices re-estimated on resamples of the base
-    rows, e.g. the second array of :func:`mtaccuracy.sensitivity.sobol_bootstrap_samples`, so
-    that the key-set frequencies come from the very resamples of the confidence intervals.
+    rows, e.g. the second array of :func:`mtaccuracy.sensitivity.sobol_bootstrap_samples` or
+    the ``st_boot`` of a bootstrapped ``sobol_indices(..., n_boot=)`` (a
+    :class:`~mtaccuracy.sensitivity.SobolIndices` may be given itself), so that the key-set
+    frequencies come from the very resamples of the confidence intervals.
     Only the first ``len(names)`` inputs are candidates (further inputs, e.g. the pose, are left
     out of the rule).  Each resample is clipped at 0 and its ties merged
     (:func:`merge_ties`: indices within the floating-point resolution are equal, and equal
@@ -668,8 +619,9 @@ def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str
 
     Parameters
     ----------
-    st_samples : array (n_boot, >= D, q)
-        Re-estimated total indices, one (D, q) table per resample.
+    st_samples : array (n_boot, >= D, q) or SobolIndices
+        Re-estimated total indices, one (D, q) table per resample (of a ``SobolIndices``: its
+        ``st_boot``).
     names : sequence of str (D,)
         The candidate inputs (the first ``len(names)`` of axis 1), unique.
     outputs : sequence of str (q,), optional
@@ -679,11 +631,16 @@ def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str
 
     Returns
     -------
-    freq : DataFrame (D, 2 + q)
-        symbol, the share of resamples in which it is key per output, and in the union.
-    counts : DataFrame (n_boot, q + 1)
-        Key errors per output and in the union, per resample.
+    KeySetFrequencies
+        Unpacks as ``freq`` (DataFrame (D, 2 + q): symbol, the share of resamples in which
+        it is key per output, and in the union) and ``counts`` (DataFrame (n_boot, q + 1):
+        key errors per output and in the union, per resample).
     """
+    if isinstance(st_samples, SobolIndices):
+        if st_samples.st_boot is None:
+            raise ValueError("these Sobol indices carry no bootstrap re-estimates: compute "
+                             "them with sobol_indices(..., n_boot=, seed=)")
+        st_samples = st_samples.st_boot
     st = np.asarray(st_samples, dtype=float)
     names = list(names)
     if st.ndim != 3 or st.shape[0] < 1:
@@ -704,5 +661,5 @@ def key_set_bootstrap(st_samples, *, names: Sequence[str], outputs: Sequence[str
         hits["union"][[names.index(u) for u in union]] += 1
         counts.append({**{o: ks.n_key for o, ks in sets.items()}, "union": len(union)})
     freq = pd.DataFrame({"symbol": names, **{o: h / st.shape[0] for o, h in hits.items()}})
-    return freq, pd.DataFrame(counts)
+    return KeySetFrequencies(freq, pd.DataFrame(counts))
 

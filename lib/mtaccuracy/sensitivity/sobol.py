@@ -4,11 +4,13 @@ The estimators are SALib's (``SALib.analyze.sobol`` with ``calc_second_order=Fal
 Saltelli et al. 2010 for the first order, Jansen 1999 for the total index, on outputs
 standardised over all N(D+2) runs.  SALib's sampler materialises every run at once (at D=41,
 N=2^17 it takes 44 s and 1.8 GB).  Here :func:`sobol_indices` takes the base rows
-:data:`BASE_ROWS` at a time: given a :class:`SobolDesign` it draws them block by block (the
+:data:`BASE_ROWS` at a time: given a :class:`SobolDesign` it draws them block by block
+through :meth:`~mtaccuracy.sensitivity.Inputs.sample_blocks`, the package's one sampler (the
 Monte Carlo stream and the Sobol' sequence continue exactly where the previous block ended),
 builds and evaluates each AB_i block chunk by chunk, and keeps per-block sums, so the model sees
-one batched call per chunk and memory is flat in N.  A test checks these numbers against
-SALib's at small N.
+one batched call per chunk and memory is flat in N; with ``n_boot=`` it accumulates the
+bootstrap intervals the same way (:mod:`~mtaccuracy.sensitivity.bootstrap`, the Poisson
+bootstrap).  A test checks these numbers against SALib's at small N.
 
 Layout: ``ya``, ``yb`` are (N, q); ``yab`` is (D, N, q) with ``yab[i]`` the model on AB_i (A
 with column i taken from B); indices are (D, q), inputs by outputs.  Given an
@@ -19,23 +21,19 @@ drawn through its laws and :func:`sobol_indices` labels its result (:class:`Sobo
 
 from __future__ import annotations
 
-__all__ = ["base_samples", "base_blocks", "BASE_ROWS", "SobolDesign", "SobolIndices",
-           "sobol_evaluate", "sobol_estimate", "bootstrap_counts",
-           "sobol_bootstrap_samples", "ci_half_width", "sobol_bootstrap", "sobol_indices",
-           "FLOAT_NOISE"]
+__all__ = ["base_samples", "base_blocks", "BASE_ROWS", "BOOT_FLOATS", "SobolDesign",
+           "SobolIndices", "sobol_evaluate", "sobol_estimate", "sobol_indices", "FLOAT_NOISE"]
 
 import copy
-import warnings
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy import stats
-from scipy.stats import qmc
 
 from ..validate import integer
 from ..validate import rng as _rng
+from .bootstrap import StreamedBootstrap, ci_half_width
 from .inputs import Inputs
 
 #: Base rows (of A and of B) drawn and run at a time by :func:`sobol_indices`.  Peak memory
@@ -44,9 +42,6 @@ from .inputs import Inputs
 #: is one block, computed with exactly the arithmetic of the whole-array estimate (the
 #: notebooks' N <= 1e5 are).
 BASE_ROWS = 2**17
-
-_SOBOL_BALANCE = "The balance properties of Sobol' points require n to be a power of 2."
-
 
 def _check_method(n, method):
     n = integer(n, "n", low=2)
@@ -88,15 +83,16 @@ def base_blocks(n: int, d: int | Inputs, *, method: str, seed, rows: int = BASE_
     Yields ``(a, b)`` blocks, (m, d) each with m <= rows, as they are needed; their
     concatenation is bitwise :func:`base_samples`' A and B (same arguments).
 
-    ``mc``: A continues one stream of ``numpy.random.default_rng(seed)``; B, which the whole
-    draw takes after all of A, comes from a copy of the generator advanced by ``n d`` draws
-    (PCG64's ``advance``).  ``sobol``: successive blocks of one scrambled 2d-dimensional
-    sequence (``scipy.stats.qmc.Sobol.random`` continues where it stopped).  ``lhs``: a Latin
-    hypercube is not a stream: each column is one random permutation of all n strata, so no
-    row is known before the whole permutation is drawn; both designs are drawn whole (2 n d
-    floats, 16 d bytes per row) and handed out in blocks.  A generator passed as ``seed`` ends
-    where :func:`base_samples` leaves it once every block is drawn.  Given an
-    :class:`Inputs` for ``d``, every block is mapped through its laws (:meth:`Inputs.from_unit`).
+    Every design is drawn by :meth:`Inputs.sample_blocks` (the package's one sampler); this
+    function only pairs them.  ``mc``: A and B are two successive designs of one generator
+    ``numpy.random.default_rng(seed)``; B, which the whole draw takes after all of A, comes
+    from a copy of the generator advanced by ``n d`` draws (PCG64's ``advance``), so both
+    stream.  ``lhs``: two successive Latin hypercubes of the generator, each drawn whole
+    (2 n d floats, 16 d bytes per row) and handed out in blocks.  ``sobol``: one scrambled
+    2d-dimensional Sobol' sequence split in halves, as SALib's Saltelli sampler does, drawn
+    block by block.  A generator passed as ``seed`` ends where :func:`base_samples` leaves it
+    once every block is drawn.  Given an :class:`Inputs` for ``d``, the designs are of its
+    laws; given a number, of :meth:`Inputs.unit` (the unit cube itself, bitwise).
 
     Parameters
     ----------
@@ -119,38 +115,34 @@ def base_blocks(n: int, d: int | Inputs, *, method: str, seed, rows: int = BASE_
     n = _check_method(n, method)
     rows = integer(rows, "rows", low=1)
     d, inputs = _dim(d)
-    blocks = _blocks(n, d, method, _rng(seed), rows)
-    return blocks if inputs is None else ((inputs.from_unit(a), inputs.from_unit(b))
-                                          for a, b in blocks)
+    return _pairs(n, inputs if inputs is not None else Inputs.unit(d), method, _rng(seed), rows)
 
 
-def _blocks(n, d, method, rng, rows):
-    if method == "lhs":
-        a, b = (qmc.LatinHypercube(d=d, rng=rng).random(n),
-                qmc.LatinHypercube(d=d, rng=rng).random(n))
-        for s in range(0, n, rows):
-            yield a[s:s + rows], b[s:s + rows]
-    elif method == "mc":
-        rng_b = _skip_ahead(rng, n * d)
-        for s in range(0, n, rows):
-            m = min(rows, n - s)
-            yield rng.random((m, d)), rng_b.random((m, d))
+def _pairs(n, inputs, method, rng, rows):
+    """(A, B) blocks of :func:`base_blocks`, every design drawn by ``Inputs.sample_blocks``.
+
+    Nothing here keeps a block while the caller holds it (no loop variable, no ``zip``, whose
+    reused result tuple would hold the last pair): a block's memory goes when the caller drops
+    it."""
+    d = inputs.dim
+    count = -(-n // rows)
+    if method == "sobol":
+        seq = Inputs.unit(2 * d).sample_blocks(n, method="sobol", seed=rng, rows=rows)
+        for _ in range(count):
+            yield _halves(inputs, next(seq), d)
+        return
+    rng_b = _skip_ahead(rng, n * d) if method == "mc" else rng
+    a = inputs.sample_blocks(n, method=method, seed=rng, rows=rows)
+    b = inputs.sample_blocks(n, method=method, seed=rng_b, rows=rows)
+    for _ in range(count):
+        yield next(a), next(b)
+    if method == "mc":
         rng.bit_generator.state = rng_b.bit_generator.state   # where the whole draw ends
-    else:
-        if n > rows and n & (n - 1):   # the whole draw's first call would warn
-            warnings.warn(_SOBOL_BALANCE, UserWarning, stacklevel=3)
-        seq = qmc.Sobol(d=2 * d, scramble=True, rng=rng)
-        for s in range(0, n, rows):
-            yield _sobol_halves(seq, min(rows, n - s), d, quiet=n > rows)
 
 
-def _sobol_halves(seq, m, d, quiet):
-    """The next m points of ``seq`` as (A, B) halves (no name left holding the block)."""
-    with warnings.catch_warnings():
-        if quiet:   # said above for the whole design, not for the block
-            warnings.filterwarnings("ignore", message="The balance properties")
-        u = seq.random(m)
-    return u[:, :d], u[:, d:]
+def _halves(inputs, u, d):
+    """The A and B halves of a block of the 2d-dimensional Sobol' sequence, through ``inputs``."""
+    return inputs.from_unit(u[:, :d]), inputs.from_unit(u[:, d:])
 
 
 def base_samples(n: int, d: int | Inputs, *, method: str, seed) -> tuple[np.ndarray, np.ndarray]:
@@ -240,7 +232,11 @@ class SobolDesign:
         ------
         a, b : arrays (m, d)
         """
-        f = self.to_inputs or (self.inputs.from_unit if self.inputs is not None else lambda u: u)
+        if self.to_inputs is None:      # the inputs' own designs (or the unit cube's)
+            d = self.inputs if self.inputs is not None else self.d
+            yield from base_blocks(self.n, d, method=self.method, seed=self.seed, rows=rows)
+            return
+        f = self.to_inputs
         for ua, ub in base_blocks(self.n, self.d, method=self.method, seed=self.seed, rows=rows):
             a = np.asarray(f(ua), dtype=float)
             del ua              # the unit-cube block is not kept beside the inputs
@@ -396,169 +392,25 @@ def sobol_estimate(ya: np.ndarray, yb: np.ndarray, yab: np.ndarray
     return s1 / var, st / var
 
 
-def bootstrap_counts(n: int, n_boot: int, *, seed, chunk: int = 20, block: int = 2**21):
-    """The ``n_boot`` bootstrap resamples of ``n`` rows as counts, a few resamples at a time.
-
-    Yields (k, n) float arrays ``w`` with ``w[b, i]`` = how often row i is drawn in resample
-    b, about ``block / n`` resamples at a time (one matrix product each; many small products
-    are slow when a multi-threaded BLAS shares a busy machine).
-
-    The draws are ``rng.integers(0, n, size=(k, n))`` for successive chunks of ``k <= chunk``
-    resamples of one generator ``mtaccuracy.validate.rng(seed)``: the resamples that
-    :func:`sobol_bootstrap` has always used (and the key-set frequencies of
-    ``screening.key_set_bootstrap``, which take its re-estimates).
-
-    Parameters
-    ----------
-    n : int
-        Rows (>= 1).
-    n_boot : int
-        Resamples (>= 1).
-    seed : None, int, SeedSequence or numpy.random.Generator
-        The randomness (:func:`mtaccuracy.validate.rng`).
-    chunk : int
-        Resamples per draw (>= 1).
-    block : int
-        Counts held at a time.
-
-    Yields
-    ------
-    array (k, n)
-        Counts of k resamples.
-    """
-    n = integer(n, "n", low=1)
-    n_boot = integer(n_boot, "n_boot", low=1)
-    chunk = integer(chunk, "chunk", low=1)
-    rng = _rng(seed)
-    per_block = max(chunk, block // max(n, 1))
-    drawn = []
-    for start in range(0, int(n_boot), chunk):
-        drawn.append(rng.integers(0, n, size=(min(chunk, int(n_boot) - start), n)))
-        if sum(len(d) for d in drawn) >= per_block or start + chunk >= n_boot:
-            idx = np.concatenate(drawn)
-            drawn = []
-            k = idx.shape[0]
-            flat = (idx + n * np.arange(k)[:, None]).ravel()
-            yield np.bincount(flat, minlength=k * n).reshape(k, n).astype(float)
-
-
-def sobol_bootstrap_samples(ya, yb, yab, *, n_boot: int, seed, chunk: int = 20,
-                            block: int = 2**21) -> tuple[np.ndarray, np.ndarray]:
-    """S1 and ST re-estimated on ``n_boot`` resamples of the N base rows: (n_boot, D, q) each.
-
-    The same estimates as :func:`sobol_estimate` on ``ya[idx], yb[idx], yab[:, idx]`` for the
-    resamples of :func:`bootstrap_counts`, computed without copying the resampled rows: every
-    term of the estimator is a mean over rows, so a resample is a weight vector (the counts)
-    and all resamples of a chunk are one matrix product of the counts with the per-row terms
-    (``ya``, ``yb``, their squares, ``sum_i yab_i``, and per input ``yab_i - ya``,
-    ``yb (yab_i - ya)``, ``(yab_i - ya)^2``).  Outputs are centred on their overall mean first
-    (the indices do not change), so the variance ``E[y^2] - E[y]^2`` has no cancellation.
-    Memory: N x (3 + 3 D) q floats, and ``block`` counts at a time.  Sums in a different order
-    than :func:`sobol_estimate`: equal to it within floating-point rounding (a test checks
-    1e-12).
-
-    Parameters
-    ----------
-    ya, yb : arrays (N, q)
-        The outputs on A and on B.
-    yab : array (D, N, q)
-        As :func:`sobol_evaluate` returns them.
-    n_boot : int
-        Resamples.
-    seed : None, int, SeedSequence or numpy.random.Generator
-        The randomness of the resampling (:func:`mtaccuracy.validate.rng`).
-    chunk, block : int
-        As :func:`bootstrap_counts`.
-
-    Returns
-    -------
-    s1, st : arrays (n_boot, D, q)
-        The re-estimates, one per resample.
-    """
-    ya, yb, yab = (np.asarray(v, dtype=float) for v in (ya, yb, yab))
-    n, q = ya.shape
-    d = yab.shape[0]
-    centre = np.concatenate([ya, yb]).mean(0)
-    ya, yb, yab = ya - centre, yb - centre, yab - centre
-    diff = (yab - ya[None]).transpose(1, 0, 2).reshape(n, d * q)          # (N, D q)
-    ybd = diff * np.tile(yb, d)
-    rows = np.concatenate([ya + yb, ya**2 + yb**2, yab.sum(0) + ya + yb, diff, ybd, diff**2],
-                          axis=1)
-    s1s, sts = [], []
-    for w in bootstrap_counts(n, n_boot, seed=seed, chunk=chunk, block=block):
-        m = (w @ rows) / n                                                  # (k, 3q + 3Dq)
-        mean_y = m[:, :q] / 2
-        var = m[:, q:2 * q] / 2 - mean_y**2                                 # (k, q)
-        mu = m[:, 2 * q:3 * q] / (d + 2)
-        md, mybd, md2 = (m[:, (3 + j * d) * q:(3 + (j + 1) * d) * q].reshape(-1, d, q)
-                         for j in range(3))
-        s1s.append((mybd - mu[:, None, :] * md) / var[:, None, :])
-        sts.append(0.5 * md2 / var[:, None, :])
-    return np.concatenate(s1s), np.concatenate(sts)
-
-
-def ci_half_width(samples: np.ndarray, conf: float = 0.95) -> np.ndarray:
-    """Half-width of the ``conf`` interval from bootstrap ``samples`` (leading axis), as SALib's.
-
-    The normal quantile times their standard deviation (ddof 1), as SALib reports it.
-
-    Parameters
-    ----------
-    samples : array (n_boot, ...)
-        Bootstrap estimates.
-    conf : float
-        Confidence level, in (0, 1).
-
-    Returns
-    -------
-    array (...)
-        The half-widths, one per estimate.
-    """
-    z = stats.norm.ppf(0.5 + conf / 2)
-    return z * np.asarray(samples).std(axis=0, ddof=1)
-
-
-def sobol_bootstrap(ya, yb, yab, *, n_boot: int, seed, conf: float = 0.95, chunk: int = 20):
-    """Bootstrap half-widths of the ``conf`` confidence intervals of S1 and ST, (D, q) each.
-
-    From ``n_boot`` resamples of the N base rows (as SALib: normal quantile times the
-    bootstrap standard deviation); see :func:`sobol_bootstrap_samples`.
-
-    Parameters
-    ----------
-    ya, yb : arrays (N, q)
-        The outputs on A and on B.
-    yab : array (D, N, q)
-        As :func:`sobol_evaluate` returns them.
-    n_boot : int
-        Resamples.
-    seed : None, int, SeedSequence or numpy.random.Generator
-        The randomness of the resampling (:func:`mtaccuracy.validate.rng`).
-    conf : float
-        Confidence level.
-    chunk : int
-        As :func:`bootstrap_counts`.
-
-    Returns
-    -------
-    s1_half, st_half : arrays (D, q)
-        Half-widths of the intervals.
-    """
-    s1s, sts = sobol_bootstrap_samples(ya, yb, yab, n_boot=n_boot, seed=seed, chunk=chunk)
-    return ci_half_width(s1s, conf), ci_half_width(sts, conf)
-
-
-def _row_blocks(a, b, rows):
-    """(n, d, inputs, iterator of (a, b) row blocks) of a :class:`SobolDesign` or arrays A, B."""
+def _row_blocks(a, b, rows, cap=None):
+    """(n, d, inputs, iterator of (a, b) row blocks) of a :class:`SobolDesign` or arrays A, B;
+    ``cap(d)``, when given, bounds the rows of a block."""
     rows = integer(rows, "rows", low=1)
     if isinstance(a, SobolDesign):
         if b is not None:
             raise ValueError("give either a SobolDesign or the arrays A and B, not both")
         _check_method(a.n, a.method)
+        rows = rows if cap is None else min(rows, cap(int(a.d)))
         return int(a.n), int(a.d), a.inputs, a.blocks(rows)
     a, b = _check_ab(a, b)
     n = a.shape[0]
+    rows = rows if cap is None else min(rows, cap(a.shape[1]))
     return n, a.shape[1], None, ((a[s:s + rows], b[s:s + rows]) for s in range(0, n, rows))
+
+
+#: Floats of the bootstrap weights of one block (``n_boot`` per base row) in
+#: :func:`sobol_indices`: 32 MB.
+BOOT_FLOATS = 2**22
 
 
 def _sum(terms):
@@ -571,7 +423,8 @@ def _sum(terms):
 
 def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | None = None,
                   *, chunk: int = 200_000, progress: Callable[[int, int], None] | None = None,
-                  rows: int = BASE_ROWS, outputs: Sequence[str] | None = None) -> SobolIndices:
+                  rows: int = BASE_ROWS, outputs: Sequence[str] | None = None,
+                  n_boot: int | None = None, seed=None, conf: float = 0.95) -> SobolIndices:
     """First-order and total Sobol indices of ``model``, streaming over base rows and AB runs.
 
     The estimators are Saltelli et al. 2010 (first order) and Jansen 1999 (total), on outputs
@@ -580,6 +433,19 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
     without ever holding ``yab`` (D N q floats: 200 MB for 41 inputs, N = 1e5, six outputs).
     Given a :class:`SobolDesign`, the base rows are drawn ``rows`` at a time too, and memory is
     that of one block whatever N (``lhs`` designs excepted, see :func:`base_blocks`).
+
+    With ``n_boot``, the result carries bootstrap intervals too, streamed like the indices: the
+    Poisson bootstrap of :mod:`~mtaccuracy.sensitivity.bootstrap` (every row's count in every
+    resample an independent Poisson(1) draw of ``seed``, drawn with its block, so the resamples
+    do not depend on the blocks), whose weighted sums are accumulated block by block
+    (:class:`~mtaccuracy.sensitivity.StreamedBootstrap`): memory flat in N (about 0.2 GB at
+    D = 41, q = 6, n_boot = 500, whatever N; the held bootstrap of :func:`sobol_evaluate` and
+    :func:`~mtaccuracy.sensitivity.sobol_bootstrap_samples` needs 16 kB per base row).  A block
+    then holds at most ``min(rows, chunk // D, BOOT_FLOATS // n_boot)`` base rows (all its AB
+    runs in one model call, its weights at most :data:`BOOT_FLOATS` floats), so with more than
+    that many rows the indices differ from those without ``n_boot`` by rounding (pooled blocks).
+    The resamples are not those of :func:`~mtaccuracy.sensitivity.sobol_bootstrap` (which
+    draws N rows with replacement): the half-widths agree to their Monte Carlo noise.
 
     Parameters
     ----------
@@ -596,17 +462,27 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
     progress : callable, optional
         ``progress(done, total)`` after each call, counting runs.
     rows : int
-        Base rows per block (:data:`BASE_ROWS`).  With N <= ``rows`` the result is bitwise
-        that of a whole-array pass; with more blocks it differs by rounding only.
+        Base rows per block (:data:`BASE_ROWS`).  With N <= ``rows`` (and no ``n_boot``) the
+        result is bitwise that of a whole-array pass; with more blocks it differs by rounding
+        only.
     outputs : sequence of str (q,), optional
         Names of the model's outputs (default ``y1`` ... ``yq``), for :meth:`SobolIndices.to_df`.
+    n_boot : int, optional
+        Bootstrap resamples (>= 2) of the intervals; none by default.
+    seed : None, int, SeedSequence or numpy.random.Generator
+        The randomness of the resampling (:func:`mtaccuracy.validate.rng`), with ``n_boot``.
+    conf : float
+        Confidence level of the intervals, in (0, 1).
 
     Returns
     -------
     SobolIndices
         Unpacks as ``s1, st``, (D, q) arrays of first-order and total indices; labelled with
         the design's input names (a :class:`SobolDesign` of an :class:`Inputs`; else ``x1``
-        ... ``xD``) and ``outputs``.
+        ... ``xD``) and ``outputs``.  With ``n_boot``: the half-widths ``s1_ci``, ``st_ci``
+        (normal quantile times the bootstrap standard deviation, as SALib's) and the
+        re-estimates ``s1_boot``, ``st_boot`` (n_boot, D, q) (e.g. for
+        :func:`~mtaccuracy.sensitivity.key_set_bootstrap`).
 
     Notes
     -----
@@ -619,7 +495,16 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
     batch of ``chunk`` runs, its ``ya`` and ``yb``, and three (D, q) sums per block.
     """
     chunk = integer(chunk, "chunk", low=1)
-    n, d, inputs, blocks = _row_blocks(a, b, rows)
+    cap = None
+    if n_boot is not None:
+        n_boot = integer(n_boot, "n_boot", low=2)
+        if not 0 < conf < 1:    # an open interval: validate.probability allows 0 and 1
+            raise ValueError(f"conf must be in (0, 1), got {conf!r}")
+
+        def cap(d):
+            return max(1, min(chunk // d, BOOT_FLOATS // n_boot))
+    n, d, inputs, blocks = _row_blocks(a, b, rows, cap)
+    boot = None if n_boot is None else StreamedBootstrap(n_boot, seed, d=d)
     run = _model_runs(model, n, d, chunk, progress)
     parts = []
     for ab, bb in blocks:
@@ -630,6 +515,9 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
         centre, var = both.mean(0), both.var(0)
         ybc = yb - centre
         total = both.sum(0)
+        if boot is not None:
+            w = boot.weights(m)
+            boot.add_base(w, ya, yb)
         sd_, sbd, sd2 = np.empty((d, q)), np.empty((d, q)), np.empty((d, q))
         for i0, i1, x in _ab_blocks(ab, bb, chunk):
             y = run(x).reshape(i1 - i0, m, q)
@@ -638,15 +526,25 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], a, b: np.ndarray | 
             sd_[i0:i1] = diff.sum(1)
             sbd[i0:i1] = np.einsum("inq,nq->iq", diff, ybc)
             sd2[i0:i1] = np.einsum("inq,inq->iq", diff, diff)
+            if boot is not None:
+                boot.add_inputs(w, i0, i1, diff, ya, yb)
         parts.append((m / n, centre, var, total, sd_, sbd, sd2))
         del ab, bb, x, ya, yb, both, ybc, y, diff   # before the next block is drawn
+        w = None
     w, centre, var, total, sd_, sbd, sd2 = zip(*parts, strict=True)
     mu = _sum(total) / (n * (d + 2))
     c = _sum([wk * ck for wk, ck in zip(w, centre, strict=True)])
     var = _sum([wk * (vk + (ck - c) ** 2) for wk, vk, ck in zip(w, var, centre, strict=True)])
     num = _sum([sb - (mu - ck) * s for sb, ck, s in zip(sbd, centre, sd_, strict=True)])
-    return SobolIndices(num / (n * var), 0.5 * _sum(sd2) / (n * var),
-                        names=inputs.names if inputs is not None else None, outputs=outputs)
+    names = inputs.names if inputs is not None else None
+    if boot is None:
+        return SobolIndices(num / (n * var), 0.5 * _sum(sd2) / (n * var), names=names,
+                            outputs=outputs)
+    s1_boot, st_boot = boot.estimates()
+    return SobolIndices(num / (n * var), 0.5 * _sum(sd2) / (n * var), names=names,
+                        outputs=outputs, s1_ci=ci_half_width(s1_boot, conf),
+                        st_ci=ci_half_width(st_boot, conf), conf=conf, s1_boot=s1_boot,
+                        st_boot=st_boot)
 
 
 class SobolIndices(tuple):
@@ -661,33 +559,39 @@ class SobolIndices(tuple):
     >>> r.to_df().to_dict("list")
     {'output': ['y1', 'y1'], 'input': ['a', 'b'], 'S1': [0.6, 0.3], 'ST': [0.7, 0.3]}
 
+    One output's indices may be given as (D,) arrays (:func:`~mtaccuracy.sensitivity.pce_sobol`
+    returns them so): they stay (D,), and the table has one output.
+
     Parameters
     ----------
-    s1, st : (D, q) array_like
+    s1, st : (D, q) or (D,) array_like
         First-order and total indices, inputs by outputs.
     names : sequence of str (D,), optional
         Input names (default ``x1`` ... ``xD``).
     outputs : sequence of str (q,), optional
         Output names (default ``y1`` ... ``yq``).
-    s1_ci, st_ci : (D, q) array_like, optional
+    s1_ci, st_ci : array_like, the shape of ``s1``, optional
         Half-widths of their ``conf`` confidence intervals.
     conf : float
         The confidence level of the half-widths (names their columns: ``S1_ci95``).
+    s1_boot, st_boot : (n_boot, D, q) array_like, optional
+        The bootstrap re-estimates the half-widths come from (e.g. for
+        :func:`~mtaccuracy.sensitivity.key_set_bootstrap`).
 
     Raises
     ------
     ValueError
-        If the arrays are not (D, q) of one shape or the names do not match it.
+        If the arrays are not (D, q) (or (D,)) of one shape or the names do not match it.
     """
 
     def __new__(cls, s1, st, *, names: Sequence[str] | None = None,
                 outputs: Sequence[str] | None = None, s1_ci=None, st_ci=None,
-                conf: float = 0.95) -> SobolIndices:
+                conf: float = 0.95, s1_boot=None, st_boot=None) -> SobolIndices:
         s1, st = np.asarray(s1, dtype=float), np.asarray(st, dtype=float)
-        if s1.ndim != 2 or st.shape != s1.shape:
+        if s1.ndim not in (1, 2) or st.shape != s1.shape:
             raise ValueError(f"s1 and st must be (D, q) arrays of one shape, got {s1.shape}, "
                              f"{st.shape}")
-        d, q = s1.shape
+        d, q = s1.shape if s1.ndim == 2 else (s1.shape[0], 1)
         cis = [None if c is None else np.asarray(c, dtype=float) for c in (s1_ci, st_ci)]
         if any(c is not None and c.shape != s1.shape for c in cis):
             raise ValueError(f"s1_ci and st_ci must be {s1.shape} like the indices")
@@ -696,19 +600,25 @@ class SobolIndices(tuple):
         if len(names) != d or len(outputs) != q:
             raise ValueError(f"{len(names)} input and {len(outputs)} output names for "
                              f"indices of {d} inputs and {q} outputs")
+        boots = [None if x is None else np.asarray(x, dtype=float) for x in (s1_boot, st_boot)]
+        if any(x is not None and (x.ndim != s1.ndim + 1 or x.shape[1:] != s1.shape)
+               for x in boots):
+            shape = ", ".join(map(str, s1.shape))
+            raise ValueError(f"s1_boot and st_boot must be (n_boot, {shape})")
         self = super().__new__(cls, (s1, st))
         self.names, self.outputs, self.conf = names, outputs, float(conf)
         self.s1_ci, self.st_ci = cis
+        self.s1_boot, self.st_boot = boots
         return self
 
     @property
     def s1(self) -> np.ndarray:
-        """(D, q) ndarray: the first-order indices."""
+        """(D, q) (or (D,)) ndarray: the first-order indices."""
         return self[0]
 
     @property
     def st(self) -> np.ndarray:
-        """(D, q) ndarray: the total indices."""
+        """(D, q) (or (D,)) ndarray: the total indices."""
         return self[1]
 
     def to_df(self) -> pd.DataFrame:
@@ -720,7 +630,7 @@ class SobolIndices(tuple):
             Columns ``output``, ``input``, ``S1``, ``ST``, and with intervals ``S1_ci95``
             after ``S1`` and ``ST_ci95`` after ``ST`` (the level in the name: half-widths).
         """
-        d, q = self.s1.shape
+        d, q = len(self.names), len(self.outputs)
         cols = {"output": np.repeat(self.outputs, d).tolist(), "input": list(self.names) * q}
         tag = f"_ci{100 * self.conf:g}"
         for key, val, ci in (("S1", self.s1, self.s1_ci), ("ST", self.st, self.st_ci)):
@@ -731,7 +641,7 @@ class SobolIndices(tuple):
 
 
 # --------------------------------------------------------------------------------------------
-# Floating-point resolution of the estimates (the tie rule built on it: screening.ties).
+# Floating-point resolution of the estimates (the tie rule built on it: tie_rule.ties).
 # --------------------------------------------------------------------------------------------
 
 #: Absolute floating-point resolution declared for Sobol indices estimated from model outputs
@@ -746,4 +656,5 @@ class SobolIndices(tuple):
 FLOAT_NOISE = 1e-11
 
 # The tie rule built on this resolution (``TIE_REL``, ``TIE_ABS``, ``merge_ties``) is a key-set
-# rule: it lives in :mod:`.screening`, which imports this module, never the reverse.
+# rule: it lives in :mod:`.tie_rule` (imported by :mod:`.screening`), which imports this module,
+# never the reverse.

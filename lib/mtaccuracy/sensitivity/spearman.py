@@ -1,35 +1,44 @@
 """Samplers and sensitivity measures, batched over samples (and over repeats).
 
 Spearman ranking (Guo et al. 2016) lives here; Sobol estimators, sparse polynomial chaos and
-key-error rules join it with the later papers.  Latin hypercube sampling is scipy's
-``scipy.stats.qmc.LatinHypercube``; ranks are ``scipy.stats.rankdata``.
+key-error rules join it with the later papers.  Latin hypercubes are drawn by
+:meth:`~mtaccuracy.sensitivity.Inputs.sample` (``scipy.stats.qmc.LatinHypercube``), the
+package's one sampler; ranks are ``scipy.stats.rankdata``.
 """
 
 from __future__ import annotations
 
 __all__ = ["latin_hypercube", "repeated_latin_hypercube", "average_ranks",
-           "spearman", "centred_ranks", "rank_by_magnitude", "below_group_mean",
+           "SpearmanCoefficients", "POSITION_OUTPUTS", "spearman", "centred_ranks",
+           "rank_by_magnitude", "below_group_mean",
            "position_outputs", "spearman_over_poses", "rank_positions", "rank_intervals",
            "sum_of_squares", "rank_r_squared", "lhs_rank_eigenvalues"]
 
 import numpy as np
 from scipy import stats
-from scipy.stats import qmc
 
 from mtaccuracy import validate
+
+from .inputs import Inputs
+from .results import IndexArray
 
 
 def latin_hypercube(n: int, bounds: np.ndarray, seed) -> np.ndarray:
     """``n`` Latin hypercube samples (n, d) of independent uniforms on ``bounds`` (2, d).
 
-    Uses ``scipy.stats.qmc.LatinHypercube`` (random placement within strata).
+    The design is :meth:`Inputs.sample` of the unit cube (``method="lhs"``,
+    ``scipy.stats.qmc.LatinHypercube``: random placement within strata), mapped to the
+    bounds as ``lower + u (upper - lower)`` (what :meth:`Inputs.from_unit` computes for a
+    uniform, bitwise).  A thin adaptor for designs given by bounds: unlike
+    :meth:`Inputs.from_bounds` it takes a zero-width column (``lower == upper``, an input held
+    at one value), which no probability law describes.
 
     Parameters
     ----------
     n : int
         Samples (>= 2), one per stratum of every input.
     bounds : array (2, d)
-        Lower and upper bounds of the d inputs (mm, rad).
+        Lower and upper bounds of the d inputs (mm, rad), ``lower <= upper``.
     seed : int, SeedSequence, Generator or None
         The randomness (:func:`mtaccuracy.validate.rng`); a Generator is used as it is, so the
         caller's stream continues.
@@ -38,12 +47,19 @@ def latin_hypercube(n: int, bounds: np.ndarray, seed) -> np.ndarray:
     -------
     array (n, d)
         The design, in the units of ``bounds``.
+
+    Raises
+    ------
+    ValueError
+        If ``n`` < 2, ``bounds`` is not (2, d), not finite, or has ``upper < lower``.
     """
     bounds = np.asarray(bounds, dtype=float)
     if bounds.ndim != 2 or bounds.shape[0] != 2:
         raise ValueError(f"bounds must have shape (2, d), got {bounds.shape}")
     n = validate.integer(n, "n", low=2)
-    u = qmc.LatinHypercube(d=bounds.shape[1], rng=validate.rng(seed)).random(n)
+    if not np.all(np.isfinite(bounds)) or np.any(bounds[1] < bounds[0]):
+        raise ValueError("bounds must be finite with lower <= upper")
+    u = Inputs.unit(bounds.shape[1]).sample(n, method="lhs", seed=seed)
     return bounds[0] + u * (bounds[1] - bounds[0])
 
 
@@ -119,7 +135,41 @@ def _correlate(rx: np.ndarray, ry: np.ndarray) -> np.ndarray:
         return num / den
 
 
-def spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+class SpearmanCoefficients(IndexArray):
+    """Spearman coefficients ``(..., p, q)`` of p inputs with q outputs, labelled.
+
+    What :func:`spearman` and :func:`spearman_over_poses` return: the array of coefficients
+    (indexed and computed with as any array; what is computed from it is a plain array) that
+    also knows its input and output names, and whose :meth:`to_df` is the ranking: per output,
+    each input's coefficient ``rho`` and its ``rank`` by ``|rho|`` (:func:`rank_positions`:
+    1 = largest, equal magnitudes in catalogue order).
+
+    >>> r = SpearmanCoefficients([[0.2, -0.9], [-0.7, 0.1]], names=["a", "b"], outputs=["X", "Y"])
+    >>> r.to_df().values.tolist()
+    [['X', 'a', 0.2, 2], ['X', 'b', -0.7, 1], ['Y', 'a', -0.9, 1], ['Y', 'b', 0.1, 2]]
+
+    Parameters
+    ----------
+    values : (..., p, q) array_like
+        The coefficients, inputs by outputs, after any leading axes (poses, designs).
+    names : sequence of str (p,), optional
+        Input names (default ``x1`` ... ``xp``).
+    outputs : sequence of str (q,), optional
+        Output names (default ``y1`` ... ``yq``).
+    lead : sequence of str, optional
+        Names of the leading axes (default ``axis0``, ...).
+    """
+
+    columns = ("rho", "rank")
+
+    def _values(self) -> dict[str, np.ndarray]:
+        """``rho`` and its ``rank`` per output, in :meth:`to_df`'s row order."""
+        v = self.view(np.ndarray)
+        return {"rho": np.moveaxis(v, -1, -2).ravel(),
+                "rank": np.moveaxis(rank_positions(v), -1, -2).ravel()}
+
+
+def spearman(x: np.ndarray, y: np.ndarray, *, names=None, outputs=None) -> SpearmanCoefficients:
     """Spearman rank correlation of every column of ``x`` with every column of ``y``.
 
     ``x`` (..., n, p) and ``y`` (..., n, q) share the sample axis ``-2``; leading axes
@@ -136,17 +186,22 @@ def spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
         Inputs, samples along axis -2.
     y : array (..., n, q)
         Outputs on the same samples.
+    names : sequence of str (p,), optional
+        Input names (default ``x1`` ... ``xp``), labels of the result.
+    outputs : sequence of str (q,), optional
+        Output names (default ``y1`` ... ``yq``).
 
     Returns
     -------
-    array (..., p, q)
-        Coefficients in [-1, 1] (NaN for a constant column).
+    SpearmanCoefficients (..., p, q)
+        Coefficients in [-1, 1] (NaN for a constant column); ``.to_df()`` ranks them.
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     if x.shape[-2] != y.shape[-2]:
         raise ValueError(f"x and y need the same number of samples, got {x.shape} and {y.shape}")
-    return _correlate(_centred(average_ranks(x)), _centred(average_ranks(y)))
+    rho = _correlate(_centred(average_ranks(x)), _centred(average_ranks(y)))
+    return SpearmanCoefficients(rho, names=names, outputs=outputs)
 
 
 def rank_by_magnitude(values: np.ndarray, names: list[str]) -> list[tuple[str, float]]:
@@ -190,6 +245,10 @@ def below_group_mean(coefficients: np.ndarray) -> np.ndarray:
     return np.all(a < a.mean(axis=0, keepdims=True), axis=1)
 
 
+#: Names of the outputs of :func:`position_outputs`.
+POSITION_OUTPUTS = ("Ex", "Ey", "Ez", "Et")
+
+
 def position_outputs(pose_error: np.ndarray) -> np.ndarray:
     """Ex, Ey, Ez and Et = sqrt(Ex^2 + Ey^2 + Ez^2) (Guo et al. Eq. 14) from the pose errors.
 
@@ -227,7 +286,8 @@ def centred_ranks(samples: np.ndarray) -> np.ndarray:
 
 
 def spearman_over_poses(machine, samples: np.ndarray, poses: dict, *, outputs=position_outputs,
-                        chunk: int = 64, sample_ranks: np.ndarray | None = None) -> np.ndarray:
+                        chunk: int = 64, sample_ranks: np.ndarray | None = None,
+                        names=None, output_names=None) -> SpearmanCoefficients:
     """Spearman coefficients of every error with every output, at many poses.
 
     One error design is reused at every pose (common random numbers).  Poses are evaluated in
@@ -248,11 +308,17 @@ def spearman_over_poses(machine, samples: np.ndarray, poses: dict, *, outputs=po
     sample_ranks : array (n, d), optional
         :func:`centred_ranks` of ``samples``, if already computed (an optimiser calling this
         many times computes them once).
+    names : sequence of str (d,), optional
+        Error names (default: the machine's ``error_names`` when it has d of them, else
+        ``x1`` ... ``xd``), labels of the result.
+    output_names : sequence of str (q,), optional
+        Output names (default :data:`POSITION_OUTPUTS` for :func:`position_outputs`, else
+        ``y1`` ... ``yq``).
 
     Returns
     -------
-    array (P, d, q)
-        The coefficients per pose, error and output.
+    SpearmanCoefficients (P, d, q)
+        The coefficients per pose, error and output (leading axis ``pose``).
     """
     chunk = validate.integer(chunk, "chunk", low=1)
     samples = np.asarray(samples, dtype=float)
@@ -271,7 +337,13 @@ def spearman_over_poses(machine, samples: np.ndarray, poses: dict, *, outputs=po
         y = outputs(machine.pose_error(np.tile(samples, (k, 1)), pose)).reshape(k, n, -1)
         ry = _centred(average_ranks(y))
         out.append(_correlate(np.broadcast_to(rx, (k,) + rx.shape), ry))
-    return np.concatenate(out, axis=0)
+    rho = np.concatenate(out, axis=0)
+    if names is None:
+        names = getattr(machine, "error_names", None)
+        names = names if names is not None and len(names) == rho.shape[1] else None
+    if output_names is None and outputs is position_outputs:
+        output_names = POSITION_OUTPUTS
+    return SpearmanCoefficients(rho, names=names, outputs=output_names, lead=("pose",))
 
 
 def rank_positions(coefficients: np.ndarray) -> np.ndarray:
