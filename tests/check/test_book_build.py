@@ -1,0 +1,239 @@
+"""The whole book (``make book``, :mod:`mtaccuracy.apps.book`), built as CI builds it.
+
+The whole book is built once per session (about 40 s, fixture ``built``) from the folder
+fixture ``book_figures`` gives: ``figures/``, or ``$MTACCURACY_BOOK_FIGURES``.  It must show
+every output, captioned by the run that drew it, without a Sphinx warning; then it is read as
+files and opened in headless Chromium (``/usr/bin/chromium``, conftest.py's ``browser``
+fixture: skipped when missing) at a desktop width and at 400 px, served on 127.0.0.1 (any
+request elsewhere fails the test).  Screenshots go to ``.test-output/book/``.
+"""
+
+import contextlib
+import functools
+import html
+import json
+import os
+import re
+import threading
+from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
+
+import matplotlib
+import pandas as pd
+import pytest
+
+matplotlib.use("Agg")
+
+from mtaccuracy.apps import book  # noqa: E402
+from mtaccuracy.compendium import scorecard  # noqa: E402
+from mtaccuracy.compendium.notebook import FIGURES, NOTEBOOKS, ROOT  # noqa: E402
+from mtaccuracy.papers import guo2016  # noqa: E402
+
+TIMEOUT_MS = 30_000
+STEMS = book.stems()
+PAPERS = [s for s in STEMS if s in scorecard.papers_index()]
+WIDTHS = {"desktop": 1280, "phone": 400}
+GUO = guo2016.Parameters.stem
+SHOTS = ROOT / ".test-output" / "book"
+
+
+@pytest.fixture(scope="session")
+def book_figures() -> Path:
+    """The outputs the whole book is built from: ``figures/`` (committed), or
+    ``$MTACCURACY_BOOK_FIGURES``."""
+    return Path(os.environ.get("MTACCURACY_BOOK_FIGURES", FIGURES))
+
+
+@pytest.fixture(scope="session")
+def built(tmp_path_factory, book_figures):
+    return (*book.build(tmp_path_factory.mktemp("book-build"), book_figures), book_figures)
+
+
+def test_the_book_builds_from_what_is_committed_without_a_warning(built):
+    site, broken, warnings, _ = built
+    assert broken == {}, broken
+    assert warnings == [], "\n".join(warnings[:20])
+    for stem in STEMS:
+        assert (site / "chapters" / f"{stem}.html").is_file()
+        assert (site / "notebooks" / f"{stem}.html").is_file()
+    assert (site / "scorecard.html").is_file() and (site / "api" / "index.html").is_file()
+    assert (site / "_static" / "mathjax" / "MathJax.js").is_file()
+
+
+def _text(path: Path) -> str:
+    return path.read_text(encoding="utf-8")
+
+
+def _visible(html_text: str) -> str:
+    """The text a reader sees, with typographic quotes and dashes as typed."""
+    text = html.unescape(re.sub(r"<[^>]+>", " ", html_text))
+    for typo, typed in {"\u2019": "'", "\u2018": "'", "\u201c": '"', "\u201d": '"',
+                        "\u2013": "--", "\u2014": "---"}.items():
+        text = text.replace(typo, typed)
+    return re.sub(r"\s+", " ", text)
+
+
+@pytest.mark.parametrize("stem", STEMS)
+def test_each_chapter_opens_with_its_paper_and_conclusion_and_shows_its_figures(built, stem):
+    site, _, _, figures = built
+    page = _text(site / "chapters" / f"{stem}.html")
+    article = page[page.index('<article class="bd-article">'):]
+    heads = [re.sub(r"<[^>]+>", "", h).strip("¶# \n")
+             for _, h in re.findall(r"<h([12])[^>]*>(.*?)</h\1>", article, re.S)]
+    assert heads[1:3] == ["What we conclude", "Figures"] and "Parameters" in heads
+    intro = _visible(article[:article.index("What we conclude")])
+    if stem in PAPERS:
+        paper = scorecard.papers_index()[stem]
+        assert heads[3] == "Scorecard" and "Paper." in intro
+        if paper["doi"]:
+            assert f'href="https://doi.org/{paper["doi"]}"' in article
+        else:
+            assert "It has no DOI." in intro
+    conclusion = book.notebook_parts(NOTEBOOKS / f"{stem}.ipynb")["conclusion"]
+    first_words = re.sub(r"[*`$]", "", conclusion.split("\n")[0])[2:40].strip()
+    assert first_words and first_words in _visible(article)
+    shown = [re.sub(r"\d*$", "", s) if s not in book.captions(stem) else s
+             for s in re.findall(r'src="\.\./_images/([^"]+)\.png"', page)]
+    assert shown == list(book.captions(stem))
+    recorded = book.chapter_figures(stem, figures / stem)[0]
+    for f in recorded:
+        assert " ".join(f["caption"].split()[:6]) in _visible(page)
+
+
+def _rows(page: str) -> list[list[str]]:
+    """The rows a DataTables table of the page is given (itables' ``data_json``)."""
+    return json.loads(json.loads(re.search(r'"data_json": ("(?:[^"\\]|\\.)*")', page).group(1)))
+
+
+def test_every_scorecard_row_is_in_the_book(built):
+    site, _, _, figures = built
+    cards = scorecard.collect(figures)
+    rows = _rows(_text(site / "scorecard.html"))
+    assert len(rows) == len(cards)
+    assert sorted(r[0] for r in rows) == sorted(cards["paper"])
+    for stem in PAPERS:
+        card = pd.read_csv(figures / stem / "reproduction.csv", dtype=str,
+                           keep_default_na=False)
+        rows = _rows(_text(site / "chapters" / f"{stem}.html"))
+        assert [r[0] for r in rows] == [html.escape(i) for i in card["item"]]
+        assert [re.sub(r"<[^>]+>", "", r[5]) for r in rows] == list(card["verdict"])
+
+
+def test_nothing_is_loaded_from_outside_the_book(built):
+    for page in built[0].rglob("*.html"):
+        text = _text(page)
+        assert not re.search(r'<(script|link|img)[^>]+(src|href)="(https?:)?//', text), page
+
+
+# ------------------------------------------------------------------------------- in a browser
+
+class _Quiet(SimpleHTTPRequestHandler):
+    def log_message(self, format, *args):
+        pass
+
+
+@contextlib.contextmanager
+def _serve(directory: Path):
+    server = ThreadingHTTPServer(("127.0.0.1", 0),
+                                 functools.partial(_Quiet, directory=str(directory)))
+    thread = threading.Thread(target=server.serve_forever, args=(0.05,), daemon=True)
+    thread.start()
+    try:
+        yield f"http://127.0.0.1:{server.server_address[1]}/"
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+@contextlib.contextmanager
+def _page(browser, width: int, problems: list[str]):
+    context = browser.new_context(viewport={"width": width, "height": 900})
+    page = context.new_page()
+    page.set_default_timeout(TIMEOUT_MS)
+
+    def route(r):
+        if r.request.url.startswith(("http://127.0.0.1:", "data:", "blob:")):
+            r.continue_()
+        else:
+            problems.append(f"request outside the book: {r.request.url}")
+            r.abort()
+
+    page.route("**/*", route)
+    blank = []
+
+    def console(m):
+        # MathJax 2 tests whether web fonts load with a font at about:blank, which Chromium
+        # refuses (a CORS error, then a failed load): one pair per test, harmless
+        if m.type != "error" or "favicon" in m.text:
+            return
+        if "Access to font at 'about:blank'" in m.text:
+            blank.append(m.text)
+        elif m.text.endswith("net::ERR_FAILED") and blank:
+            blank.pop()
+        else:
+            problems.append(f"console {m.type}: {m.text}")
+
+    page.on("console", console)
+    page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
+    try:
+        yield page
+    finally:
+        context.close()
+
+
+def _no_sideways_scroll(page) -> int:
+    return page.evaluate("document.documentElement.scrollWidth - "
+                         "document.documentElement.clientWidth")
+
+
+@pytest.mark.parametrize("width", WIDTHS.values(), ids=WIDTHS.keys())
+def test_chapters_fit_the_screen_and_their_scorecards_filter(built, browser, width):
+    site, _, _, figures = built
+    problems = []
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    with _serve(site) as url, _page(browser, width, problems) as page:
+        page.goto(url + "index.html")
+        assert _no_sideways_scroll(page) <= 0, "the home page scrolls sideways"
+        page.screenshot(path=str(SHOTS / f"index-{width}.png"), full_page=True)
+        for stem in [*PAPERS, None]:
+            page.goto(url + (f"chapters/{stem}.html" if stem else "scorecard.html"))
+            table = page.locator(f"#card-{stem[:2]}" if stem else "#card-all")
+            table.locator("tbody tr").first.wait_for()
+            assert _no_sideways_scroll(page) <= 0, f"{stem} scrolls sideways at {width} px"
+            if stem:
+                first = page.locator("article h2").first.inner_text()
+                assert "What we conclude" in first, first
+            n_all = int(re.search(r"of ([\d,]+) entries",
+                                  page.locator(".dt-info").first.inner_text()).group(1))
+            page.locator(".dt-search input").first.fill("reproduced")
+            page.wait_for_timeout(300)
+            info = page.locator(".dt-info").first.inner_text()
+            verdicts = (pd.read_csv(figures / stem / "reproduction.csv") if stem
+                        else scorecard.collect(figures)).verdict
+            cells = [c.lower() for c in table.locator("tbody tr").all_inner_texts()]
+            if (verdicts == "reproduced").any():
+                m = re.search(r"of ([\d,]+) entries \(filtered from ([\d,]+)", info)
+                assert m and int(m.group(1)) < n_all == int(m.group(2)), info
+                assert all("reproduced" in c for c in cells)
+            else:
+                assert "No matching records" in " ".join(cells) or "0 to 0" in info, info
+            if stem == PAPERS[0]:
+                page.screenshot(path=str(SHOTS / f"chapter-{width}.png"), full_page=False)
+    assert not problems, "\n".join(problems[:10])
+
+
+def test_math_is_typeset_offline(built, browser):
+    site, problems = built[0], []
+    stem = "05_yang2021_spindle_four_point_ga"
+    with _serve(site) as url, _page(browser, WIDTHS["phone"], problems) as page:
+        page.goto(url + f"notebooks/{stem}.html")
+        page.wait_for_function("window.MathJax && MathJax.Hub", timeout=TIMEOUT_MS)
+        page.evaluate("new Promise(r => MathJax.Hub.Queue(r))")
+        spans = page.evaluate("document.querySelectorAll('.math.notranslate').length")
+        typeset = page.evaluate("document.querySelectorAll('.MathJax, .MathJax_Display').length")
+        raw = page.evaluate(r"(document.querySelector('article').innerText.match(/\\\(|\$\$/g)"
+                            r" || []).length")
+        assert spans > 50 and typeset >= spans and raw == 0, (spans, typeset, raw)
+        assert _no_sideways_scroll(page) <= 0
+    assert not problems, problems
+
