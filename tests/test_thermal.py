@@ -434,7 +434,7 @@ def test_data_beyond_the_size_limits_are_refused(good_dir):
 
 
 def test_an_oversized_file_is_refused_before_it_is_read(good_dir, monkeypatch):
-    monkeypatch.setattr(thermal.io, "MAX_FILE_BYTES", 5000)
+    monkeypatch.setattr(thermal.csvfile, "MAX_FILE_BYTES", 5000)
     with pytest.raises(thermal.DataFormatError,
                        match=r"errors.csv: 6776 bytes; files up to 5000 bytes are read"):
         thermal.read_measurements(good_dir)

@@ -23,20 +23,17 @@ from sklearn.metrics import make_scorer
 
 from .baselines import BASELINES, ridge_all_sensors
 from .clustering import Selection, fuzzy_clusters, most_frequent, select_sensitive_points
-from .io import ThermalData, rises_of
+from .data import ThermalData, rises_of
 from .models import (
     DecoupledRegressor,
-    GroupedSVR,
     PointByPointRegressor,
-    StandardisedSVR,
     _prefixed,
-    _svr_params,
     compose,
     decouple,
     fit_linear,
     predict_linear,
-    tie_margin,
 )
+from .svr import GroupedSVR, StandardisedSVR, _svr_params, tie_margin
 
 __all__ = [
     "metrics", "pooled_rmse", "POOLED_RMSE_SCORER", "batch_metrics", "design", "point_by_point",
