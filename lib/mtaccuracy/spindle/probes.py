@@ -63,6 +63,7 @@ __all__ = [
     "ProbeSeparation", "resolvable_harmonic", "layout_cancelled", "layout_weights",
     "noise_amplification", "profile_noise_rms", "separate_probes", "separate_probe_data",
     "probe_noise_estimate", "MIN_PROBES", "MAX_PROBES", "MIN_SAMPLES", "RCOND",
+    "AMPLIFICATION_DIGITS",
 ]
 
 # --------------------------------------------------------------------------------------------
@@ -77,6 +78,13 @@ MAX_PROBES = 16
 #: Samples per revolution: at least 8, the library's least (the probe file allows up to
 #: :data:`~mtaccuracy.spindle.probedata.MAX_SAMPLES`).
 MIN_SAMPLES = _MIN_SAMPLES
+#: Significant digits of the noise amplification a separation reports
+#: (:attr:`ProbeSeparation.amplification`).  It carries rounding that another CPU changes
+#: (another BLAS kernel's singular values, the weights' search: about 2e-14 relative), which
+#: moved a point of notebook 07's figure of it; to 8 digits it is the same on any CPU unless
+#: a value lies within that noise of a rounding edge, and a figure on a log scale resolves
+#: far less (1e-8 relative is about 1e-6 of a pixel there).
+AMPLIFICATION_DIGITS = 8
 #: A harmonic is cancelled by a layout when the smallest singular value of the least-squares
 #: design of that harmonic (the profile harmonic and the two motion components read by every
 #: probe) is below this fraction of the largest, the threshold of
@@ -372,7 +380,8 @@ class ProbeSeparation:
     harmonics : array of int (K,)
         The harmonics ``2..max_harmonic``.
     amplification : array (K,)
-        Noise amplification ``q_k`` of the estimator per harmonic (inf where set aside).
+        Noise amplification ``q_k`` of the estimator per harmonic (inf where set aside), to
+        :data:`AMPLIFICATION_DIGITS` significant digits.
     cancelled : list of int
         Harmonics set aside (the layout cannot separate them).
     max_harmonic : int
@@ -395,6 +404,13 @@ class ProbeSeparation:
     max_harmonic: int
     first_harmonic: np.ndarray
     residual_rms: np.ndarray
+
+
+def _significant(values, digits: int) -> np.ndarray:
+    """``values`` rounded to ``digits`` significant digits (correctly rounded decimal; inf
+    stays inf)."""
+    return np.array([float(f"{v:.{digits}g}") for v in np.asarray(values, dtype=float).ravel()]
+                    ).reshape(np.shape(values))
 
 
 def _cancelled_message(angles_deg, cancelled, n, max_harmonic) -> str:
@@ -512,7 +528,8 @@ def separate_probes(signals, phi, *, method: str = "least_squares", weights=None
         r_k = np.zeros(spec.shape[:-2] + (n,), dtype=complex)
         r_k[..., solve] = np.einsum("l,...lk->...k", w, spec[..., solve]) / lam[solve]
         amp = noise_amplification(phi, harmonics, weights=w)
-    amp = np.where(np.isin(harmonics, cancelled), np.inf, amp)
+    amp = _significant(np.where(np.isin(harmonics, cancelled), np.inf, amp),
+                       AMPLIFICATION_DIGITS)
     r0 = np.fft.ifft(r_k, axis=-1).real                                 # (..., N)
     at_probe = np.fft.ifft(r_k[..., None, :] * shift.T, axis=-1).real    # (..., L, N)
 

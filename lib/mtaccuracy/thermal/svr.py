@@ -47,16 +47,21 @@ SVR_GRID = [
      "epsilon": [0.01, 0.1]},
 ]
 
-#: libsvm's stopping tolerance (the KKT violation, in standardised units).  scikit-learn's
-#: default, 1e-3, leaves ill-conditioned candidates (RBF with gamma 0.01 and C 1000 is nearly
-#: a linear model with a huge C) so far from their optimum that a rounding-level change of the
-#: inputs (1e-15 relative, what another BLAS kernel does) moved cross-validated RMSEs by up to
-#: 2 % and held-out metrics by 0.5 %.  At 1e-6 the same perturbations move the scores of the
-#: candidates within 5 % of the best by < 2e-6 and the held-out metrics by < 3e-5 (relative;
-#: the reconstruction, every split of the notebook), at no measurable cost in time there; on
-#: 800 rows a fit takes 2 to 5 times as long as at 1e-3 (kept: the reason above does not
-#: shrink with the data).
-SVR_SOLVER_TOL = 1e-6
+#: libsvm's stopping tolerance (the KKT violation, in standardised units).  Where libsvm stops
+#: short of the optimum depends on the floating-point path that led there, and another CPU's
+#: BLAS kernel (OpenBLAS chooses one per CPU) changes the inputs by rounding (1e-16 relative):
+#: scikit-learn's default, 1e-3, then moved cross-validated RMSEs by up to 2 % and held-out
+#: metrics by 0.5 % (ill-conditioned candidates: RBF with gamma 0.01 and C 1000 is nearly a
+#: linear model with a huge C).  The spread shrinks in proportion to the tolerance: over the
+#: SVR results of notebook 04 (the main split's search, every split of leave one experiment
+#: out, both sensor choices), ``OPENBLAS_CORETYPE=Haswell, Sandybridge, Prescott`` against this
+#: machine's kernel moved them by up to 3e-5 relative at 1e-6 (the sixth digit of the stored
+#: tables: 24 of 172 numbers), 2.4e-7 at 1e-8, 7.8e-9 at 1e-10 and 2.0e-11 at 1e-12 (none of
+#: the 172 at six digits).  At 1e-12 the results are the optimum's to about 1e-11, a property
+#: of the data and not of the CPU, and the sixth digit of a table is safe; the time hardly
+#: changes (one split of notebook 04 at the reader's size limits: 87 s at 1e-6, 97 s at 1e-12;
+#: no candidate reached libsvm's iteration limit).
+SVR_SOLVER_TOL = 1e-12
 
 #: Bounded grid (issue 22): a search on n training rows tries only the C of the grid with
 #: ``C * n <= SVR_MAX_CN``.  C weighs the sum of the n samples' losses against the
@@ -74,10 +79,11 @@ SVR_MAX_CN = 30_000.0
 #: Cross-validated RMSEs within this relative distance of the best are ties: candidates that
 #: give the same model (a C larger than every dual variable needs, an epsilon tube no sample
 #: touches) score equal up to rounding, and which of them scikit-learn's "first best" picks
-#: would follow floating-point noise.  1e-3 is 500 times the scatter of near-best scores under
-#: rounding-level perturbations (< 2e-6 at :data:`SVR_SOLVER_TOL`) and far below any
-#: difference a cross-validation over a few experiments can resolve.
+#: would follow floating-point noise.  1e-3 is far above the scatter of near-best scores under
+#: rounding-level perturbations (< 1e-10 at :data:`SVR_SOLVER_TOL`; < 2e-6 at the 1e-6 used
+#: before) and far below any difference a cross-validation over a few experiments can resolve.
 SVR_TIE_RTOL = 1e-3
+
 
 class StandardisedSVR(RegressorMixin, BaseEstimator):
     """scikit-learn's :class:`~sklearn.svm.SVR` on standardised inputs and target.
