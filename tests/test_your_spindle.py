@@ -8,14 +8,14 @@ import pandas as pd
 import pytest
 
 from mtaccuracy.papers import your_spindle
-from mtaccuracy.spindle import probes
+from mtaccuracy.spindle import example
 
 
 def _example(tmp_path):
     """A copy of the shipped example's folder (probes, truth and record)."""
     folder = tmp_path / "spindle"
     folder.mkdir()
-    for name in probes.EXAMPLE_FILES.values():
+    for name in example.EXAMPLE_FILES.values():
         shutil.copy(your_spindle.EXAMPLE_FOLDER / name, folder / name)
     return folder
 
@@ -23,20 +23,20 @@ def _example(tmp_path):
 def test_the_shipped_example_is_recognised_by_content_and_its_truth_is_recorded(tmp_path):
     folder = _example(tmp_path)
     moved = tmp_path / "renamed.csv"                    # any name, any place
-    shutil.copy(folder / probes.EXAMPLE_FILES["probes"], moved)
+    shutil.copy(folder / example.EXAMPLE_FILES["probes"], moved)
     read = []
     truth = your_spindle.shipped_example(moved, folder=folder, on_read=read.append)
     assert list(truth.columns) == ["revolution", "angle_deg", "profile_um", "x_um", "y_um"]
-    assert read == [folder / probes.EXAMPLE_FILES["truth"]]
+    assert read == [folder / example.EXAMPLE_FILES["truth"]]
     # the repository's own example, with the default folder
     assert your_spindle.shipped_example(
-        your_spindle.EXAMPLE_FOLDER / probes.EXAMPLE_FILES["probes"]) is not None
+        your_spindle.EXAMPLE_FOLDER / example.EXAMPLE_FILES["probes"]) is not None
 
 
 def test_another_file_has_no_truth_and_reads_none(tmp_path):
     folder = _example(tmp_path)
     other = tmp_path / "mine.csv"
-    text = (folder / probes.EXAMPLE_FILES["probes"]).read_text()
+    text = (folder / example.EXAMPLE_FILES["probes"]).read_text()
     other.write_text(text + "\n")                      # one byte more: not the example
     read = []
     assert your_spindle.shipped_example(other, folder=folder, on_read=read.append) is None
@@ -45,10 +45,10 @@ def test_another_file_has_no_truth_and_reads_none(tmp_path):
 
 def test_a_truth_that_is_not_the_recorded_one_is_refused(tmp_path):
     folder = _example(tmp_path)
-    truth = folder / probes.EXAMPLE_FILES["truth"]
+    truth = folder / example.EXAMPLE_FILES["truth"]
     truth.write_text(truth.read_text() + "\n")
     with pytest.raises(ValueError, match="not the truth recorded"):
-        your_spindle.shipped_example(folder / probes.EXAMPLE_FILES["probes"], folder=folder)
+        your_spindle.shipped_example(folder / example.EXAMPLE_FILES["probes"], folder=folder)
 
 
 def _tables(with_truth: bool):

@@ -790,10 +790,24 @@ def pooled_fields(pooled, n_sensors: int) -> dict[str, str]:
 # The figures drawn here, each with its caption; the chapter's captions (:data:`FIGURES`)
 # ------------------------------------------------------------------------------------------
 
+#: Decimals (um, um/m) of the values the prediction figures draw: 1e-4 um is a few thousandths
+#: of a pixel there (about 0.03 um a pixel).  Below it a model's predictions carry rounding
+#: that another CPU changes (another BLAS kernel: about 1e-14 um for the MLR, 1e-10 um for the
+#: SVR), and the PNG's antialiased pixels changed from it; drawn to 1e-4 um the figures are
+#: the same on any CPU unless a value lies within that noise of a rounding edge.
+PLOT_DECIMALS = 4
+
+
+def _plotted(values):
+    """Values as the figures draw them: to :data:`PLOT_DECIMALS` decimals."""
+    return np.round(np.asarray(values, dtype=float), PLOT_DECIMALS) + 0.0
+
+
 def prediction_figure(positions_mm, index, measured, predicted, *, title: str):
     """Measured (solid) and predicted (dashed) errors along the axis, and the residuals.
 
-    Figs. 11, 15 and 17 (:data:`FIG11`, :data:`FIG15`, :data:`FIG17`).
+    Figs. 11, 15 and 17 (:data:`FIG11`, :data:`FIG15`, :data:`FIG17`), drawn to
+    :data:`PLOT_DECIMALS` decimals.
 
     Parameters
     ----------
@@ -813,6 +827,7 @@ def prediction_figure(positions_mm, index, measured, predicted, *, title: str):
     """
     import matplotlib.pyplot as plt  # heavy (a GUI backend): loaded only to draw
 
+    measured, predicted = _plotted(measured), _plotted(predicted)
     resid = measured - predicted
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     cm = plt.get_cmap("plasma")(np.linspace(0, 0.85, len(index)))
@@ -859,7 +874,8 @@ def kb_figure(measurement, measured_kb, predicted_kb, *, title: str, colour):
     """Slope k and intercept b of every test measurement: decoupled and predicted.
 
     Figs. 14 and 16 (:data:`FIG14`, :data:`FIG16`): k and b decoupled from the data
-    (circles), and predicted from the temperatures (squares).
+    (circles), and predicted from the temperatures (squares), drawn to :data:`PLOT_DECIMALS`
+    decimals.
 
     Parameters
     ----------
@@ -879,6 +895,8 @@ def kb_figure(measurement, measured_kb, predicted_kb, *, title: str, colour):
     """
     import matplotlib.pyplot as plt  # heavy (a GUI backend): loaded only to draw
 
+    measured_kb = [_plotted(v) for v in measured_kb]
+    predicted_kb = [_plotted(v) for v in predicted_kb]
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
     for ax, meas, pred, lab in ((axes[0], measured_kb[0], predicted_kb[0], "slope k (µm/m)"),
                                 (axes[1], measured_kb[1], predicted_kb[1], "intercept b (µm)")):

@@ -14,14 +14,14 @@ from pathlib import Path
 import numpy as np
 import param
 
-from ..spindle import probes
+from ..spindle import example
 from .figure import Caption, figures
 from .parameters import InputFile, NotebookParameters, NumberList, OutputFolder
 
 __all__ = ["profile_caption_fields", "shipped_example"]
 
 #: ``data/spindle/`` of the repository this library was imported from: the shipped simulated
-#: example (:func:`mtaccuracy.spindle.probes.write_example`), its truth and its record.
+#: example (:func:`mtaccuracy.spindle.example.write_example`), its truth and its record.
 EXAMPLE_FOLDER = Path(__file__).resolve().parents[3] / "data" / "spindle"
 
 #: The last sentence of every caption: where the data come from.
@@ -37,7 +37,7 @@ def shipped_example(path, *, folder=EXAMPLE_FOLDER, on_read=None):
 
     Recognised by content, whatever the file's name or place: its SHA-256 against the one
     recorded in the folder's ``provenance.json``
-    (:func:`mtaccuracy.spindle.probes.match_example`).
+    (:func:`mtaccuracy.spindle.example.match_example`).
 
     Parameters
     ----------
@@ -61,9 +61,9 @@ def shipped_example(path, *, folder=EXAMPLE_FOLDER, on_read=None):
     ValueError
         The file is the example but the truth beside it is missing or not the recorded one.
     """
-    truth = probes.match_example(path, folder)
+    truth = example.match_example(path, folder)
     if truth is not None and on_read is not None:
-        on_read(Path(folder) / probes.EXAMPLE_FILES["truth"])
+        on_read(Path(folder) / example.EXAMPLE_FILES["truth"])
     return truth
 
 

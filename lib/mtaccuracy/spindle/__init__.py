@@ -4,8 +4,9 @@ Modules:
 
 ``separation``
     the probe model (Eq. 7), the weights (Eqs. 5, 15), the eigenvalues and the transfer
-    function (Eqs. 14, 19), the matrix method (Eqs. 3-10), and the least-squares multi-probe
-    estimator beside it;
+    function (Eqs. 14, 19), the matrix method (Eqs. 3-10);
+``least_squares``
+    the least-squares multi-probe estimator beside it, on the sampling grid;
 ``design``
     the layout objective ``H = q_k^2`` (Eqs. 19-20), its bounds, the best ``a_3``, canonical
     layouts;
@@ -15,13 +16,20 @@ Modules:
 ``simulate``
     simulated measurements (Section 3);
 ``probes``
-    a reader's own multi-probe measurement: the probe file (``revolution``, ``angle_deg``,
-    ``probe_<angle>_um``), its checks, and the separation at any probe angles (the weighted
-    method with weights for the given angles, and least squares), with the shipped simulated
-    example;
+    the separation at any probe angles (the weighted method with weights for the given
+    angles, and least squares): what a layout separates, its noise amplification;
+``probedata``
+    a reader's own multi-probe measurement as any reader returns it (:class:`ProbeData`) and
+    the checks that hold whatever its file format;
+``probefile``
+    the probe file (``revolution``, ``angle_deg``, ``probe_<angle>_um``): its reader and
+    writer;
+``example``
+    the shipped simulated example and its truth;
 ``errormotion``
     radial error motion in ISO 230-7 terms: fixed and rotating sensitive directions,
-    synchronous, asynchronous and total error motion values about the LSC or MRS centre.
+    synchronous, asynchronous and total error motion values about the LSC or MRS centre, the
+    profile about its least-squares circle.
 
 Roundness (least-squares circle, minimum zone) is :mod:`mtaccuracy.roundness`.  Every public name
 is importable from here: ``from mtaccuracy import spindle as S; S.separate(...)``.
@@ -37,10 +45,25 @@ optimisation at a time, looping over the population in Python, and hundreds of r
 
 from .. import roundness  # noqa: F401
 from ..roundness import *  # noqa: F403
-from . import design, errormotion, optimise, probes, separation, simulate  # noqa: F401
+from . import (  # noqa: F401
+    design,
+    errormotion,
+    example,
+    least_squares,
+    optimise,
+    probedata,
+    probefile,
+    probes,
+    separation,
+    simulate,
+)
 from .design import *  # noqa: F403
 from .errormotion import *  # noqa: F403
+from .example import *  # noqa: F403
+from .least_squares import *  # noqa: F403
 from .optimise import *  # noqa: F403
+from .probedata import *  # noqa: F403
+from .probefile import *  # noqa: F403
 from .probes import *  # noqa: F403
 from .separation import *  # noqa: F403
 from .simulate import *  # noqa: F403

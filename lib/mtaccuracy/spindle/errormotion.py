@@ -53,7 +53,7 @@ from scipy.optimize import linprog
 from ..roundness import TWO_PI, lsc_roundness, mz_roundness
 
 __all__ = ["CENTRES", "ErrorMotion", "sensitive_component", "radial_error_motion",
-           "error_motion_table"]
+           "error_motion_table", "fixed_directions", "about_lsc"]
 
 #: The polar-plot centres offered (ISO 230-7): LSC (the default) and MRS.
 CENTRES = ("LSC", "MRS")
@@ -262,3 +262,54 @@ def error_motion_table(dx, dy, theta, *, fixed_directions, rotating_direction,
         "asynchronous_um": [float(m.asynchronous_value) for m in motions],
         "total_um": [float(m.total_value) for m in motions]})
     return table, motions
+
+
+def about_lsc(profile) -> np.ndarray:
+    """A profile's deviations from its least-squares circle (ISO 12181-1's LSC reference).
+
+    In the limacon model of :func:`~mtaccuracy.roundness.lsc_roundness`: the profile without its
+    mean and first harmonic, i.e. without the centring.
+
+    Parameters
+    ----------
+    profile : array (..., N)
+        Radial deviations sampled uniformly over a turn (any length unit).
+
+    Returns
+    -------
+    array (..., N)
+        In the unit of ``profile``; its peak-to-valley is the LSC roundness.
+    """
+    p = np.asarray(profile, dtype=float)
+    _, coef = lsc_roundness(p)
+    t = TWO_PI * np.arange(p.shape[-1]) / p.shape[-1]
+    return p - coef[..., :1] - coef[..., 1:2] * np.cos(t) - coef[..., 2:] * np.sin(t)
+
+
+def fixed_directions(data, report_probes) -> np.ndarray:
+    """Fixed sensitive directions along the named probes' axes (all probes when none is named).
+
+    The probes are named by their mounting angles (deg); an angle that is no probe's is refused.
+
+    Parameters
+    ----------
+    data : ProbeData
+        The probe file (:class:`~mtaccuracy.spindle.probedata.ProbeData`).
+    report_probes : sequence of float
+        Mounting angles (deg) of probes of the file (modulo 360); empty: every probe.
+
+    Returns
+    -------
+    array (D,)
+        The directions (rad), in the order given (file order when empty).
+    """
+    wanted = [float(a) for a in report_probes] or list(data.angles_deg)
+    out = []
+    for a in wanted:
+        hit = np.flatnonzero(np.abs(np.angle(np.exp(1j * np.deg2rad(a - data.angles_deg))))
+                             < 1e-9)
+        if not hit.size:
+            raise ValueError(f"no probe of {data.path} is mounted at {a:g} deg; its probes are "
+                             f"at {', '.join(f'{v:g}' for v in data.angles_deg)} deg")
+        out.append(data.phi[hit[0]])
+    return np.array(out)

@@ -23,26 +23,24 @@ from sklearn.metrics import make_scorer
 
 from .baselines import BASELINES, ridge_all_sensors
 from .clustering import Selection, fuzzy_clusters, most_frequent, select_sensitive_points
-from .io import ThermalData, rises_of
+from .data import ThermalData, rises_of
 from .models import (
     DecoupledRegressor,
-    GroupedSVR,
     PointByPointRegressor,
-    StandardisedSVR,
     _prefixed,
-    _svr_params,
     compose,
     decouple,
     fit_linear,
     predict_linear,
-    tie_margin,
 )
+from .svr import GroupedSVR, StandardisedSVR, _svr_params, tie_margin
 
 __all__ = [
     "metrics", "pooled_rmse", "POOLED_RMSE_SCORER", "batch_metrics", "design", "point_by_point",
     "decoupled", "eq8_table",
     "eq9_table", "svr_hyperparameters", "SplitResult", "evaluate_split",
     "leave_one_experiment_out", "replicate_split", "metrics_by_experiment",
+    "METRIC_DIGITS",
 ]
 
 
@@ -227,7 +225,11 @@ def svr_hyperparameters(model: DecoupledRegressor) -> pd.DataFrame:
         Per target: ``kernel``, ``C``, ``gamma``, ``epsilon`` of the chosen candidate, its mean
         CV RMSE, the number of candidates tried (the grid within :data:`SVR_MAX_CN`: all 40
         up to 30 training rows), how many tied with the best (within its ``tie_rtol``) and the
-        distance of the nearest other one to the tie window's edge.
+        distance of the nearest other one to the tie window's edge.  The two scores to
+        :data:`METRIC_DIGITS` significant digits (as tables are written): below them lie
+        libsvm's stopping point (about 1e-11 relative at
+        :data:`~mtaccuracy.thermal.svr.SVR_SOLVER_TOL`) and the rounding another CPU changes,
+        so the table is the same on any CPU.
     """
     rows = []
     for target, est in (("k", model.k_estimator_), ("b", model.b_estimator_)):
@@ -236,15 +238,26 @@ def svr_hyperparameters(model: DecoupledRegressor) -> pd.DataFrame:
         tied, margin = tie_margin(s.cv_results_, est.tie_rtol)
         rows.append({"target": target, "kernel": p["kernel"], "C": p["C"],
                      "gamma": p.get("gamma", ""), "epsilon": p["epsilon"],
-                     "cv_rmse": -s.cv_results_["mean_test_score"][s.best_index_],
+                     "cv_rmse": _digits(-s.cv_results_["mean_test_score"][s.best_index_],
+                                        METRIC_DIGITS),
                      "candidates": len(s.cv_results_["params"]), "tied": tied,
-                     "tie_window_margin": margin})
+                     "tie_window_margin": _digits(margin, METRIC_DIGITS)})
     return pd.DataFrame(rows)
 
 
 # --------------------------------------------------------------------------------------------
 # One split, and every experiment held out in turn
 # --------------------------------------------------------------------------------------------
+
+#: Significant digits of the metrics in a split's table (:attr:`SplitResult.table`, and so of
+#: :func:`leave_one_experiment_out`), as tables are written.  Below them lies what another CPU
+#: changes: the SVR's stopping point (about 1e-11 relative at
+#: :data:`~mtaccuracy.thermal.svr.SVR_SOLVER_TOL`) and the MLR's rounding (1e-14); the
+#: figures drawn from the table (bars a few hundred pixels high, written to 1e-6 of a pixel)
+#: changed bytes from it.  Rounded here, the table is the same on any CPU unless a metric lies
+#: within that noise of a rounding edge.
+METRIC_DIGITS = 6
+
 
 @dataclass
 class SplitResult:
@@ -272,7 +285,8 @@ class SplitResult:
     measured_kb : tuple
         Their decoupled (k, b).
     table : DataFrame
-        method, target, rmse, max_residual, mae, unit.
+        method, target, rmse, max_residual, mae, unit; the metrics to
+        :data:`METRIC_DIGITS` significant digits.
     settings : dict
         What determines the result (compared to reuse it).
     """
@@ -300,6 +314,8 @@ def evaluate_split(data: ThermalData, *, train, test, n_clusters: int = 3, rho: 
 
     Selects sensitive points on ``train`` only (:func:`select_sensitive_points`), fits the
     point-by-point MLR and the decoupled models there, predicts ``test`` from its temperatures.
+    The metrics table holds :data:`METRIC_DIGITS` significant digits: below them lies
+    rounding that another CPU changes.
 
     Parameters
     ----------
@@ -377,13 +393,13 @@ def evaluate_split(data: ThermalData, *, train, test, n_clusters: int = 3, rho: 
     if "uncompensated" in baselines:
         preds["uncompensated"] = np.zeros_like(measured)
         rows.append({"method": "uncompensated", "target": "thermal positioning error",
-                     "unit": "um", **metrics(measured)})
+                     "unit": "um", **_metric_digits(metrics(measured))})
     for name, m in models.items():
         x = design(te, every if name == "ridge_all_sensors" else chosen,
                    "decoupled" if isinstance(m, DecoupledRegressor) else "point")
         preds[name] = m.predict(x)
         rows.append({"method": name, "target": "thermal positioning error", "unit": "um",
-                     **metrics(measured - preds[name])})
+                     **_metric_digits(metrics(measured - preds[name]))})
         if isinstance(m, DecoupledRegressor):
             kb_preds[name] = m.predict_kb(x)
             for target, unit, meas, pred in (("slope k", "um/m", measured_kb[0],
@@ -391,11 +407,21 @@ def evaluate_split(data: ThermalData, *, train, test, n_clusters: int = 3, rho: 
                                              ("intercept b", "um", measured_kb[1],
                                               kb_preds[name][1])):
                 rows.append({"method": name, "target": target, "unit": unit,
-                             **metrics(meas - pred)})
+                             **_metric_digits(metrics(meas - pred))})
     table = pd.DataFrame(rows)[["method", "target", "rmse", "max_residual", "mae", "unit"]]
     return SplitResult(list(tr.experiments), list(te.experiments), pos_sel, selected, chosen,
                        k_sel, b_sel, models, preds, kb_preds, measured, measured_kb, table,
                        _settings(data, train, test, n_clusters, rho, kinds, sensors, baselines))
+
+
+def _digits(value: float, digits: int) -> float:
+    """``value`` to ``digits`` significant digits (correctly rounded; NaN stays NaN)."""
+    return float(f"{value:.{digits}g}")
+
+
+def _metric_digits(values: dict) -> dict:
+    """Metrics to :data:`METRIC_DIGITS` significant digits."""
+    return {k: _digits(v, METRIC_DIGITS) for k, v in values.items()}
 
 
 def _settings(data, train, test, n_clusters, rho, kinds, sensors, baselines=()) -> dict:

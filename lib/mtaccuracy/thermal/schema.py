@@ -1,0 +1,82 @@
+"""The thermal measurement schema of ``data/thermal/README.md``: names, units, limits, errors.
+
+What a dataset of one axis holds and how it is refused: the three files
+(:data:`TEMPERATURES_FILE`, :data:`ERRORS_FILE`, the optional :data:`EXPERIMENTS_FILE`), the
+unit every column name carries, the plausible range of each quantity and the size limits, and
+the error and warnings the readers raise (:class:`DataFormatError`, naming the file and the
+problem; :class:`DroppedSensorWarning` and :class:`IgnoredColumnWarning` for what they set
+aside).  Reading: :mod:`~mtaccuracy.thermal.io`; the checks: :mod:`~mtaccuracy.thermal.checks`.
+
+Units: positions in mm, errors in um, temperatures in degrees Celsius, times in minutes.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "DataFormatError", "DroppedSensorWarning", "IgnoredColumnWarning",
+    "TEMPERATURES_FILE", "ERRORS_FILE", "EXPERIMENTS_FILE", "TEMPERATURE_RANGE_C",
+    "ERROR_LIMIT_UM", "ERROR_MIN_SPAN_UM", "POSITION_MIN_SPAN_MM", "POSITION_LIMIT_MM",
+    "MIN_SENSORS", "MAX_SENSORS", "MAX_POSITIONS", "MAX_MEASUREMENTS", "MAX_FILE_BYTES",
+]
+
+TEMPERATURES_FILE = "temperatures.csv"
+ERRORS_FILE = "errors.csv"
+EXPERIMENTS_FILE = "experiments.csv"
+_TEMP_UNIT = "_degC"
+#: The columns that identify a measurement in ``temperatures.csv`` (and, but for the time, in
+#: ``errors.csv``).
+_KEYS = ("experiment", "measurement", "time_min")
+#: Plausible values of each quantity, refused outside (the limits are in the message).
+#: Temperatures (degC): a machine shop's air, structure, drives and motor windings lie within
+#: -30..200 degC (insulation class H is rated to 180 degC); a temperature in kelvin does not
+#: (any shop above -30 degC reads above 243 K).
+TEMPERATURE_RANGE_C = (-30.0, 200.0)
+#: Errors (um): a machine tool's positioning error stays within +-1000 um (1 mm); larger
+#: readings are most likely in nm.  Over a whole file the errors span at least 1 um: the pitch
+#: error, the warm-up drift and the interferometer's own scatter each reach that; a file whose
+#: errors all lie within 1 um is most likely in mm.
+ERROR_LIMIT_UM = 1000.0
+ERROR_MIN_SPAN_UM = 1.0
+#: Target positions (mm): they span at least 1 mm and lie within +-100 m; positions in m span
+#: less than 1 mm over any machine-tool axis shorter than 1 km.
+POSITION_MIN_SPAN_MM = 1.0
+POSITION_LIMIT_MM = 1e5
+#: Size limits of a readable dataset, so that a run stays within memory and time on a small
+#: machine: the fuzzy closure holds n_sensors**3 numbers, the point-by-point selection runs
+#: once per position, and the SVR search's time grows with the measurements (its grid bounded
+#: by :data:`mtaccuracy.thermal.SVR_MAX_CN`): at the limits one train/test split of notebook 04
+#: takes about 50 s, the whole notebook about 8 min on 2 cores, 0.6 GB.
+MAX_SENSORS = 100
+#: At least this many working sensors (after dead ones are dropped): the clustering and the
+#: selection of sensitive points need a choice.
+MIN_SENSORS = 3
+MAX_POSITIONS = 500
+MAX_MEASUREMENTS = 1000
+#: A file larger than this is refused before it is read (errors.csv at the limits above, 500 000
+#: rows, takes about 15 MB).
+MAX_FILE_BYTES = 100_000_000
+
+
+class DataFormatError(ValueError):
+    """A measurement file breaks the CSV schema; the message names the file and the problem."""
+
+
+class DroppedSensorWarning(UserWarning):
+    """A dead sensor was dropped by :func:`~mtaccuracy.thermal.io.read_measurements`.
+
+    Dead: its reading never changes within an experiment, or it holds no number.  The message
+    names the file, the sensor and the value.
+    """
+
+
+class IgnoredColumnWarning(UserWarning):
+    """Columns outside the schema (``spindle_speed_rpm``, ``note``) were ignored on reading.
+
+    Raised by :func:`~mtaccuracy.thermal.io.read_measurements`; the message names the file and the
+    columns.
+    """
+
+
+
+def _problem(path, message) -> DataFormatError:
+    return DataFormatError(f"{path}: {message}")
