@@ -520,14 +520,14 @@ def decode_plan(text: str) -> dict:
 
 def _snakemake(config: dict, *, cores: int, mem_mb: int, force: bool, targets=(),
                workdir: Path = ROOT, profile: str | None = None) -> int:
-    cmd = [sys.executable, "-m", "snakemake", "--snakefile", str(SNAKEFILE), "--directory",
-           str(workdir), "--cores", str(cores), "--resources", f"mem_mb={mem_mb}",
+    cmd = [sys.executable, "-m", "snakemake", *targets, "--snakefile", str(SNAKEFILE),
+           "--directory", str(workdir), "--cores", str(cores), "--resources", f"mem_mb={mem_mb}",
            "--rerun-incomplete", "--quiet", "rules", "host", "reason",
            # a changed file re-runs (its checksum, not only its time); a file newly listed as
            # read (the last run's record) does not: the run that listed it read it
            "--rerun-triggers", "mtime", "params", "code",
            "--max-checksum-file-size", str(100 * 2**20),
-           "--config", f"plan={encode_plan(config)}", *targets]
+           "--config", f"plan={encode_plan(config)}"]
     if force:
         cmd.append("--forceall")
     if profile:  # a cluster: the profile's executor submits the jobs (workflow/profiles/)
