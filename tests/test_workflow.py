@@ -8,8 +8,10 @@ repository."""
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import nbformat
@@ -265,7 +267,7 @@ def tiny(tmp_path_factory):
         timing]
     nbformat.write(nb, path)
     run_dir = base / "run"
-    workflow.execute(path, {"n": 4}, run_dir, base / "log" / "99_tiny.ipynb")
+    workflow.execute(path, {"n": 4}, run_dir, base / "log" / "99_tiny.log")
     return base, path, run_dir
 
 
@@ -303,18 +305,27 @@ def test_a_failing_cell_is_named_and_its_notebook_kept(tiny, tmp_path):
     nbformat.write(nb, bad)
     with pytest.raises(RuntimeError, match=r"99_tiny failed in cell \[7\]: ValueError: bad "
                                            r"data in row 7; the executed notebook is"):
-        workflow.execute(bad, {}, tmp_path / "run", tmp_path / "log" / "99_tiny.ipynb")
+        workflow.execute(bad, {}, tmp_path / "run", tmp_path / "log" / "99_tiny.log")
     assert (tmp_path / "log" / "99_tiny.ipynb").exists()
 
 
 # --- the engine itself, end to end -------------------------------------------------------------
 
-def _reproduce(workdir: Path, params: str, *extra: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "mtaccuracy.compendium.workflow", "reproduce", "--nb", "03",
-         "--params", params, "--cores", "1", "--workdir", str(workdir), *extra],
-        capture_output=True, text=True, timeout=600,
-        env={**os.environ, "PYTHONPATH": str(ROOT / "lib")})
+def _command(workdir: Path, params: str) -> list[str]:
+    return [sys.executable, "-m", "mtaccuracy.compendium.workflow", "reproduce", "--nb", "03",
+            "--params", params, "--cores", "1", "--workdir", str(workdir)]
+
+
+ENV = {**os.environ, "PYTHONPATH": str(ROOT / "lib")}
+
+
+def _reproduce(workdir: Path, params: str) -> subprocess.CompletedProcess:
+    return subprocess.run(_command(workdir, params), capture_output=True, text=True, timeout=600,
+                          env=ENV)
+
+
+def _files(folder: Path) -> dict:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
 
 
 def test_reproduce_runs_a_changed_notebook_once_and_publishes_it_whole(tmp_path):
@@ -331,4 +342,21 @@ def test_reproduce_runs_a_changed_notebook_once_and_publishes_it_whole(tmp_path)
     assert "Nothing to be done" in again.stdout + again.stderr
     assert (out / "notes.txt").read_text() == "mine"
     assert not (tmp_path / "wd" / "build" / "scorecard.done").exists()  # not in place
+    # another seed, killed (-9, the whole process group) while the notebook runs: nothing of the
+    # published run changes, and the next command runs it again from the start
+    before = _files(out)
+    other = f"{params} seed=7"
+    proc = subprocess.Popen(_command(tmp_path / "wd", other), env=ENV, start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    running = tmp_path / "wd" / "build" / "logs" / f"{GUO}.ipynb"
+    deadline = time.monotonic() + 300
+    while not running.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert _files(out) == before
+    last = _reproduce(tmp_path / "wd", other)
+    assert last.returncode == 0, last.stdout + last.stderr
+    assert provenance.read(out)["run"]["parameters"]["seed"] == 7
+    assert (out / "notes.txt").read_text() == "mine"
     shutil.rmtree(tmp_path / "wd")

@@ -10,7 +10,7 @@ or killed.  Each notebook runs in two steps, both Snakemake jobs:
 1. :func:`execute`: papermill runs the notebook into ``build/runs/<stem>/`` (the executed
    notebook, and its outputs in ``outputs/``).  A failed or interrupted run is Snakemake's
    incomplete output, removed before the next; the executed notebook of a failed run is kept
-   as the job's log, ``build/logs/<stem>.ipynb``.
+   beside the job's log, ``build/logs/<stem>.ipynb``.
 2. :func:`publish`: the finished run is copied into place, ``figures/<stem>/`` and
    ``notebooks/<stem>.ipynb`` (or the ``output_dir`` given).  Written by hand because no
    engine mechanism keeps a user's files in a folder it writes: only the files the previous run
@@ -299,8 +299,8 @@ def execute(notebook: Path, given: dict, run_dir: Path, log: Path, *, threads: i
     run_dir : Path
         Receives ``<stem>.ipynb`` (executed, :func:`normalise`) and ``outputs/``.
     log : Path
-        The executed notebook as it runs (kept when it fails); the kernel's standard error
-        goes beside it, as ``<log>.stderr``.
+        The kernel's standard error (``<stem>.log``); the notebook as it runs is written
+        beside it (``<stem>.ipynb``) and kept only when the run fails.
     threads : int
         BLAS threads of the kernel.
 
@@ -313,6 +313,7 @@ def execute(notebook: Path, given: dict, run_dir: Path, log: Path, *, threads: i
 
     stem = notebook.stem
     run_dir, log = Path(run_dir).resolve(), Path(log).resolve()
+    running = log.with_suffix(".ipynb")
     run_dir.mkdir(parents=True, exist_ok=True)
     log.parent.mkdir(parents=True, exist_ok=True)
     env = {"OPENBLAS_NUM_THREADS": str(threads), "OMP_NUM_THREADS": str(threads),
@@ -321,13 +322,13 @@ def execute(notebook: Path, given: dict, run_dir: Path, log: Path, *, threads: i
     os.environ.update(env)
     t0 = time.perf_counter()
     try:
-        with _stderr_to(log.with_name(log.name + ".stderr")):
-            pm.execute_notebook(notebook, log, cwd=notebook.parent, kernel_name="python3",
+        with _stderr_to(log):
+            pm.execute_notebook(notebook, running, cwd=notebook.parent, kernel_name="python3",
                                 parameters={**given, "output_dir": str(run_dir / "outputs")},
                                 progress_bar=False, log_output=False)
     except pm.PapermillExecutionError as exc:
         raise RuntimeError(f"{stem} failed in cell [{exc.exec_count}]: {exc.ename}: "
-                           f"{exc.evalue}; the executed notebook is {provenance.shown(log)}"
+                           f"{exc.evalue}; the executed notebook is {provenance.shown(running)}"
                            ) from None
     finally:
         for k, v in old.items():
@@ -336,10 +337,10 @@ def execute(notebook: Path, given: dict, run_dir: Path, log: Path, *, threads: i
             else:
                 os.environ[k] = v
         shutil.rmtree(run_dir / ".jupyter", ignore_errors=True)
-    nb = normalise(json.loads(log.read_text(encoding="utf-8")), stem, given)
+    nb = normalise(json.loads(running.read_text(encoding="utf-8")), stem, given)
     (run_dir / f"{stem}.ipynb").write_text(
         json.dumps(nb, indent=1, ensure_ascii=False, sort_keys=True) + "\n", encoding="utf-8")
-    log.unlink()  # kept only when the run fails
+    running.unlink()  # kept only when the run fails
     return time.perf_counter() - t0
 
 
@@ -518,11 +519,32 @@ def decode_plan(text: str) -> dict:
     return json.loads(base64.urlsafe_b64decode(text.removeprefix("b64:").encode()))
 
 
+@contextlib.contextmanager
+def _one_at_a_time(workdir: Path):
+    """Hold the checkout's workflow lock while Snakemake runs (it then runs with ``--nolock``).
+
+    Written by hand because Snakemake's own lock (files in ``.snakemake/locks``) outlives a
+    killed run and then refuses the next one until ``--unlock``; an ``flock`` is released by the
+    kernel when its process dies, however it dies, so a second ``make reproduce`` is refused only
+    while the first is really running."""
+    import fcntl  # POSIX only, like the rest of the workflow
+
+    path = Path(workdir) / ".snakemake" / "workflow.lock"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w") as fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ParameterError(f"another make reproduce or make sweep is running in "
+                                 f"{provenance.shown(workdir)}; wait for it to end") from None
+        yield
+
+
 def _snakemake(config: dict, *, cores: int, mem_mb: int, force: bool, targets=(),
                workdir: Path = ROOT, profile: str | None = None) -> int:
     cmd = [sys.executable, "-m", "snakemake", *targets, "--snakefile", str(SNAKEFILE),
            "--directory", str(workdir), "--cores", str(cores), "--resources", f"mem_mb={mem_mb}",
-           "--rerun-incomplete", "--quiet", "rules", "host", "reason",
+           "--rerun-incomplete", "--nolock", "--quiet", "rules", "host", "reason",
            # a changed file re-runs (its checksum, not only its time); a file newly listed as
            # read (the last run's record) does not: the run that listed it read it
            "--rerun-triggers", "mtime", "params", "code",
@@ -533,12 +555,13 @@ def _snakemake(config: dict, *, cores: int, mem_mb: int, force: bool, targets=()
     if profile:  # a cluster: the profile's executor submits the jobs (workflow/profiles/)
         cmd += ["--profile", str(SNAKEFILE.parent / "profiles" / profile)]
     Path(workdir).mkdir(parents=True, exist_ok=True)
-    proc = subprocess.Popen(cmd, cwd=workdir)
-    while True:  # Ctrl-C reaches Snakemake too: it stops its jobs; wait for it to say so
-        try:
-            return proc.wait()
-        except KeyboardInterrupt:
-            continue
+    with _one_at_a_time(workdir):
+        proc = subprocess.Popen(cmd, cwd=workdir)
+        while True:  # Ctrl-C reaches Snakemake too: it stops its jobs; wait for it to say so
+            try:
+                return proc.wait()
+            except KeyboardInterrupt:
+                continue
 
 
 def _cores(text: str | None) -> int:
