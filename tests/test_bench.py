@@ -180,6 +180,9 @@ def test_memory_rows_go_up_in_n_and_quick_leaves_out_the_largest(monkeypatch):
     bench.main(["--quick", "--only", "salib"])      # a peer's row brings ours along
     assert ran == ["zheng_sobol_n16384", "zheng_salib_n16384", "sobol_memory_n8192",
                    "sobol_memory_salib_n8192"]
+    ran.clear()
+    bench.main(["--quick", "--only", "ishigami_openturns"])   # both of ours, OpenTURNS not run
+    assert ran == ["pce_ishigami_omp", "pce_ishigami_lars"]
 
 
 def test_the_memory_task_estimates_the_linear_model():

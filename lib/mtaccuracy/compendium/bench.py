@@ -830,10 +830,10 @@ def main(argv=None) -> int:
     if args.task:
         print(json.dumps(run_task(args.task)))
         return 0
-    peer_of = {p: t for t, p in PEERS.items()}
-    chosen = {t for _, t, *_ in ROWS if args.only in t and not (args.quick and t in FULL_ONLY)}
-    chosen |= {x for t in chosen for x in (PEERS.get(t), peer_of.get(t))
-               if x and not (args.quick and x in FULL_ONLY)}
+    left_out = FULL_ONLY if args.quick else set()
+    chosen = {t for _, t, *_ in ROWS if args.only in t} - left_out
+    chosen |= ({p for t, p in PEERS.items() if t in chosen}
+               | {t for t, p in PEERS.items() if p in chosen}) - left_out
     ot_python, ot_note = None, NO_OPENTURNS
     if args.with_openturns and any(t.endswith("openturns") for t in chosen):
         print(f"OpenTURNS environment: {openturns_env()} ({OPENTURNS_REQUIREMENT}; made once)",
