@@ -81,6 +81,8 @@ def test_the_peer_note_gives_time_and_memory_ratios_and_index_agreement():
     assert "SALib 25.0x the time" in note and "13.0x the task MB" in note
     assert "7.5x the peak" in note and "agree to 3e-15" in note
     assert bench._peer_note(ours, bench._failed("not run"), "OpenTURNS") == ""
+    quicker = bench._peer_note(ours, dict(time=0.05, task_mb=50.0, peak_mb=150.0), "OpenTURNS")
+    assert "OpenTURNS 0.025x the time, 0.5x the task MB, 0.75x the peak" in quicker
 
 
 def test_openturns_rows_are_skipped_with_a_message_when_it_is_absent(monkeypatch):

@@ -749,9 +749,11 @@ def _peer_note(ours: dict, peer: dict, name: str) -> str:
     """``; SALib 20x the time, ...``: the peer's time and memory over ours, and the indices."""
     if not (peer.get("time", float("nan")) > 0 and ours.get("time", float("nan")) > 0):
         return ""
-    note = (f"; {name} {peer['time'] / ours['time']:.1f}x the time, "
-            f"{peer['task_mb'] / max(ours['task_mb'], 1.0):.1f}x the task MB, "
-            f"{peer['peak_mb'] / ours['peak_mb']:.1f}x the peak")
+    def times(x):
+        return f"{x:.1f}x" if x >= 1 else f"{x:.2g}x"
+    note = (f"; {name} {times(peer['time'] / ours['time'])} the time, "
+            f"{times(peer['task_mb'] / max(ours['task_mb'], 1.0))} the task MB, "
+            f"{times(peer['peak_mb'] / ours['peak_mb'])} the peak")
     if "indices" in ours and "indices" in peer:
         diff = np.abs(np.asarray(ours["indices"]) - np.asarray(peer["indices"])).max()
         note += f"; indices agree to {diff:.0e}"
