@@ -289,7 +289,7 @@ def _sobol_task(tool: str, case: str, n: int, repeat: int) -> dict:
         if dt < t:
             t, stages = dt, seconds
     how = f"min of {repeat}" if repeat else "one run"
-    note = f"{how}; {n * (len(sd) + 2) / t / 1e6:.1f} M runs/s"
+    note = f"{how}; {n * (len(sd) + 2) / t / 1e6:.2g} M runs/s"
     if stages:
         note += "; " + ", ".join(f"{k} {v:.2f} s" for k, v in stages.items())
     return dict(time=t, err_s1=float(np.abs(s1 - exact).max()),
