@@ -1,11 +1,14 @@
 """``make bench``: a task runs in a process of its own and reports time, memory and index errors;
-OpenTURNS is optional."""
+SALib runs the same Sobol' design as ours; OpenTURNS gets an environment of its own."""
 
 import builtins
 import json
 import subprocess
 import sys
+from pathlib import Path
+from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from mtaccuracy.compendium import bench
@@ -21,6 +24,67 @@ def test_a_task_runs_in_its_own_process_and_reports_json():
     assert r["err_s1"] < 1e-10 and r["err_st"] < 1e-10 and "degree 2" in r["note"]
 
 
+def test_the_subprocess_imports_the_library_the_bench_runs_from(monkeypatch):
+    seen = {}
+
+    def fake_run(cmd, **kw):
+        seen.update(cmd=cmd, env=kw["env"])
+        return SimpleNamespace(returncode=0, stdout='{"time": 1.0}\n', stderr="")
+    monkeypatch.setattr(bench.subprocess, "run", fake_run)
+    monkeypatch.setenv("PYTHONPATH", "/elsewhere")
+    assert bench._in_subprocess("zheng_mcs", python="/other/python") == {"time": 1.0}
+    assert seen["cmd"] == ["/other/python", "-m", "mtaccuracy.compendium.bench", "--task",
+                           "zheng_mcs"]
+    lib = seen["env"]["PYTHONPATH"].split(":")
+    assert Path(lib[0], "mtaccuracy", "compendium", "bench.py").samefile(bench.__file__)
+    assert lib[1:] == ["/elsewhere"]
+
+
+def test_salib_and_ours_draw_one_design_and_agree_with_the_closed_form():
+    model, sd, exact = bench._sobol_case("linear")   # linear: the closed form is exact
+    n = 2**10
+    stages = {}
+    s1, st = bench.salib_sobol(model, sd, n, stages=stages)
+    o1, ot = bench.ours_sobol(model, sd, n)
+    assert s1.shape == st.shape == exact.shape == (41, 6)
+    assert set(stages) == {"sample", "model", "analyze"}
+    # the same Sobol' points and the same estimators: the same numbers, to rounding
+    assert np.abs(s1 - o1).max() < 1e-12 and np.abs(st - ot).max() < 1e-12
+    # within the sampling error at N = 2^10: over 20 seeds the largest errors were 0.028 (S1)
+    # and 0.012 (ST), their mean 0.016 and 0.004
+    assert np.abs(s1 - exact).max() < 0.05 and np.abs(st - exact).max() < 0.03
+    # and they do depend on the design: another N gives other numbers
+    assert np.abs(bench.ours_sobol(model, sd, 2**9)[0] - o1).max() > 1e-6
+
+
+def test_a_sobol_row_reports_errors_indices_and_salib_stages(monkeypatch):
+    monkeypatch.setattr(bench, "_sobol_case", _small_case)
+    r = bench._sobol_task("salib", "linear", 2**8, 0)
+    assert r["time"] > 0 and "one run" in r["note"] and "sample" in r["note"]
+    s1, st = (np.asarray(a) for a in r["indices"])
+    assert s1.shape == (3, 2) and r["err_st"] == pytest.approx(
+        np.abs(st - _small_case("linear")[2]).max())
+
+
+def _small_case(case):
+    """A linear model of three inputs and two outputs with its exact indices."""
+    jac = np.array([[1.0, 2.0, 0.5], [0.0, 1.0, 3.0]])
+    sd = np.array([1.0, 0.5, 2.0])
+    share = (jac * sd) ** 2
+    return (lambda e: e @ jac.T), sd, (share / share.sum(1, keepdims=True)).T
+
+
+def test_the_peer_note_gives_time_and_memory_ratios_and_index_agreement():
+    ours = dict(time=2.0, task_mb=100.0, peak_mb=200.0, indices=[[[0.5]], [[0.5]]])
+    peer = dict(time=50.0, task_mb=1300.0, peak_mb=1500.0, indices=[[[0.5]], [[0.5 + 3e-15]]])
+    note = bench._peer_note(ours, peer, "SALib")
+    assert "SALib 25.0x the time" in note and "13.0x the task MB" in note
+    assert "7.5x the peak" in note and "agree to 3e-15" in note
+    assert bench._peer_note(ours, bench._failed("not run"), "OpenTURNS") == ""
+    quicker = bench._peer_note(ours, dict(time=0.05, task_mb=50.0, peak_mb=150.0), "OpenTURNS")
+    assert "OpenTURNS 0.025x the time, 0.5x the task MB, 0.75x the peak" in quicker
+
+
 def test_openturns_rows_are_skipped_with_a_message_when_it_is_absent(monkeypatch):
     real = builtins.__import__
 
@@ -30,29 +94,99 @@ def test_openturns_rows_are_skipped_with_a_message_when_it_is_absent(monkeypatch
         return real(name, *a, **k)
     monkeypatch.setattr(builtins, "__import__", no_openturns)
     r = bench._task_openturns("interaction_polynomial")
-    assert "not installed" in r["note"] and r["time"] != r["time"]  # NaN time
+    assert "--with-openturns" in r["note"] and r["time"] != r["time"]  # NaN time
+
+
+def test_the_openturns_environment_is_its_own_venv_with_openturns_from_pypi(tmp_path):
+    env = tmp_path / "bench-openturns"
+    make_venv, install = bench.openturns_env_commands(env, python="/project/.venv/bin/python")
+    # made by the project's Python (same version), without the base interpreter's packages
+    assert make_venv == ["/project/.venv/bin/python", "-m", "venv", str(env)]
+    # pip runs as the new environment's Python: openturns lands there, never in the project's
+    assert install[:4] == [str(env / "bin" / "python"), "-m", "pip", "install"]
+    assert install[-1] == bench.OPENTURNS_REQUIREMENT
+    assert bench.OPENTURNS_REQUIREMENT.startswith("openturns==")
+    assert bench.openturns_env().parts[-2:] == ("build", "bench-openturns")
+
+
+def test_the_environment_is_made_once_and_sees_the_project_packages(tmp_path, monkeypatch):
+    env = tmp_path / "bench-openturns"
+    site = env / "lib" / f"python{sys.version_info.major}.{sys.version_info.minor}" / \
+        "site-packages"
+    ran = []
+    monkeypatch.setattr(bench, "_site_dirs", lambda: ["/project/site-packages"])
+
+    def fake_run(cmd, **kw):          # makes the folders a venv would; installs nothing
+        ran.append(cmd)
+        if cmd[1:3] == ["-m", "venv"]:
+            site.mkdir(parents=True)
+            (env / "bin").mkdir()
+            (env / "bin" / "python").touch()
+        return SimpleNamespace(returncode=0 if installed else 1)
+    installed = False
+    python = bench.ensure_openturns_env(env, run=fake_run)
+    assert python == env / "bin" / "python"
+    assert [c[1:3] for c in ran] == [["-m", "venv"], ["-m", "pip"]]
+    pth = (site / bench.PROJECT_PTH).read_text()
+    assert pth == "import site; site.addsitedir('/project/site-packages')\n"
+    # a second call with openturns importable there runs nothing but that check
+    ran.clear()
+    installed = True
+    assert bench.ensure_openturns_env(env, run=fake_run) == python
+    assert ran == [[str(python), "-c", "import openturns"]]
+
+
+def test_without_the_flag_openturns_rows_say_how_to_get_them(monkeypatch, capsys):
+    ran = []
+
+    def fake(name, timeout=None, python=None):
+        ran.append((name, python))
+        return dict(time=1.0, peak_mb=1.0, task_mb=1.0)
+    monkeypatch.setattr(bench, "_in_subprocess", fake)
+    monkeypatch.setattr(bench, "ensure_openturns_env",
+                        lambda: pytest.fail("no environment without --with-openturns"))
+    bench.main(["--only", "pce_ishigami"])
+    assert [n for n, _ in ran] == ["pce_ishigami_omp", "pce_ishigami_lars"]
+    assert "--with-openturns" in capsys.readouterr().out
+    ran.clear()
+    monkeypatch.setattr(bench, "ensure_openturns_env", lambda: Path("/ot/bin/python"))
+    bench.main(["--only", "pce_ishigami", "--with-openturns"])
+    assert sorted(ran) == [("pce_ishigami_lars", None), ("pce_ishigami_omp", None),
+                           ("pce_ishigami_openturns", "/ot/bin/python")]
+    assert "OpenTURNS 1.0x the time" in capsys.readouterr().out
 
 
 def test_every_row_names_a_task_and_unknown_tasks_are_refused():
     assert all(task in bench.TASKS for _, task, *_ in bench.ROWS)
+    assert all(t in bench.TASKS and p in bench.TASKS for t, p in bench.PEERS.items())
+    # --quick never runs a peer's row without ours beside it
+    assert all(p in bench.FULL_ONLY or t not in bench.FULL_ONLY for t, p in bench.PEERS.items())
     with pytest.raises(SystemExit):
         bench.main(["--task", "no_such_task"])
 
 
-def test_memory_rows_go_up_in_n_and_quick_leaves_out_the_largest(monkeypatch, capsys):
+def test_memory_rows_go_up_in_n_and_quick_leaves_out_the_largest(monkeypatch):
     ran = []
 
-    def fake(name, timeout=None):
+    def fake(name, timeout=None, python=None):
         ran.append(name)
         return dict(time=1.0, peak_mb=1.0, task_mb=1.0)
     monkeypatch.setattr(bench, "_in_subprocess", fake)
     bench.main(["--quick", "--only", "sobol_memory"])
-    assert ran == ["sobol_memory_1e4", "sobol_memory_1e5", "sobol_memory_1e6"]
+    assert ran == ["sobol_memory_n8192", "sobol_memory_salib_n8192", "sobol_memory_n131072",
+                   "sobol_memory_n1048576"]
     ran.clear()
     bench.main(["--only", "sobol_memory"])
-    assert ran[-1] == "sobol_memory_1e7" and len(ran) == 4
+    assert ran[-1] == "sobol_memory_n8388608" and len(ran) == 6
+    ran.clear()
+    bench.main(["--quick", "--only", "salib"])      # a peer's row brings ours along
+    assert ran == ["zheng_sobol_n16384", "zheng_salib_n16384", "sobol_memory_n8192",
+                   "sobol_memory_salib_n8192"]
+    ran.clear()
+    bench.main(["--quick", "--only", "ishigami_openturns"])   # both of ours, OpenTURNS not run
+    assert ran == ["pce_ishigami_omp", "pce_ishigami_lars"]
 
 
 def test_the_memory_task_estimates_the_linear_model():
-    r = bench._sobol_memory(10_000)      # a linear model: S1 = ST = the closed form
+    r = bench._sobol_memory(2**10)      # a linear model: S1 = ST = the closed form
     assert r["err_s1"] < 0.05 and r["err_st"] < 0.05 and r["time"] > 0

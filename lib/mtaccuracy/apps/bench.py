@@ -1,4 +1,4 @@
-"""``make bench``: the speed targets named in the issues, measured.
+"""``make bench``: the speed targets named in the issues, measured, with the peers side by side.
 
 Every task runs in a fresh Python process of its own (``python -m mtaccuracy.compendium.bench --task
 NAME``), so its memory is that task's alone: the row gives the process's peak RSS and, of it,
@@ -8,14 +8,38 @@ Times are the minimum of ``repeat`` runs (3 unless a row says otherwise) after o
 never asserted in timed tests.  ``make reproduce`` and ``make test`` are timed in a fresh clone
 (min of two; skipped with ``--quick``).
 
-The sparse-PCE benchmarks (issue 13) run the same cases, on the same samples, through our
-``fit_sparse_pce`` (OMP and LARS, basis and length validated) and through OpenTURNS
-(``FunctionalChaosAlgorithm``, LARS with corrected LOO, the Legendre basis at a fixed degree),
-an optional dependency of the bench only: without it those rows say so and the rest runs.  Each
-prints the time and the largest error of S1 and ST against the exact indices.
+Peers are measured in the same run, each in a process of its own, and every ratio printed is
+of two rows of that run (the ratio stands in the note of our row: the peer's time and memory
+over ours):
+
+* SALib (``SALib.sample.sobol.sample`` with ``calc_second_order=False``, the model, then
+  ``SALib.analyze.sobol.analyze`` on each output) against our ``sobol_indices``, on the Zheng
+  et al. machine (``ac_double_turntable.pose_error`` at the paper's pose, the 41 errors normal
+  with the ranges of ``_zheng``) and on its first-order model (the memory rows).  Accuracy is
+  made equal, not argued: both draw the same design (one scrambled Sobol' sequence from
+  ``numpy.random.default_rng(SEED)``, N a power of two: 2^14 in ``--quick``, 2^17 beside the
+  paper's N = 1e5, 2^13 and 2^17 for the memory rows) and apply the same estimators (Saltelli
+  2010, Jansen), so their indices agree to rounding; the note of our row says to how many
+  digits, and both rows give the largest error of S1 and ST against the closed form
+  (``linear_indices`` on the Jacobian: exact for the linear model, the first-order answer for
+  the machine).  What SALib is asked for is what we compute: no second-order indices, and its
+  bootstrap (which it cannot switch off) at its smallest, two resamples.  Both evaluate the
+  model 250 000 runs per call, so the model's temporaries are the same; SALib then holds its
+  sample matrix (N (D + 2) x D floats: 1.8 GB at N = 2^17) and all outputs, which is its
+  design, and is why it runs no row above N = 2^17 (14.8 GB at 2^20).  Rows of N >= 2^17 and
+  the memory rows are one run each (no warm-up) for both tools; the quick rows min of 3.
+* OpenTURNS (``FunctionalChaosAlgorithm``, LARS with corrected LOO, the Legendre basis at a
+  fixed degree) against our ``fit_sparse_pce`` (OMP and LARS, basis and length validated) on the
+  sparse-PCE benchmarks with exact indices, the same samples: each row prints the time and the
+  largest error of S1 and ST, accuracy beside time.  OpenTURNS never enters the project's
+  environment: ``--with-openturns`` makes (once) a virtual environment of its own under
+  ``build/bench-openturns/`` that sees the project's packages (a ``.pth`` file) and has
+  ``OPENTURNS_REQUIREMENT`` installed from PyPI, and runs the OpenTURNS tasks with its Python;
+  without the flag those rows say how to get them.
 
 Local imports: each task imports what it measures inside its function, so that its time and
-memory are its own (a task runs in a process of its own).
+memory are its own (a task runs in a process of its own; a peer's package is imported before
+the task's memory baseline is taken, as ours is).
 """
 
 from __future__ import annotations
@@ -26,6 +50,7 @@ import resource
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -136,27 +161,149 @@ def task_zheng_mcs():
     return dict(time=t, note=f"largest |ST - linear closed form| {np.abs(st - lin).max():.1e}")
 
 
-#: base rows N of the memory-against-N rows (the last only without --quick)
-SOBOL_MEMORY_N = {"1e4": 10_000, "1e5": 100_000, "1e6": 1_000_000, "1e7": 10_000_000}
+#: seed of the Sobol' designs that ours and SALib share (``numpy.random.default_rng(SEED)``)
+SEED = 2
+
+#: model runs per call, for ours and for SALib alike
+CHUNK = 250_000
+
+#: base rows N of the memory-against-N rows (the last only without --quick): powers of two, so
+#: that the Sobol' design keeps its balance and SALib's sampler takes the same N
+SOBOL_MEMORY_N = [2**13, 2**17, 2**20, 2**23]
+
+#: N of the rows where SALib runs the memory task too (its sample matrix: 14.8 GB at 2^20)
+SALIB_MEMORY_N = [2**13, 2**17]
+
+#: N of the Zheng Sobol' rows, ours and SALib's (2^17 only without --quick)
+ZHENG_SOBOL_N = [2**14, 2**17]
 
 
-def _sobol_memory(n: int) -> dict:
-    """Sobol indices (S1, ST) of the Zheng machine's first-order model at one pose (41 errors,
-    six outputs: ``e @ J.T``, runs cost little, so the memory is the estimator's), streamed
-    from a Monte Carlo design of ``n`` base rows (``SobolDesign``): one run, sampling
-    included.  The peak should not grow with n once n exceeds ``sensitivity.BASE_ROWS``."""
+def _power(n: int) -> str:
+    """``2^k`` for a power of two ``n``."""
+    return f"2^{n.bit_length() - 1}"
+
+
+def _sobol_case(case: str):
+    """(model, sd, exact indices (41, 6)) of a Sobol' comparison case.
+
+    ``zheng``: the machine's pose error at the paper's pose; ``linear``: its first-order model
+    ``e @ J.T`` (runs cost little, so the memory is the estimator's), for which the closed form
+    is exact."""
     from .. import sensitivity as S
 
     m, sd, pose = _zheng()
+    if case == "zheng":
+        return (lambda e: m.pose_error(e, pose)), sd, S.linear_indices(m.jacobian(pose), sd=sd)[0]
     jac = m.jacobian(pose).reshape(6, 41)
-    design = S.SobolDesign(n, S.Inputs.normal(0.0, sd), method="mc", seed=2)
+    return (lambda e: e @ jac.T), sd, S.linear_indices(jac, sd=sd)
+
+
+def ours_sobol(model, sd, n: int):
+    """Our Sobol' indices (S1, ST), streamed from a scrambled Sobol' design of ``n`` base rows.
+
+    Parameters
+    ----------
+    model : callable
+        ``(m, D)`` errors to ``(m, q)`` outputs.
+    sd : array (D,)
+        Standard deviations of the normal, zero-mean errors.
+    n : int
+        Base rows N (a power of two).
+
+    Returns
+    -------
+    s1, st : arrays (D, q)
+        First-order and total indices.
+    """
+    from .. import sensitivity as S
+
+    design = S.SobolDesign(n, S.Inputs.normal(0.0, sd), method="sobol", seed=SEED)
+    s1, st = S.sobol_indices(model, design, chunk=CHUNK)
+    return s1, st
+
+
+def salib_sobol(model, sd, n: int, *, stages: dict | None = None):
+    """SALib's Sobol' indices (S1, ST) of ``model``: its sampler, the runs, its analysis.
+
+    The same design as :func:`ours_sobol` (the Sobol' sequence of
+    ``numpy.random.default_rng(SEED)``, the errors normal through ``dists="norm"``), the model
+    run ``CHUNK`` rows per call, then ``sobol.analyze`` on each output without second-order
+    indices and with its bootstrap at its smallest (two resamples).
+
+    Parameters
+    ----------
+    model : callable
+        ``(m, D)`` errors to ``(m, q)`` outputs.
+    sd : array (D,)
+        Standard deviations of the normal, zero-mean errors.
+    n : int
+        Base rows N (a power of two).
+    stages : dict, optional
+        Filled with the seconds of ``sample``, ``model`` and ``analyze``.
+
+    Returns
+    -------
+    s1, st : arrays (D, q)
+        First-order and total indices.
+    """
+    from SALib.analyze import sobol as analyze
+    from SALib.sample import sobol as sample
+
+    d = len(sd)
+    problem = dict(num_vars=d, names=[f"e{i + 1}" for i in range(d)],
+                   bounds=[[0.0, float(s)] for s in sd], dists=["norm"] * d)
     t0 = time.perf_counter()
-    s1, st = S.sobol_indices(lambda e: e @ jac.T, design, chunk=250_000)
-    t = time.perf_counter() - t0
-    exact = S.linear_indices(jac, sd=sd)             # (41, 6), exact for a linear model: S1 = ST
+    x = sample.sample(problem, n, calc_second_order=False, seed=np.random.default_rng(SEED))
+    t1 = time.perf_counter()
+    y = np.concatenate([model(x[s:s + CHUNK]) for s in range(0, len(x), CHUNK)])
+    del x
+    t2 = time.perf_counter()
+    res = [analyze.analyze(problem, y[:, k], calc_second_order=False, num_resamples=2, seed=1)
+           for k in range(y.shape[1])]
+    t3 = time.perf_counter()
+    if stages is not None:
+        stages.update(sample=t1 - t0, model=t2 - t1, analyze=t3 - t2)
+    return (np.array([r["S1"] for r in res]).T, np.array([r["ST"] for r in res]).T)
+
+
+def _sobol_task(tool: str, case: str, n: int, repeat: int) -> dict:
+    """One Sobol' row: ``tool`` (ours, salib) on ``case`` with N = ``n``; ``repeat`` 0 is one run.
+
+    Returns the time, the largest errors of S1 and ST against the closed form, the indices
+    themselves (for the comparison of the two tools) and a note."""
+    model, sd, exact = _sobol_case(case)
+    stages: dict = {}
+
+    def run():
+        if tool == "ours":
+            return ours_sobol(model, sd, n), {}
+        seconds: dict = {}
+        return salib_sobol(model, sd, n, stages=seconds), seconds
+    if repeat:
+        run()                                   # warm-up
+    t = np.inf
+    for _ in range(max(repeat, 1)):             # the best run, with its own stages
+        t0 = time.perf_counter()
+        (s1, st), seconds = run()
+        dt = time.perf_counter() - t0
+        if dt < t:
+            t, stages = dt, seconds
+    how = f"min of {repeat}" if repeat else "one run"
+    note = f"{how}; {n * (len(sd) + 2) / t / 1e6:.2g} M runs/s"
+    if stages:
+        note += "; " + ", ".join(f"{k} {v:.2f} s" for k, v in stages.items())
     return dict(time=t, err_s1=float(np.abs(s1 - exact).max()),
                 err_st=float(np.abs(st - exact).max()),
-                note=f"one run; {n * 43 / t / 1e6:.1f} M runs/s")
+                indices=[np.asarray(s1).tolist(), np.asarray(st).tolist()], note=note)
+
+
+def _sobol_memory(n: int) -> dict:
+    """Sobol' indices of the Zheng machine's first-order model, streamed; one run.
+
+    41 errors, six outputs (``e @ J.T``: runs cost little, so the memory is the estimator's),
+    from a Sobol' design of ``n`` base rows (``SobolDesign``), sampling included.  The peak
+    should not grow with n once n exceeds ``sensitivity.BASE_ROWS``."""
+    return _sobol_task("ours", "linear", n, 0)
 
 
 def task_zheng_linear_pose():
@@ -244,8 +391,8 @@ def _task_openturns(name):
     try:
         import openturns as ot
     except ImportError:
-        return dict(time=float("nan"), note="OpenTURNS not installed (pip install openturns): "
-                                            "skipped")
+        return dict(time=float("nan"), note="OpenTURNS not importable in this Python: skipped "
+                                            "(--with-openturns runs it in a venv of its own)")
     b, x, y, _, degree, repeat = _case(name)
     d = x.shape[1]
     dists = [ot.Uniform(*m.support()) for m in b.inputs.marginals]
@@ -267,7 +414,7 @@ def _task_openturns(name):
                 res.getIndices().getSize())
     if repeat:
         t, (s1, st, terms) = _min_time(run, repeat)
-    else:  # one run (a minute): no warm-up
+    else:  # one run, no warm-up (g_function_41d: over 25 min with openturns 1.27.post1 here)
         t0 = time.perf_counter()
         s1, st, terms = run()
         t = time.perf_counter() - t0
@@ -361,12 +508,48 @@ TASKS = {
     "zheng_mcs": task_zheng_mcs,
     "zheng_linear_pose": task_zheng_linear_pose,
     "zheng_linear_atlas": task_zheng_linear_atlas,
+    **{f"zheng_sobol_n{n}": (lambda n=n: _sobol_task("ours", "zheng", n, 0 if n >= 2**17
+                                                     else REPEAT)) for n in ZHENG_SOBOL_N},
+    **{f"zheng_salib_n{n}": (lambda n=n: _sobol_task("salib", "zheng", n, 0 if n >= 2**17
+                                                     else REPEAT)) for n in ZHENG_SOBOL_N},
     **dict(_pce_tasks()),
-    **{f"sobol_memory_{k}": (lambda n=n: _sobol_memory(n)) for k, n in SOBOL_MEMORY_N.items()},
+    **{f"sobol_memory_n{n}": (lambda n=n: _sobol_memory(n)) for n in SOBOL_MEMORY_N},
+    **{f"sobol_memory_salib_n{n}": (lambda n=n: _sobol_task("salib", "linear", n, 0))
+       for n in SALIB_MEMORY_N},
 }
 
+#: modules a task's process imports before its memory baseline, by a word of the task's name
+#: (a peer's package counts as ours does: not in the task's memory)
+TASK_IMPORTS = {"salib": ("SALib.sample.sobol", "SALib.analyze.sobol"),
+                "openturns": ("openturns",)}
+
+#: our task -> the peer's task it is compared with (the ratio goes in our row's note)
+PEERS = {**{f"zheng_sobol_n{n}": f"zheng_salib_n{n}" for n in ZHENG_SOBOL_N},
+         **{f"sobol_memory_n{n}": f"sobol_memory_salib_n{n}" for n in SALIB_MEMORY_N},
+         **{f"pce_{c}_{m}": f"pce_{c}_openturns" for c in PCE_CASES for m in ("omp", "lars")}}
+
 #: rows left out by --quick (a few minutes)
-FULL_ONLY = {"sobol_memory_1e7"}
+FULL_ONLY = {f"sobol_memory_n{2**23}", f"zheng_sobol_n{2**17}", f"zheng_salib_n{2**17}",
+             f"sobol_memory_salib_n{2**17}"}
+
+
+def _sobol_rows():
+    """The rows of the Zheng Sobol' comparison, ours then SALib's at each N."""
+    for n in ZHENG_SOBOL_N:
+        size = f"N {_power(n)}, {n * 43:.1e} runs"
+        yield ("Zheng 2024", f"zheng_sobol_n{n}", "Sobol' (S1, ST), ours", size, "", None)
+        yield ("Zheng 2024", f"zheng_salib_n{n}", "Sobol' (S1, ST), SALib", size, "", None)
+
+
+def _memory_rows():
+    """The memory-against-N rows, SALib's beside ours where it runs."""
+    for n in SOBOL_MEMORY_N:
+        size = f"N {_power(n)}, 43 N runs"
+        yield ("memory", f"sobol_memory_n{n}", "Sobol streamed, linear 41 x 6", size,
+               "peak flat in N", None)
+        if n in SALIB_MEMORY_N:
+            yield ("memory", f"sobol_memory_salib_n{n}", "SALib, linear 41 x 6", size, "", None)
+
 
 #: (paper, task, what, size, target, published seconds)
 ROWS = [
@@ -381,8 +564,8 @@ ROWS = [
     ("Zheng 2024", "zheng_pce_six", "PCE, all six components", "n 1e3, degree 3", "", 7.8761),
     ("Zheng 2024", "zheng_mcs", "MCS Sobol (S1, ST), one pose", "N 1e5, 4.3e6 runs",
      "<= 3 s, <= 300 MB", 244.0789),
-    *[("memory", f"sobol_memory_{k}", "Sobol streamed, linear 41 x 6", f"N {k}, 43 N runs",
-       "peak flat in N", None) for k in SOBOL_MEMORY_N],
+    *_sobol_rows(),
+    *_memory_rows(),
     ("Zheng 2024", "zheng_linear_pose", "linear closed form, one pose", "41 x 6, Jacobian incl.",
      "<= 1 ms", None),
     ("Zheng 2024", "zheng_linear_atlas", "linear closed form, pose atlas", "1e4 poses in travels",
@@ -401,26 +584,180 @@ def run_task(name: str) -> dict:
     """Run one task in this process; its time, peak RSS and the task's own memory.
 
     The task's own memory is its peak RSS above the process with the library imported (numpy,
-    scipy, pandas, scikit-learn, chaospy: about 120 MB, the same for every task), MB."""
+    scipy, pandas, scikit-learn, chaospy: about 120 MB, the same for every task) and the peer's
+    package a peer's task measures (``TASK_IMPORTS``), MB."""
+    import importlib
+
     from .. import machines, sensitivity  # noqa: F401
 
+    for word, modules in TASK_IMPORTS.items():
+        if word in name:
+            for module in modules:
+                try:
+                    importlib.import_module(module)
+                except ImportError:   # the task says so itself
+                    pass
     start = _rss_mb()
     out = TASKS[name]()
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return dict(out, peak_mb=peak, task_mb=peak - start)
 
 
-def _in_subprocess(name: str, timeout: float | None = None) -> dict:
+def _failed(note: str) -> dict:
+    """A row that has no measurement, with the reason."""
+    return dict(time=float("nan"), peak_mb=float("nan"), task_mb=float("nan"), note=note)
+
+
+def _lib_dir() -> str:
+    """The folder holding the ``mtaccuracy`` package this bench runs from."""
+    return str(Path(__file__).resolve().parents[2])
+
+
+def _in_subprocess(name: str, timeout: float | None = None, python: str | None = None) -> dict:
+    """Run task ``name`` in a fresh process of ``python`` (default: this one); its JSON."""
+    path = os.environ.get("PYTHONPATH", "")
+    env = dict(os.environ, PYTHONPATH=_lib_dir() + (os.pathsep + path if path else ""))
     try:
-        res = subprocess.run([sys.executable, "-m", "mtaccuracy.compendium.bench", "--task", name],
-                             capture_output=True, text=True, timeout=timeout)
+        res = subprocess.run([python or sys.executable, "-m", "mtaccuracy.compendium.bench",
+                              "--task", name], capture_output=True, text=True, timeout=timeout,
+                             env=env)
     except subprocess.TimeoutExpired:
-        return dict(time=float("nan"), peak_mb=float("nan"), task_mb=float("nan"),
-                    note=f"stopped after {timeout:.0f} s (--timeout)")
+        return _failed(f"stopped after {timeout:.0f} s (--timeout)")
     if res.returncode != 0:
-        return dict(time=float("nan"), peak_mb=float("nan"), task_mb=float("nan"),
-                    note="FAILED: " + (res.stderr.strip().splitlines() or ["?"])[-1])
+        return _failed("FAILED: " + (res.stderr.strip().splitlines() or ["?"])[-1])
     return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+# ------------------------------------------------------------------------------------------
+# OpenTURNS in an environment of its own (--with-openturns)
+# ------------------------------------------------------------------------------------------
+
+#: what ``--with-openturns`` installs into ``build/bench-openturns/`` (from PyPI)
+OPENTURNS_REQUIREMENT = "openturns==1.27.post1"
+
+#: the .pth file through which the OpenTURNS environment sees the project's packages
+PROJECT_PTH = "mtaccuracy-bench-project.pth"
+
+NO_OPENTURNS = ("not run: --with-openturns (BENCH_ARGS=--with-openturns make bench) installs "
+                "OpenTURNS into build/bench-openturns/, a venv of its own, and runs these rows")
+
+
+def openturns_env() -> Path:
+    """The folder of the bench's OpenTURNS environment, ``build/bench-openturns/``.
+
+    Returns
+    -------
+    pathlib.Path
+        Under the repository's root (``build/`` is ignored by git).
+    """
+    from . import paths
+
+    return paths.ROOT / "build" / "bench-openturns"
+
+
+def openturns_env_commands(env: Path, *, python: str | None = None) -> list[list[str]]:
+    """The commands that make the OpenTURNS environment: a venv, then pip install into it.
+
+    The venv is made by this Python (so it is of the same version) without
+    ``--system-site-packages`` (that would show the base interpreter's packages, not the
+    project's); :func:`ensure_openturns_env` writes the ``.pth`` file through which it sees
+    the project's between the two.  pip runs as the new environment's Python, so OpenTURNS
+    (and only what it lacks of its dependencies) lands there, never in the project's.
+
+    Parameters
+    ----------
+    env : pathlib.Path
+        The environment's folder.
+    python : str, optional
+        The Python that makes the venv (default: this one, ``sys.executable``).
+
+    Returns
+    -------
+    list of list of str
+        The ``venv`` command, then the ``pip install`` command.
+    """
+    env_python = str(env / "bin" / "python")
+    return [[python or sys.executable, "-m", "venv", str(env)],
+            [env_python, "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
+             OPENTURNS_REQUIREMENT]]
+
+
+def project_pth(site_dirs) -> str:
+    """The ``.pth`` text that adds the project's site folders (and their own .pth files).
+
+    Parameters
+    ----------
+    site_dirs : sequence of str
+        The project environment's site-packages folders.
+
+    Returns
+    -------
+    str
+        One ``import site; site.addsitedir(...)`` line per folder (``addsitedir`` also
+        processes the folder's ``.pth`` files, e.g. an editable install's).
+    """
+    return "".join(f"import site; site.addsitedir({str(d)!r})\n" for d in site_dirs)
+
+
+def _site_dirs() -> list[str]:
+    """This environment's site-packages folders (pure and platform), once each."""
+    import sysconfig
+
+    return list(dict.fromkeys(sysconfig.get_paths()[k] for k in ("purelib", "platlib")))
+
+
+def ensure_openturns_env(env: Path | None = None, *, run=subprocess.run) -> Path:
+    """The Python of the bench's OpenTURNS environment, made the first time it is asked for.
+
+    An environment whose Python imports ``openturns`` is used as it is; otherwise it is made:
+    :func:`openturns_env_commands`' venv, the ``.pth`` file of :func:`project_pth` in its
+    site-packages (so that it runs the project's numpy, scipy, ... and this library), then
+    the pip install.
+
+    Parameters
+    ----------
+    env : pathlib.Path, optional
+        The environment's folder (default :func:`openturns_env`).
+    run : callable
+        Runs a command (``subprocess.run``'s signature; a test passes a recorder).
+
+    Returns
+    -------
+    pathlib.Path
+        The environment's Python.
+
+    Raises
+    ------
+    subprocess.CalledProcessError
+        If making the venv or installing OpenTURNS fails (e.g. PyPI unreachable).
+    """
+    env = openturns_env() if env is None else env
+    python = env / "bin" / "python"
+    if python.exists() and run([str(python), "-c", "import openturns"],
+                               capture_output=True).returncode == 0:
+        return python
+    make_venv, install = openturns_env_commands(env)
+    run(make_venv, check=True)
+    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+    site = env / "lib" / version / "site-packages"
+    (site / PROJECT_PTH).write_text(project_pth(_site_dirs()), encoding="utf-8")
+    run(install, check=True)
+    return python
+
+
+def _peer_note(ours: dict, peer: dict, name: str) -> str:
+    """``; SALib 20x the time, ...``: the peer's time and memory over ours, and the indices."""
+    if not (peer.get("time", float("nan")) > 0 and ours.get("time", float("nan")) > 0):
+        return ""
+    def times(x):
+        return f"{x:.1f}x" if x >= 1 else f"{x:.2g}x"
+    note = (f"; {name} {times(peer['time'] / ours['time'])} the time, "
+            f"{times(peer['task_mb'] / max(ours['task_mb'], 1.0))} the task MB, "
+            f"{times(peer['peak_mb'] / ours['peak_mb'])} the peak")
+    if "indices" in ours and "indices" in peer:
+        diff = np.abs(np.asarray(ours["indices"]) - np.asarray(peer["indices"])).max()
+        note += f"; indices agree to {diff:.0e}"
+    return note
 
 
 _MEASURE = """
@@ -460,17 +797,33 @@ def _command_rows(repeat: int = 2):
 
 
 def main(argv=None) -> int:
+    """Run the rows (each task in a process of its own) and print the table, or one task.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Command-line arguments (default ``sys.argv[1:]``); ``--help`` lists them.
+
+    Returns
+    -------
+    int
+        The exit status, 0.
+    """
     import argparse
     import shlex
 
     ap = argparse.ArgumentParser(prog="python -m mtaccuracy.compendium.bench")
     ap.add_argument("--quick", action="store_true",
-                    help="skip timing make reproduce and make test, and the N = 1e7 "
-                         "memory row (a few minutes)")
+                    help="skip timing make reproduce and make test, the N = 2^23 memory row "
+                         "and the N = 2^17 SALib rows (a few minutes)")
     ap.add_argument("--from-env", action="store_true",
                     help="also read arguments from $BENCH_ARGS (as make bench passes them)")
     ap.add_argument("--task", choices=sorted(TASKS), help="run one task here, print JSON")
-    ap.add_argument("--only", default="", help="run only the rows whose task contains this")
+    ap.add_argument("--only", default="",
+                    help="run only the rows whose task contains this (and their peers)")
+    ap.add_argument("--with-openturns", action="store_true",
+                    help="run the OpenTURNS rows in build/bench-openturns/, a venv of their own "
+                         "that is made (with OpenTURNS from PyPI) the first time")
     ap.add_argument("--timeout", type=float, default=600.0,
                     help="stop an OpenTURNS task after this many seconds (default 600)")
     args = ap.parse_args(argv)
@@ -479,6 +832,18 @@ def main(argv=None) -> int:
     if args.task:
         print(json.dumps(run_task(args.task)))
         return 0
+    left_out = FULL_ONLY if args.quick else set()
+    chosen = {t for _, t, *_ in ROWS if args.only in t} - left_out
+    chosen |= ({p for t, p in PEERS.items() if t in chosen}
+               | {t for t, p in PEERS.items() if p in chosen}) - left_out
+    ot_python, ot_note = None, NO_OPENTURNS
+    if args.with_openturns and any(t.endswith("openturns") for t in chosen):
+        print(f"OpenTURNS environment: {openturns_env()} ({OPENTURNS_REQUIREMENT}; made once)",
+              flush=True)
+        try:
+            ot_python = str(ensure_openturns_env())
+        except (OSError, subprocess.CalledProcessError) as exc:
+            ot_note = f"FAILED to make the OpenTURNS environment: {exc}"
     head = (f"{'paper':<10} {'what':<34} {'size':<30} {'min time':>9}  {'target':<18} "
             f"{'peak MB':>8} {'task MB':>8} {'err S1':>8} {'err ST':>8}  note")
     print(head)
@@ -493,10 +858,26 @@ def main(argv=None) -> int:
         print(f"{paper:<10} {what:<34} {size:<30} {r['time']:>8.3f}s  {target:<18} "
               f"{r['peak_mb']:>8.0f} {r['task_mb']:>8.0f} {e1} {et}  {note}", flush=True)
 
+    results: dict = {}
+
+    def result(task):
+        if task not in results:
+            if not task.endswith("openturns"):
+                results[task] = _in_subprocess(task)
+            elif ot_python is None:
+                results[task] = _failed(ot_note)
+            else:
+                results[task] = _in_subprocess(task, args.timeout, python=ot_python)
+        return results[task]
+
     for paper, task, what, size, target, published in ROWS:
-        if args.only in task and not (args.quick and task in FULL_ONLY):
-            limit = args.timeout if task.endswith("openturns") else None
-            show(paper, what, size, target, _in_subprocess(task, limit), published)
+        if task in chosen:
+            r = dict(result(task))
+            if PEERS.get(task) in chosen:
+                peer = PEERS[task]
+                r["note"] = r.get("note", "") + _peer_note(
+                    r, result(peer), "OpenTURNS" if peer.endswith("openturns") else "SALib")
+            show(paper, what, size, target, r, published)
     if not args.quick and not args.only:
         for what, size, target, r in _command_rows():
             show("all", what, size, target, r)
