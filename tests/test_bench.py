@@ -11,11 +11,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from mtaccuracy.compendium import bench
+from mtaccuracy.apps import bench, bench_tasks
 
 
 def test_a_task_runs_in_its_own_process_and_reports_json():
-    out = subprocess.run([sys.executable, "-m", "mtaccuracy.compendium.bench", "--task",
+    out = subprocess.run([sys.executable, "-m", "mtaccuracy.apps.bench", "--task",
                           "pce_interaction_polynomial_omp"], capture_output=True, text=True,
                          check=True)
     r = json.loads(out.stdout.strip().splitlines()[-1])
@@ -33,19 +33,19 @@ def test_the_subprocess_imports_the_library_the_bench_runs_from(monkeypatch):
     monkeypatch.setattr(bench.subprocess, "run", fake_run)
     monkeypatch.setenv("PYTHONPATH", "/elsewhere")
     assert bench._in_subprocess("zheng_mcs", python="/other/python") == {"time": 1.0}
-    assert seen["cmd"] == ["/other/python", "-m", "mtaccuracy.compendium.bench", "--task",
+    assert seen["cmd"] == ["/other/python", "-m", "mtaccuracy.apps.bench", "--task",
                            "zheng_mcs"]
     lib = seen["env"]["PYTHONPATH"].split(":")
-    assert Path(lib[0], "mtaccuracy", "compendium", "bench.py").samefile(bench.__file__)
+    assert Path(lib[0], "mtaccuracy", "apps", "bench.py").samefile(bench.__file__)
     assert lib[1:] == ["/elsewhere"]
 
 
 def test_salib_and_ours_draw_one_design_and_agree_with_the_closed_form():
-    model, sd, exact = bench._sobol_case("linear")   # linear: the closed form is exact
+    model, sd, exact = bench_tasks._sobol_case("linear")   # linear: the closed form is exact
     n = 2**10
     stages = {}
-    s1, st = bench.salib_sobol(model, sd, n, stages=stages)
-    o1, ot = bench.ours_sobol(model, sd, n)
+    s1, st = bench_tasks.salib_sobol(model, sd, n, stages=stages)
+    o1, ot = bench_tasks.ours_sobol(model, sd, n)
     assert s1.shape == st.shape == exact.shape == (41, 6)
     assert set(stages) == {"sample", "model", "analyze"}
     # the same Sobol' points and the same estimators: the same numbers, to rounding
@@ -54,12 +54,12 @@ def test_salib_and_ours_draw_one_design_and_agree_with_the_closed_form():
     # and 0.012 (ST), their mean 0.016 and 0.004
     assert np.abs(s1 - exact).max() < 0.05 and np.abs(st - exact).max() < 0.03
     # and they do depend on the design: another N gives other numbers
-    assert np.abs(bench.ours_sobol(model, sd, 2**9)[0] - o1).max() > 1e-6
+    assert np.abs(bench_tasks.ours_sobol(model, sd, 2**9)[0] - o1).max() > 1e-6
 
 
 def test_a_sobol_row_reports_errors_indices_and_salib_stages(monkeypatch):
-    monkeypatch.setattr(bench, "_sobol_case", _small_case)
-    r = bench._sobol_task("salib", "linear", 2**8, 0)
+    monkeypatch.setattr(bench_tasks, "_sobol_case", _small_case)
+    r = bench_tasks._sobol_task("salib", "linear", 2**8, 0)
     assert r["time"] > 0 and "one run" in r["note"] and "sample" in r["note"]
     s1, st = (np.asarray(a) for a in r["indices"])
     assert s1.shape == (3, 2) and r["err_st"] == pytest.approx(
@@ -93,7 +93,7 @@ def test_openturns_rows_are_skipped_with_a_message_when_it_is_absent(monkeypatch
             raise ImportError("no openturns")
         return real(name, *a, **k)
     monkeypatch.setattr(builtins, "__import__", no_openturns)
-    r = bench._task_openturns("interaction_polynomial")
+    r = bench_tasks._task_openturns("interaction_polynomial")
     assert "--with-openturns" in r["note"] and r["time"] != r["time"]  # NaN time
 
 
@@ -188,5 +188,5 @@ def test_memory_rows_go_up_in_n_and_quick_leaves_out_the_largest(monkeypatch):
 
 
 def test_the_memory_task_estimates_the_linear_model():
-    r = bench._sobol_memory(2**10)      # a linear model: S1 = ST = the closed form
+    r = bench_tasks._sobol_memory(2**10)      # a linear model: S1 = ST = the closed form
     assert r["err_s1"] < 0.05 and r["err_st"] < 0.05 and r["time"] > 0
