@@ -2,15 +2,15 @@
 
 The estimators are SALib's (``SALib.analyze.sobol`` with ``calc_second_order=False``):
 Saltelli et al. 2010 for the first order, Jansen 1999 for the total index, on outputs
-standardised over all N(D+2) runs.  SALib's sampler materialises every run at once (at D=41,
-N=2^17, ``make bench`` measures 75 s of sampling and a 4.1 GB peak).  Here
-:func:`sobol_indices` takes the base rows :data:`BASE_ROWS` at a time: given a :class:`SobolDesign` it draws them block by block
-through :meth:`~mtaccuracy.sensitivity.Inputs.sample_blocks`, the package's one sampler (the
-Monte Carlo stream and the Sobol' sequence continue exactly where the previous block ended),
-builds and evaluates each AB_i block chunk by chunk, and keeps per-block sums, so the model sees
-one batched call per chunk and memory is flat in N; with ``n_boot=`` it accumulates the
-bootstrap intervals the same way (:mod:`~mtaccuracy.sensitivity.bootstrap`, the Poisson
-bootstrap).  A test checks these numbers against SALib's at small N.
+standardised over all N(D+2) runs. SALib's sampler materialises every run at once (at D=41,
+N=2^17, ``make bench`` measures 75 s of sampling and a 4.1 GB peak). Here :func:`sobol_indices`
+takes the base rows :data:`BASE_ROWS` at a time: given a :class:`SobolDesign` it draws them
+block by block through :meth:`~mtaccuracy.sensitivity.Inputs.sample_blocks`, the package's one
+sampler (the Monte Carlo stream and the Sobol' sequence continue exactly where the previous
+block ended), builds and evaluates each AB_i block chunk by chunk, and keeps per-block sums, so
+the model sees one batched call per chunk and memory is flat in N; with ``n_boot=`` it
+accumulates the bootstrap intervals the same way (:mod:`~mtaccuracy.sensitivity.bootstrap`, the
+Poisson bootstrap). A test checks these numbers against SALib's at small N.
 
 Layout: ``ya``, ``yb`` are (N, q); ``yab`` is (D, N, q) with ``yab[i]`` the model on AB_i (A
 with column i taken from B); indices are (D, q), inputs by outputs.  Given an
