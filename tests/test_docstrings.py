@@ -380,7 +380,7 @@ def compendium_summary_problems() -> list[str]:
     out = []
     lib = Path(mtaccuracy.__file__).parent
     for path in sorted(p for room in ("papers", "compendium", "apps")
-                       for p in (lib / room).glob("*.py")):
+                       for p in (lib / room).rglob("*.py")):
         tree = ast.parse(path.read_text(encoding="utf-8"))
         out += summary_problems(path.name, ast.get_docstring(tree) or "")
         for name, doc in _summaries(tree, path.stem):

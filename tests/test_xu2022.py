@@ -99,10 +99,14 @@ def _same_as_committed(folder: Path) -> bool:
 
 @pytest.fixture
 def committed_copy(tmp_path, monkeypatch):
-    """A copy of data/thermal that :mod:`xu2022` takes for the committed folder."""
+    """A copy of data/thermal that :mod:`xu2022` takes for the committed folder.
+
+    Patched where :func:`xu2022.regenerate` and :func:`xu2022.reconstruction_seed` read it
+    (:mod:`xu2022.data`); ``xu2022.DATA`` stays the committed folder, which the tests compare
+    the copy with."""
     copy = tmp_path / "data" / "thermal"
     shutil.copytree(xu2022.DATA, copy)
-    monkeypatch.setattr(xu2022, "DATA", copy)
+    monkeypatch.setattr(xu2022.data, "DATA", copy)
     return copy
 
 

@@ -1,10 +1,10 @@
 """Paper code: what serves one chapter of the compendium and no reader's own work.
 
-One module per paper, and one per own-data chapter; each holds that chapter's fits to published
-values, typo analyses, reconstructions, checks of its notebook's parameters, scorecard helpers
-and figures (with their captions, beside the code that draws them).  They import the science
-packages, never the workflow or the apps (:mod:`mtaccuracy.compendium`, :mod:`mtaccuracy.apps`;
-``tests/test_layering.py``).
+One module (or package) per paper, and one per own-data chapter; each holds that chapter's fits
+to published values, typo analyses, reconstructions, checks of its notebook's parameters,
+scorecard helpers and figures (with their captions, beside the code that draws them). They
+import the science packages, never the workflow or the apps (:mod:`mtaccuracy.compendium`,
+:mod:`mtaccuracy.apps`; ``tests/test_layering.py``).
 
 =========================  ===================================================================
 ``parameters``             how a notebook's parameters are declared (``param``) and checked
