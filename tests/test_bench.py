@@ -1,10 +1,12 @@
 """``make bench``: a task runs in a process of its own and reports time, memory and index errors;
-SALib runs the same Sobol' design as ours; OpenTURNS gets an environment of its own."""
+SALib runs the same Sobol' design as ours; OpenTURNS gets an environment of its own; make's
+targets are timed in fresh clones.  Nothing here is timed."""
 
 import builtins
 import json
 import subprocess
 import sys
+import sysconfig
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -41,10 +43,10 @@ def test_the_subprocess_imports_the_library_the_bench_runs_from(monkeypatch):
 
 
 def test_salib_and_ours_draw_one_design_and_agree_with_the_closed_form():
-    model, sd, exact = bench_tasks._sobol_case("linear")   # linear: the closed form is exact
+    model, sd, exact = bench_tasks.sobol_case("linear")   # linear: the closed form is exact
     n = 2**10
     stages = {}
-    s1, st = bench_tasks.salib_sobol(model, sd, n, stages=stages)
+    s1, st = bench_tasks.salib_sobol(model, sd, n, stages)
     o1, ot = bench_tasks.ours_sobol(model, sd, n)
     assert s1.shape == st.shape == exact.shape == (41, 6)
     assert set(stages) == {"sample", "model", "analyze"}
@@ -57,21 +59,40 @@ def test_salib_and_ours_draw_one_design_and_agree_with_the_closed_form():
     assert np.abs(bench_tasks.ours_sobol(model, sd, 2**9)[0] - o1).max() > 1e-6
 
 
-def test_a_sobol_row_reports_errors_indices_and_salib_stages(monkeypatch):
-    monkeypatch.setattr(bench_tasks, "_sobol_case", _small_case)
-    r = bench_tasks._sobol_task("salib", "linear", 2**8, 0)
-    assert r["time"] > 0 and "one run" in r["note"] and "sample" in r["note"]
-    s1, st = (np.asarray(a) for a in r["indices"])
-    assert s1.shape == (3, 2) and r["err_st"] == pytest.approx(
-        np.abs(st - _small_case("linear")[2]).max())
-
-
 def _small_case(case):
     """A linear model of three inputs and two outputs with its exact indices."""
     jac = np.array([[1.0, 2.0, 0.5], [0.0, 1.0, 3.0]])
     sd = np.array([1.0, 0.5, 2.0])
     share = (jac * sd) ** 2
     return (lambda e: e @ jac.T), sd, (share / share.sum(1, keepdims=True)).T
+
+
+def test_a_sobol_row_reports_errors_indices_and_salib_stages(monkeypatch):
+    monkeypatch.setattr(bench_tasks, "sobol_case", _small_case)
+    r = bench_tasks.sobol_task(bench_tasks.salib_sobol, "linear", 2**8)
+    assert r["time"] > 0 and "one run" in r["note"] and "sample" in r["note"]
+    s1, st = (np.asarray(a) for a in r["indices"])
+    assert s1.shape == (3, 2) and r["err_st"] == pytest.approx(
+        np.abs(st - _small_case("linear")[2]).max())
+    ours = bench_tasks.sobol_task(bench_tasks.ours_sobol, "linear", 2**8, 1)
+    assert "min of 1" in ours["note"] and "sample" not in ours["note"]
+
+
+def test_the_memory_task_estimates_the_linear_model():
+    r = bench_tasks.TASKS["sobol_memory_n8192"]()    # a linear model: S1 = ST = the closed form
+    assert r["err_s1"] < 0.01 and r["err_st"] < 0.01 and r["time"] > 0
+
+
+def test_timed_keeps_the_fastest_run_after_a_warm_up():
+    calls = []
+
+    def fn():
+        calls.append(1)
+        return len(calls)
+    t, out = bench_tasks.timed(fn, repeat=2, number=3)
+    assert len(calls) == 9 and out in (6, 9) and t >= 0       # warm-up: calls 1-3, not kept
+    calls.clear()
+    assert bench_tasks.timed(fn, repeat=0)[1] == 1 and calls == [1]   # one run, no warm-up
 
 
 def test_the_peer_note_gives_time_and_memory_ratios_and_index_agreement():
@@ -93,28 +114,14 @@ def test_openturns_rows_are_skipped_with_a_message_when_it_is_absent(monkeypatch
             raise ImportError("no openturns")
         return real(name, *a, **k)
     monkeypatch.setattr(builtins, "__import__", no_openturns)
-    r = bench_tasks._task_openturns("interaction_polynomial")
+    r = bench_tasks.pce_openturns("interaction_polynomial")
     assert "--with-openturns" in r["note"] and r["time"] != r["time"]  # NaN time
 
 
-def test_the_openturns_environment_is_its_own_venv_with_openturns_from_pypi(tmp_path):
+def test_the_openturns_environment_is_made_once_and_sees_the_project_packages(tmp_path):
     env = tmp_path / "bench-openturns"
-    make_venv, install = bench.openturns_env_commands(env, python="/project/.venv/bin/python")
-    # made by the project's Python (same version), without the base interpreter's packages
-    assert make_venv == ["/project/.venv/bin/python", "-m", "venv", str(env)]
-    # pip runs as the new environment's Python: openturns lands there, never in the project's
-    assert install[:4] == [str(env / "bin" / "python"), "-m", "pip", "install"]
-    assert install[-1] == bench.OPENTURNS_REQUIREMENT
-    assert bench.OPENTURNS_REQUIREMENT.startswith("openturns==")
-    assert bench.openturns_env().parts[-2:] == ("build", "bench-openturns")
-
-
-def test_the_environment_is_made_once_and_sees_the_project_packages(tmp_path, monkeypatch):
-    env = tmp_path / "bench-openturns"
-    site = env / "lib" / f"python{sys.version_info.major}.{sys.version_info.minor}" / \
-        "site-packages"
+    site = env / "lib" / f"python{sys.version_info[0]}.{sys.version_info[1]}" / "site-packages"
     ran = []
-    monkeypatch.setattr(bench, "_site_dirs", lambda: ["/project/site-packages"])
 
     def fake_run(cmd, **kw):          # makes the folders a venv would; installs nothing
         ran.append(cmd)
@@ -126,14 +133,20 @@ def test_the_environment_is_made_once_and_sees_the_project_packages(tmp_path, mo
     installed = False
     python = bench.ensure_openturns_env(env, run=fake_run)
     assert python == env / "bin" / "python"
-    assert [c[1:3] for c in ran] == [["-m", "venv"], ["-m", "pip"]]
-    pth = (site / bench.PROJECT_PTH).read_text()
-    assert pth == "import site; site.addsitedir('/project/site-packages')\n"
+    # the venv by the project's Python (same version, without the base interpreter's
+    # packages); then pip as the new environment's Python: openturns lands there alone
+    assert ran == [[sys.executable, "-m", "venv", str(env)],
+                   [str(python), "-m", "pip", "install", "--quiet",
+                    "--disable-pip-version-check", bench.OPENTURNS_REQUIREMENT]]
+    assert bench.OPENTURNS_REQUIREMENT.startswith("openturns==")
+    pth = (site / bench.PROJECT_PTH).read_text().splitlines()
+    assert f"import site; site.addsitedir({sysconfig.get_paths()['purelib']!r})" in pth
     # a second call with openturns importable there runs nothing but that check
     ran.clear()
     installed = True
     assert bench.ensure_openturns_env(env, run=fake_run) == python
     assert ran == [[str(python), "-c", "import openturns"]]
+    assert bench.OPENTURNS_ENV.parts[-2:] == ("build", "bench-openturns")
 
 
 def test_without_the_flag_openturns_rows_say_how_to_get_them(monkeypatch, capsys):
@@ -156,11 +169,17 @@ def test_without_the_flag_openturns_rows_say_how_to_get_them(monkeypatch, capsys
     assert "OpenTURNS 1.0x the time" in capsys.readouterr().out
 
 
-def test_every_row_names_a_task_and_unknown_tasks_are_refused():
-    assert all(task in bench.TASKS for _, task, *_ in bench.ROWS)
-    assert all(t in bench.TASKS and p in bench.TASKS for t, p in bench.PEERS.items())
-    # --quick never runs a peer's row without ours beside it
-    assert all(p in bench.FULL_ONLY or t not in bench.FULL_ONLY for t, p in bench.PEERS.items())
+def test_the_rows_and_their_peers_are_consistent():
+    tasks = [r.task for r in bench_tasks.ROWS]
+    assert len(set(tasks)) == len(tasks) == len(bench.TASKS)
+    for r in bench_tasks.ROWS:
+        if r.peer:    # the peer is a row of its own, after ours, and a peer's rows have none
+            assert tasks.index(r.peer) > tasks.index(r.task)
+            assert bench_tasks.ROWS[tasks.index(r.peer)].peer is None
+            # --quick never runs a peer's row without ours beside it
+            assert bench_tasks.ROWS[tasks.index(r.peer)].full or not r.full
+    assert all(r.peer.endswith("openturns") for r in bench_tasks.ROWS
+               if r.peer and r.task.startswith("pce"))
     with pytest.raises(SystemExit):
         bench.main(["--task", "no_such_task"])
 
@@ -187,6 +206,33 @@ def test_memory_rows_go_up_in_n_and_quick_leaves_out_the_largest(monkeypatch):
     assert ran == ["pce_ishigami_omp", "pce_ishigami_lars"]
 
 
-def test_the_memory_task_estimates_the_linear_model():
-    r = bench_tasks._sobol_memory(2**10)      # a linear model: S1 = ST = the closed form
-    assert r["err_s1"] < 0.05 and r["err_st"] < 0.05 and r["time"] > 0
+def test_make_runs_in_a_fresh_clone_that_leaves_the_shared_venv_alone():
+    ran = []
+
+    def fake_run(cmd, **kw):
+        ran.append((cmd, kw))
+        if isinstance(cmd, str):            # the checksum naming the venv's stamp
+            return SimpleNamespace(stdout="4242 6717\n")
+        return SimpleNamespace(stdout="12.5 204800 0\n")
+    assert bench.make_in_clone("reproduce", run=fake_run) == (12.5, 200.0, 0)
+    (clone_cmd, _), (stamp_cmd, stamp_kw), (make_cmd, _) = ran
+    clone = clone_cmd[-1]
+    assert clone_cmd == ["git", "clone", "-q", str(bench.ROOT), clone]
+    assert not Path(clone).exists()         # removed after the run
+    # make must never remake the stamp of the shared .venv (the clone's files are newer):
+    # the Makefile names it by the same checksum, taken in the clone
+    assert stamp_kw["cwd"] == clone and "cat environment.txt pyproject.toml | cksum" in stamp_cmd
+    makefile = (bench.ROOT / "Makefile").read_text()
+    assert f"STAMP := $(VENV)/.installed-$(shell {stamp_cmd} | cut -d' ' -f1)" in makefile
+    assert make_cmd[-6:] == ["make", "-C", clone, "-o", ".venv/.installed-4242", "reproduce"]
+
+
+def test_each_timed_make_run_has_a_clone_of_its_own(monkeypatch):
+    runs = iter([(80.0, 900.0, 0), (70.0, 950.0, 0), (140.0, 500.0, 0), (130.0, 400.0, 2)])
+    targets = []
+    monkeypatch.setattr(bench, "make_in_clone", lambda t: targets.append(t) or next(runs))
+    (r1, *_, reproduce), (r2, *_, test) = bench._command_rows()
+    # a second make reproduce in one clone would have nothing to do: a clone per run
+    assert targets == ["reproduce", "reproduce", "test", "test"]
+    assert (reproduce["time"], reproduce["peak_mb"], reproduce["note"]) == (70.0, 950.0, "")
+    assert (test["time"], test["note"]) == (130.0, "A RUN FAILED")

@@ -1,94 +1,96 @@
-"""The bench's tasks: each measures one speed target of the issues, in a process of its own.
+"""The bench's rows (:data:`ROWS`) and the tasks that measure them, each in a process of its own.
 
-Each ``task_*`` returns ``dict(time=..., note=..., [err_s1, err_st])``; :data:`TASKS` names
-them for :mod:`mtaccuracy.apps.bench`, which runs each in a fresh Python process so that the
-memory it reports is that task's alone.
-
-Local imports: every task imports what it measures inside itself, so that a process running one
-task loads only that task's libraries (its peak memory is the task's).
+A task returns ``dict(time=..., note=..., [err_s1, err_st, indices])``; :mod:`.bench` runs it in
+a fresh Python process and adds the memory.  Local imports: a task imports the modules only it
+needs (thermal, the explorer, SALib, OpenTURNS) inside itself, so that they count in its memory
+as what it measures; the library's machines and sensitivity are imported before the baseline.
 """
 
 from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
+from functools import partial
+from typing import NamedTuple
 
 import numpy as np
 
-REPEAT = 3
+from .. import errors
+from .. import sensitivity as S
+from ..machines import build
+from ..sensitivity.benchmarks import BENCHMARKS
+
+REPEAT = 3        # timed runs after the warm-up, unless a row says otherwise
+SEED = 2          # the Sobol' designs ours and SALib share: numpy.random.default_rng(SEED)
+CHUNK = 250_000   # model runs per call, ours and SALib's alike
 
 
-def _rss_mb() -> float:
-    """Current resident set size of this process, MB (Linux /proc)."""
+def rss_mb() -> float:
+    """The resident set size of this process now, MB (Linux /proc)."""
     with open("/proc/self/statm") as f:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
 
 
-def _min_time(fn, repeat: int = REPEAT):
-    """Warm-up run, then the minimum wall time of ``repeat`` runs; returns (seconds, result)."""
-    out = fn()
-    best = np.inf
-    for _ in range(repeat):
+def timed(fn: Callable, repeat: int = REPEAT, number: int = 1) -> tuple[float, object]:
+    """``(seconds a call, result)``: the fastest of ``repeat`` runs (0: one) of ``number`` calls.
+
+    A warm-up run goes first unless ``repeat`` is 0.  At most two results are held at a time
+    (the best and the one being made), so that a task's memory is what it makes."""
+    best = (np.inf, None)
+    for i in range(repeat + 1 if repeat else 1):
         t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
+        for _ in range(number):
+            out = fn()
+        dt = (time.perf_counter() - t0) / number
+        if (i or not repeat) and dt < best[0]:
+            best = (dt, out)
+        del out
+    return best
 
-
-# ------------------------------------------------------------------------------------------
-# Tasks: each returns dict(time=..., note=..., [err_s1, err_st]) and runs in its own process.
-# ------------------------------------------------------------------------------------------
 
 def _zheng():
-    from ..machines import build
-
+    """The Zheng et al. machine, its 41 errors' standard deviations and the paper's pose."""
     m = build("ac_double_turntable")
     sd = np.array([e.to_library * (15.0 if e.translational else 10.0) / 3 for e in m.catalogue])
-    pose = dict(x=106.1, y=-58.6, z=-255.3, A=np.deg2rad(60.7), C=np.deg2rad(56.7))
-    return m, sd, pose
+    return m, sd, dict(x=106.1, y=-58.6, z=-255.3, A=np.deg2rad(60.7), C=np.deg2rad(56.7))
 
 
-def task_guo_pose_error():
-    from .. import errors, sensitivity
-    from ..machines import build
-
+def _guo():
+    """The Guo et al. machine, its 21 errors' uniform bounds and the pose."""
     m = build("vertical_xyfz")
     b = errors.uniform_bounds(m.catalogue, {"positioning": (0, 3), "straightness": (0, 4),
                                             "angular": (0, 3.2e-5), "squareness": (0, 1.9)})
-    x = sensitivity.latin_hypercube(1_000_000, b, 0)
-    pose = dict(x=100.0, y=100.0, z=100.0)
-    t, _ = _min_time(lambda: m.pose_error(x, pose))
-    return dict(time=t, note=f"{1 / t:.2f} M samples/s")
+    return m, b, dict(x=100.0, y=100.0, z=100.0)
 
 
-def task_guo_spearman():
-    from .. import errors, sensitivity
-    from ..machines import build
+def pose_error(machine: str) -> dict:
+    """The pose error of ``machine`` (Guo's, Zheng's) for 1e6 error samples."""
+    if machine == "guo":
+        m, b, pose = _guo()
+        x, note = S.latin_hypercube(1_000_000, b, 0), ""
+    else:
+        m, sd, pose = _zheng()
+        x = np.random.default_rng(0).standard_normal((1_000_000, 41))
+        x *= sd
+        note = " (task MB: the 328 MB input, the output)"
+    t, _ = timed(lambda: m.pose_error(x, pose))
+    return dict(time=t, note=f"{1 / t:.2f} M samples/s{note}")
 
-    m = build("vertical_xyfz")
-    b = errors.uniform_bounds(m.catalogue, {"positioning": (0, 3), "straightness": (0, 4),
-                                            "angular": (0, 3.2e-5), "squareness": (0, 1.9)})
-    pose = dict(x=100.0, y=100.0, z=100.0)
-    d = sensitivity.repeated_latin_hypercube(500, b, repeats=200, seed=2)
-    y = sensitivity.position_outputs(m.pose_error(d.reshape(-1, 21), pose)).reshape(200, 500, 4)
-    t, _ = _min_time(lambda: sensitivity.spearman(d, y))
-    return dict(time=t, note="")
+
+def guo_spearman() -> dict:
+    """Spearman's coefficients of 200 repeats of 500 samples, 21 errors, 4 outputs, batched."""
+    m, b, pose = _guo()
+    d = S.repeated_latin_hypercube(500, b, repeats=200, seed=2)
+    y = S.position_outputs(m.pose_error(d.reshape(-1, 21), pose)).reshape(200, 500, 4)
+    return dict(time=timed(lambda: S.spearman(d, y))[0], note="")
 
 
-def task_zheng_pose_error():
+def zheng_pce(components) -> dict:
+    """Zheng et al.'s degree-3 PCE of the pose error's ``components`` from 1000 LHS samples."""
     m, sd, pose = _zheng()
-    x = np.random.default_rng(0).standard_normal((1_000_000, 41))
-    x *= sd
-    t, _ = _min_time(lambda: m.pose_error(x, pose))
-    return dict(time=t, note=f"{1 / t:.2f} M samples/s (task MB: the 328 MB input, the output)")
-
-
-def _zheng_pce(components):
-    from .. import sensitivity as S
-
-    m, sd, pose = _zheng()
-    u = S.base_samples(1000, 41, method="lhs", seed=1)[0]
-    xi = S.Inputs.normal(0.0, np.ones(41)).from_unit(u)
+    xi = S.Inputs.normal(0.0, np.ones(41)).from_unit(
+        S.base_samples(1000, 41, method="lhs", seed=1)[0])
     yv = m.pose_error(xi * sd, pose)
 
     def run():
@@ -96,62 +98,26 @@ def _zheng_pce(components):
         psi = S.design_matrix(xi, alphas)
         fits = S.fit_pce_outputs(xi, yv[:, list(components)], psi=psi, alphas=alphas)
         return [S.pce_sobol(f) for f in fits]
-    t, out = _min_time(run)
-    return dict(time=t, note=f"terms kept: {', '.join(str(int((o[1] > 0).sum())) for o in out)}"
-                             " inputs with an index")
+    t, out = timed(run)
+    kept = ", ".join(str(int((o[1] > 0).sum())) for o in out)
+    return dict(time=t, note=f"terms kept: {kept} inputs with an index")
 
 
-def task_zheng_pce_one():
-    return _zheng_pce([0])
-
-
-def task_zheng_pce_six():
-    return _zheng_pce(range(6))
-
-
-def task_zheng_mcs():
-    from .. import sensitivity as S
-
+def zheng_mcs() -> dict:
+    """Monte Carlo Sobol' indices at N = 1e5, sampling included, streamed 250 000 runs a call."""
     m, sd, pose = _zheng()
     design = S.SobolDesign(100_000, S.Inputs.normal(0.0, sd), method="mc", seed=2)
-
-    def run():   # sampling included; streamed: the base rows and AB runs are never all held
-        return S.sobol_indices(lambda z: m.pose_error(z, pose), design, chunk=250_000)
-    t, (s1, st) = _min_time(run)
+    t, (s1, st) = timed(lambda: S.sobol_indices(lambda z: m.pose_error(z, pose), design,
+                                                chunk=CHUNK))
     lin = S.linear_indices(m.jacobian(pose), sd=sd)[0]
     return dict(time=t, note=f"largest |ST - linear closed form| {np.abs(st - lin).max():.1e}")
 
 
-#: seed of the Sobol' designs that ours and SALib share (``numpy.random.default_rng(SEED)``)
-SEED = 2
+def sobol_case(case: str):
+    """``(model, sd, exact (41, 6))``: ``zheng``, the machine, or ``linear``, its linear model.
 
-#: model runs per call, for ours and for SALib alike
-CHUNK = 250_000
-
-#: base rows N of the memory-against-N rows (the last only without --quick): powers of two, so
-#: that the Sobol' design keeps its balance and SALib's sampler takes the same N
-SOBOL_MEMORY_N = [2**13, 2**17, 2**20, 2**23]
-
-#: N of the rows where SALib runs the memory task too (its sample matrix: 14.8 GB at 2^20)
-SALIB_MEMORY_N = [2**13, 2**17]
-
-#: N of the Zheng Sobol' rows, ours and SALib's (2^17 only without --quick)
-ZHENG_SOBOL_N = [2**14, 2**17]
-
-
-def _power(n: int) -> str:
-    """``2^k`` for a power of two ``n``."""
-    return f"2^{n.bit_length() - 1}"
-
-
-def _sobol_case(case: str):
-    """(model, sd, exact indices (41, 6)) of a Sobol' comparison case.
-
-    ``zheng``: the machine's pose error at the paper's pose; ``linear``: its first-order model
-    ``e @ J.T`` (runs cost little, so the memory is the estimator's), for which the closed form
-    is exact."""
-    from .. import sensitivity as S
-
+    The closed form on the Jacobian is exact for ``linear`` (whose runs cost little, so that
+    its memory is the estimator's) and the first-order answer for ``zheng``."""
     m, sd, pose = _zheng()
     if case == "zheng":
         return (lambda e: m.pose_error(e, pose)), sd, S.linear_indices(m.jacobian(pose), sd=sd)[0]
@@ -159,54 +125,18 @@ def _sobol_case(case: str):
     return (lambda e: e @ jac.T), sd, S.linear_indices(jac, sd=sd)
 
 
-def ours_sobol(model, sd, n: int):
-    """Our Sobol' indices (S1, ST), streamed from a scrambled Sobol' design of ``n`` base rows.
-
-    Parameters
-    ----------
-    model : callable
-        ``(m, D)`` errors to ``(m, q)`` outputs.
-    sd : array (D,)
-        Standard deviations of the normal, zero-mean errors.
-    n : int
-        Base rows N (a power of two).
-
-    Returns
-    -------
-    s1, st : arrays (D, q)
-        First-order and total indices.
-    """
-    from .. import sensitivity as S
-
+def ours_sobol(model, sd, n: int, stages: dict | None = None):
+    """Our ``(S1, ST)`` of ``model``, errors normal of ``sd``, N = ``n`` (``stages`` unused)."""
     design = S.SobolDesign(n, S.Inputs.normal(0.0, sd), method="sobol", seed=SEED)
-    s1, st = S.sobol_indices(model, design, chunk=CHUNK)
-    return s1, st
+    return S.sobol_indices(model, design, chunk=CHUNK)
 
 
-def salib_sobol(model, sd, n: int, *, stages: dict | None = None):
-    """SALib's Sobol' indices (S1, ST) of ``model``: its sampler, the runs, its analysis.
+def salib_sobol(model, sd, n: int, stages: dict | None = None):
+    """SALib's ``(S1, ST)`` on :func:`ours_sobol`'s design; ``stages`` gets each stage's seconds.
 
-    The same design as :func:`ours_sobol` (the Sobol' sequence of
-    ``numpy.random.default_rng(SEED)``, the errors normal through ``dists="norm"``), the model
-    run ``CHUNK`` rows per call, then ``sobol.analyze`` on each output without second-order
-    indices and with its bootstrap at its smallest (two resamples).
-
-    Parameters
-    ----------
-    model : callable
-        ``(m, D)`` errors to ``(m, q)`` outputs.
-    sd : array (D,)
-        Standard deviations of the normal, zero-mean errors.
-    n : int
-        Base rows N (a power of two).
-    stages : dict, optional
-        Filled with the seconds of ``sample``, ``model`` and ``analyze``.
-
-    Returns
-    -------
-    s1, st : arrays (D, q)
-        First-order and total indices.
-    """
+    Its sampler (``dists="norm"``, the same ``default_rng(SEED)``), the model run ``CHUNK``
+    rows a call, then ``sobol.analyze`` on each output without second-order indices and with
+    its bootstrap (which it cannot switch off) at its smallest, two resamples."""
     from SALib.analyze import sobol as analyze
     from SALib.sample import sobol as sample
 
@@ -221,36 +151,21 @@ def salib_sobol(model, sd, n: int, *, stages: dict | None = None):
     t2 = time.perf_counter()
     res = [analyze.analyze(problem, y[:, k], calc_second_order=False, num_resamples=2, seed=1)
            for k in range(y.shape[1])]
-    t3 = time.perf_counter()
     if stages is not None:
-        stages.update(sample=t1 - t0, model=t2 - t1, analyze=t3 - t2)
-    return (np.array([r["S1"] for r in res]).T, np.array([r["ST"] for r in res]).T)
+        stages.update(sample=t1 - t0, model=t2 - t1, analyze=time.perf_counter() - t2)
+    return np.array([r["S1"] for r in res]).T, np.array([r["ST"] for r in res]).T
 
 
-def _sobol_task(tool: str, case: str, n: int, repeat: int) -> dict:
-    """One Sobol' row: ``tool`` (ours, salib) on ``case`` with N = ``n``; ``repeat`` 0 is one run.
-
-    Returns the time, the largest errors of S1 and ST against the closed form, the indices
-    themselves (for the comparison of the two tools) and a note."""
-    model, sd, exact = _sobol_case(case)
-    stages: dict = {}
+def sobol_task(tool, case: str, n: int, repeat: int = 0) -> dict:
+    """One Sobol' row: ``tool`` (:func:`ours_sobol`, :func:`salib_sobol`) on ``case``, N = ``n``."""
+    model, sd, exact = sobol_case(case)
 
     def run():
-        if tool == "ours":
-            return ours_sobol(model, sd, n), {}
-        seconds: dict = {}
-        return salib_sobol(model, sd, n, stages=seconds), seconds
-    if repeat:
-        run()                                   # warm-up
-    t = np.inf
-    for _ in range(max(repeat, 1)):             # the best run, with its own stages
-        t0 = time.perf_counter()
-        (s1, st), seconds = run()
-        dt = time.perf_counter() - t0
-        if dt < t:
-            t, stages = dt, seconds
-    how = f"min of {repeat}" if repeat else "one run"
-    note = f"{how}; {n * (len(sd) + 2) / t / 1e6:.2g} M runs/s"
+        stages: dict = {}
+        return tool(model, sd, n, stages), stages
+    t, ((s1, st), stages) = timed(run, repeat)
+    note = (f"{f'min of {repeat}' if repeat else 'one run'}; "
+            f"{n * (len(sd) + 2) / t / 1e6:.2g} M runs/s")
     if stages:
         note += "; " + ", ".join(f"{k} {v:.2f} s" for k, v in stages.items())
     return dict(time=t, err_s1=float(np.abs(s1 - exact).max()),
@@ -258,103 +173,78 @@ def _sobol_task(tool: str, case: str, n: int, repeat: int) -> dict:
                 indices=[np.asarray(s1).tolist(), np.asarray(st).tolist()], note=note)
 
 
-def _sobol_memory(n: int) -> dict:
-    """Sobol' indices of the Zheng machine's first-order model, streamed; one run.
-
-    41 errors, six outputs (``e @ J.T``: runs cost little, so the memory is the estimator's),
-    from a Sobol' design of ``n`` base rows (``SobolDesign``), sampling included.  The peak
-    should not grow with n once n exceeds ``sensitivity.BASE_ROWS``."""
-    return _sobol_task("ours", "linear", n, 0)
-
-
-def task_zheng_linear_pose():
-    """All 41 x 6 closed-form indices at one pose, the Jacobian included.
-
-    One call is too quick for the timer, so a loop of 1000 calls is timed and divided."""
-    from .. import sensitivity as S
-
+def zheng_linear_pose(loop: int = 1000) -> dict:
+    """All 41 x 6 closed-form indices at one pose, Jacobian included (``loop`` calls timed)."""
     m, sd, pose = _zheng()
-    loop = 1000
-
-    def each(fn):
-        def run():
-            for _ in range(loop):
-                out = fn()
-            return out
-        return run
-    t, s = _min_time(each(lambda: S.linear_indices(m.jacobian(pose), sd=sd)))
-    t_jac, jac = _min_time(each(lambda: m.jacobian(pose)))
-    t_idx, _ = _min_time(each(lambda: S.linear_indices(jac, sd=sd)))
-    return dict(time=t / loop,
-                note=f"{t / loop * 1e3:.3f} ms per call (loop of {loop} timed); of it Jacobian "
-                     f"{t_jac / loop * 1e3:.3f} "
-                     f"ms, indices {t_idx / loop * 1e6:.0f} us; {s.shape[-2]} x "
-                     f"{s.shape[-1]} indices")
+    jac = m.jacobian(pose)
+    t, s = timed(lambda: S.linear_indices(m.jacobian(pose), sd=sd), number=loop)
+    t_jac, _ = timed(lambda: m.jacobian(pose), number=loop)
+    t_idx, _ = timed(lambda: S.linear_indices(jac, sd=sd), number=loop)
+    return dict(time=t, note=f"{t * 1e3:.3f} ms per call (loop of {loop} timed); of it Jacobian "
+                             f"{t_jac * 1e3:.3f} ms, indices {t_idx * 1e6:.0f} us; "
+                             f"{s.shape[-2]} x {s.shape[-1]} indices")
 
 
-def task_zheng_linear_atlas():
-    from .. import sensitivity as S
-
+def zheng_linear_atlas() -> dict:
+    """The closed-form indices at 1e4 random poses within the machine's travels."""
     m, sd, _ = _zheng()
     rng = np.random.default_rng(0)
     poses = {k: rng.uniform(lo, hi, 10_000) for k, (lo, hi) in m.travels.items()}
     var = sd**2
-    t, s = _min_time(lambda: S.indices_at_poses(m.jacobian(poses), var=var))
-    t_jac, jac = _min_time(lambda: m.jacobian(poses))
+    t, s = timed(lambda: S.indices_at_poses(m.jacobian(poses), var=var))
+    t_jac, _ = timed(lambda: m.jacobian(poses))
     return dict(time=t, note=f"{len(s) / t / 1e3:.0f} k poses/s; of it Jacobian "
                              f"{t_jac * 1e3:.0f} ms; output {s.shape}")
 
 
-PCE_CASES = {  # name: (benchmark, n, degrees for ours, OpenTURNS degree, OpenTURNS repeats)
-    "ishigami": ("ishigami", 1000, range(1, 15), 12, REPEAT),
-    "g_function_8d": ("g_function_8d", 500, range(1, 7), 6, REPEAT),
-    "g_function_41d": ("g_function_41d", 1000, (1, 2, 3), 3, 0),
-    "interaction_polynomial": ("interaction_polynomial", 120, (1, 2, 3), 2, REPEAT),
-}
+#: sparse-PCE benchmarks with exact indices: n, our degrees, OpenTURNS' degree and repeats
+PCE_CASES = {"ishigami": (1000, range(1, 15), 12, REPEAT),
+             "g_function_8d": (500, range(1, 7), 6, REPEAT),
+             "g_function_41d": (1000, (1, 2, 3), 3, 0),   # OpenTURNS: over 25 min, one run
+             "interaction_polynomial": (120, (1, 2, 3), 2, REPEAT)}
 
 
-def _case(name):
-    from ..sensitivity.benchmarks import BENCHMARKS
-
-    bench, n, degrees, ot_degree, ot_repeat = PCE_CASES[name]
-    b = BENCHMARKS[bench]()
-    x = b.sample(n, 1)
-    return b, x, b.model(x), degrees, ot_degree, ot_repeat
+def _pce_case(name: str):
+    """``(benchmark, x, y)``: benchmark ``name`` and its samples (seed 1), ours and OpenTURNS'."""
+    b = BENCHMARKS[name]()
+    x = b.sample(PCE_CASES[name][0], 1)
+    return b, x, b.model(x)
 
 
-def _errors(b, s1, st):
-    top = np.argsort(-np.asarray(st), kind="stable")
-    rank = "" if b.dim < 10 else ("; top six right" if set(top[:6]) == set(range(6))
-                                  else f"; top six {sorted(int(i) for i in top[:6])}")
+def _pce_errors(b, s1, st) -> dict:
+    """The largest errors of S1 and ST, and for many inputs whether the top six by ST are right."""
+    top = sorted(int(i) for i in np.argsort(-np.asarray(st), kind="stable")[:6])
+    rank = "" if b.dim < 10 else (
+        "; top six right" if top == list(range(6)) else f"; top six {top}")
     return dict(err_s1=float(np.abs(s1 - b.s1).max()), err_st=float(np.abs(st - b.st).max()),
                 rank=rank)
 
 
-def _task_ours(name, method):
+def pce_ours(name: str, method: str) -> dict:
+    """Our ``fit_sparse_pce`` (``method``: omp, lars; basis and length validated) on ``name``."""
     import warnings
 
-    from ..sensitivity import pce as P
-
-    b, x, y, degrees, _, _ = _case(name)
-    inp = b.inputs
+    b, x, y = _pce_case(name)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", P.PoorFitWarning)
-        t, res = _min_time(lambda: P.fit_sparse_pce(x, y, inputs=inp, degrees=degrees,
-                                                    method=method))
+        warnings.simplefilter("ignore", S.PoorFitWarning)
+        t, res = timed(lambda: S.fit_sparse_pce(x, y, inputs=b.inputs,
+                                                degrees=PCE_CASES[name][1], method=method))
     f = res.fit
-    return dict(time=t, **_errors(b, res.s1, res.st),
+    return dict(time=t, **_pce_errors(b, res.s1, res.st),
                 note=f"degree {f.degree}, q {f.q_norm:g}, {len(f.coef)} terms of {f.n_candidates}"
                      f", validation {f.validation:.1e}, LOO {f.loo:.1e}"
                      + ("" if res.reliable else ", PoorFitWarning"))
 
 
-def _task_openturns(name):
+def pce_openturns(name: str) -> dict:
+    """OpenTURNS' ``FunctionalChaosAlgorithm`` (LARS, corrected LOO, Legendre) on ``name``."""
     try:
         import openturns as ot
     except ImportError:
         return dict(time=float("nan"), note="OpenTURNS not importable in this Python: skipped "
                                             "(--with-openturns runs it in a venv of its own)")
-    b, x, y, _, degree, repeat = _case(name)
+    b, x, y = _pce_case(name)
+    _, _, degree, repeat = PCE_CASES[name]
     d = x.shape[1]
     dists = [ot.Uniform(*m.support()) for m in b.inputs.marginals]
 
@@ -373,27 +263,16 @@ def _task_openturns(name):
         return (np.array([sens.getSobolIndex(i) for i in range(d)]),
                 np.array([sens.getSobolTotalIndex(i) for i in range(d)]),
                 res.getIndices().getSize())
-    if repeat:
-        t, (s1, st, terms) = _min_time(run, repeat)
-    else:  # one run, no warm-up (g_function_41d: over 25 min with openturns 1.27.post1 here)
-        t0 = time.perf_counter()
-        s1, st, terms = run()
-        t = time.perf_counter() - t0
-    return dict(time=t, **_errors(b, s1, st),
+    t, (s1, st, terms) = timed(run, repeat)
+    return dict(time=t, **_pce_errors(b, s1, st),
                 note=f"LARS + corrected LOO, Legendre degree {degree}, {terms} terms"
                      + ("" if repeat else "; one run"))
 
 
-def _pce_tasks():
-    for name in PCE_CASES:
-        for method in ("omp", "lars"):
-            yield f"pce_{name}_{method}", (lambda nm=name, me=method: _task_ours(nm, me))
-        yield f"pce_{name}_openturns", (lambda nm=name: _task_openturns(nm))
-
-
 def _thermal_limit_data(n_exp=10, n_meas=100, n_sens=100, n_pos=500, seed=0, dt=3.0):
-    """A thermal dataset at the reader's size limits (issue 22), from a small model of its own:
-    first-order thermal nodes (time constants 5-150 min) driven by the drive's heat and the
+    """A thermal dataset at the reader's size limits (issue 22), from a small model of its own.
+
+    First-order thermal nodes (time constants 5-150 min) driven by the drive's heat and the
     air; errors k(T) x + b(T) + a bow + 0.3 um noise."""
     import pandas as pd
 
@@ -407,7 +286,7 @@ def _thermal_limit_data(n_exp=10, n_meas=100, n_sens=100, n_pos=500, seed=0, dt=
     feeds = rng.choice([1000, 2000, 3000, 4000, 5000, 6000], n_exp)
     x = np.linspace(0.0, 998.0, n_pos)
     a = np.exp(-dt / tau)
-    rows, temps, errs = [], [], []
+    temps, errs = [], []
     for e in range(n_exp):
         stop = rng.uniform(0.5, 1.0) * t[-1]
         drive = np.where(t < stop, feeds[e] / 1000.0 * rng.uniform(0.8, 1.2), 0.0)
@@ -422,73 +301,97 @@ def _thermal_limit_data(n_exp=10, n_meas=100, n_sens=100, n_pos=500, seed=0, dt=
         bow = 0.3 * (np.abs(d[:, 22]) ** 1.5)[:, None] * np.sin(np.pi * x / x[-1])
         errs.append(k[:, None] * x / 1000 + b[:, None] + bow + 0.2 * np.sin(x / 37.0)
                     + rng.normal(0, 0.3, (n_meas, n_pos)))
-        rows.append(pd.DataFrame({"experiment": e + 1, "measurement": np.arange(1, n_meas + 1),
-                                  "time_min": t}))
         temps.append(temp)
-    return ThermalData(pd.concat(rows, ignore_index=True),
+    index = pd.DataFrame({"experiment": np.repeat(np.arange(1, n_exp + 1), n_meas),
+                          "measurement": np.tile(np.arange(1, n_meas + 1), n_exp),
+                          "time_min": np.tile(t, n_exp)})
+    return ThermalData(index,
                        pd.DataFrame(np.vstack(temps), columns=[f"T{j + 1}" for j in range(n_sens)]),
                        np.vstack(errs), x + 100.0, {e + 1: float(f) for e, f in enumerate(feeds)},
                        source="bench")
 
 
-def task_xu_split_limit():
-    """One train/test split of notebook 04 at the reader's limits; one run.
-
-    The limits are 1000 measurements x 100 sensors x 500 positions; the split runs selection,
-    point-by-point MLR, decoupled MLR and SVR."""
+def xu_split_limit() -> dict:
+    """One split of notebook 04 (selection, point-by-point and decoupled MLR, SVR) at the limits."""
     from .. import thermal
 
     data = _thermal_limit_data()
-    t0 = time.perf_counter()
-    thermal.evaluate_split(data, train=list(range(1, 10)), test=[10], n_clusters=3)
-    return dict(time=time.perf_counter() - t0, note="one run (not min of 3)")
+    t, _ = timed(lambda: thermal.evaluate_split(data, train=list(range(1, 10)), test=[10],
+                                                n_clusters=3), 0)
+    return dict(time=t, note="one run (not min of 3)")
 
 
-def task_explore_update():
-    """One slider move of the explorer's Machine tab (``mtaccuracy.apps.explore``).
-
-    The move computes the closed-form indices at the pose and the dominant-error map over a 25 x 25
-    grid, for each of the papers' three machines at its starting pose; min of 10 runs each after a
-    warm-up.  The time is the slowest machine's."""
+def explore_update() -> dict:
+    """One slider move of the explorer's Machine tab on each of its three machines; the slowest."""
     from . import explore_model as M
 
-    times = {name: M.time_slider_update(M.machine_setup(name), repeat=10)
+    times = {name: timed(partial(M.slider_update, M.machine_setup(name)), 10)[0]
              for name in M.MACHINES}
     return dict(time=max(times.values()),
                 note="; ".join(f"{n} {t * 1e3:.1f} ms" for n, t in times.items()))
 
 
-TASKS = {
-    "xu_split_limit": task_xu_split_limit,
-    "explore_update": task_explore_update,
-    "guo_pose_error": task_guo_pose_error,
-    "guo_spearman": task_guo_spearman,
-    "zheng_pose_error": task_zheng_pose_error,
-    "zheng_pce_one": task_zheng_pce_one,
-    "zheng_pce_six": task_zheng_pce_six,
-    "zheng_mcs": task_zheng_mcs,
-    "zheng_linear_pose": task_zheng_linear_pose,
-    "zheng_linear_atlas": task_zheng_linear_atlas,
-    **{f"zheng_sobol_n{n}": (lambda n=n: _sobol_task("ours", "zheng", n, 0 if n >= 2**17
-                                                     else REPEAT)) for n in ZHENG_SOBOL_N},
-    **{f"zheng_salib_n{n}": (lambda n=n: _sobol_task("salib", "zheng", n, 0 if n >= 2**17
-                                                     else REPEAT)) for n in ZHENG_SOBOL_N},
-    **dict(_pce_tasks()),
-    **{f"sobol_memory_n{n}": (lambda n=n: _sobol_memory(n)) for n in SOBOL_MEMORY_N},
-    **{f"sobol_memory_salib_n{n}": (lambda n=n: _sobol_task("salib", "linear", n, 0))
-       for n in SALIB_MEMORY_N},
-}
+class Row(NamedTuple):
+    """One row of the table: paper, task, what is measured, size, target, measuring function."""
 
-#: modules a task's process imports before its memory baseline, by a word of the task's name
-#: (a peer's package counts as ours does: not in the task's memory)
-TASK_IMPORTS = {"salib": ("SALib.sample.sobol", "SALib.analyze.sobol"),
-                "openturns": ("openturns",)}
+    paper: str
+    task: str
+    what: str
+    size: str
+    target: str
+    run: Callable[[], dict]
+    published: float | None = None   # the paper's seconds: the note gives the ratio
+    peer: str | None = None           # the peer's task: the note gives its ratios to ours
+    full: bool = False                # left out by --quick
 
-#: our task -> the peer's task it is compared with (the ratio goes in our row's note)
-PEERS = {**{f"zheng_sobol_n{n}": f"zheng_salib_n{n}" for n in ZHENG_SOBOL_N},
-         **{f"sobol_memory_n{n}": f"sobol_memory_salib_n{n}" for n in SALIB_MEMORY_N},
-         **{f"pce_{c}_{m}": f"pce_{c}_openturns" for c in PCE_CASES for m in ("omp", "lars")}}
 
-#: rows left out by --quick (a few minutes)
-FULL_ONLY = {f"sobol_memory_n{2**23}", f"zheng_sobol_n{2**17}", f"zheng_salib_n{2**17}",
-             f"sobol_memory_salib_n{2**17}"}
+def _rows():
+    """The rows in the table's order, ours before the peer it is compared with."""
+    z = "Zheng 2024"
+    yield Row("Xu 2022", "xu_split_limit", "one split: selection, MLR, SVR", "1000 x 100 x 500",
+              "<= 60 s", xu_split_limit)
+    yield Row("Guo 2016", "guo_pose_error", "vertical_xyfz pose error", "1e6 samples", "",
+              partial(pose_error, "guo"))
+    yield Row("Guo 2016", "guo_spearman", "Spearman, batched", "200 x 500 x 21 x 4", "",
+              guo_spearman)
+    yield Row(z, "zheng_pose_error", "ac_double_turntable pose error", "1e6 samples",
+              ">= 2 M samples/s", partial(pose_error, "zheng"))
+    yield Row(z, "zheng_pce_one", "PCE, one component", "n 1e3, degree 3, 13244 terms",
+              "<= 0.5 s", partial(zheng_pce, [0]), 7.8761)
+    yield Row(z, "zheng_pce_six", "PCE, all six components", "n 1e3, degree 3", "",
+              partial(zheng_pce, range(6)), 7.8761)
+    yield Row(z, "zheng_mcs", "MCS Sobol (S1, ST), one pose", "N 1e5, 4.3e6 runs",
+              "<= 3 s, <= 300 MB", zheng_mcs, 244.0789)
+    for n in (2**14, 2**17):    # N >= 2^17: one run each, full mode only
+        size, big = f"N 2^{n.bit_length() - 1}, {n * 43:.1e} runs", n >= 2**17
+        yield Row(z, f"zheng_sobol_n{n}", "Sobol' (S1, ST), ours", size, "",
+                  partial(sobol_task, ours_sobol, "zheng", n, 0 if big else REPEAT),
+                  peer=f"zheng_salib_n{n}", full=big)
+        yield Row(z, f"zheng_salib_n{n}", "Sobol' (S1, ST), SALib", size, "",
+                  partial(sobol_task, salib_sobol, "zheng", n, 0 if big else REPEAT), full=big)
+    for n in (2**13, 2**17, 2**20, 2**23):   # SALib to 2^17 (its sample matrix: 14.8 GB at 2^20)
+        size, salib = f"N 2^{n.bit_length() - 1}, 43 N runs", n <= 2**17
+        yield Row("memory", f"sobol_memory_n{n}", "Sobol streamed, linear 41 x 6", size,
+                  "peak flat in N", partial(sobol_task, ours_sobol, "linear", n),
+                  peer=f"sobol_memory_salib_n{n}" if salib else None, full=n == 2**23)
+        if salib:
+            yield Row("memory", f"sobol_memory_salib_n{n}", "SALib, linear 41 x 6", size, "",
+                      partial(sobol_task, salib_sobol, "linear", n), full=n >= 2**17)
+    yield Row(z, "zheng_linear_pose", "linear closed form, one pose", "41 x 6, Jacobian incl.",
+              "<= 1 ms", zheng_linear_pose)
+    yield Row(z, "zheng_linear_atlas", "linear closed form, pose atlas", "1e4 poses in travels",
+              "<= 10 s", zheng_linear_atlas)
+    yield Row("explorer", "explore_update", "slider move: indices + map",
+              "3 machines, 25 x 25 grid", "<= 0.1 s", explore_update)
+    for name, (n, degrees, ot_degree, _) in PCE_CASES.items():
+        for m in ("omp", "lars"):
+            yield Row("PCE bench", f"pce_{name}_{m}", f"{name} ({m})",
+                      f"n {n}, degree <= {max(degrees)}",
+                      "<= 3 s" if (name, m) == ("g_function_41d", "omp") else "",
+                      partial(pce_ours, name, m), peer=f"pce_{name}_openturns")
+        yield Row("PCE bench", f"pce_{name}_openturns", f"{name} (openturns)",
+                  f"n {n}, degree <= {ot_degree}", "", partial(pce_openturns, name))
+
+
+ROWS = list(_rows())
+TASKS = {r.task: r.run for r in ROWS}
