@@ -1,4 +1,4 @@
-"""The pose search of notebook 01 (compendium.zheng2024): symmetry group of the linear indices,
+"""The pose search of notebook 01 (papers.zheng2024): symmetry group of the linear indices,
 canonical pose, canonical ranking of optimiser output, least-squares fit of a known pose."""
 
 import numpy as np

@@ -3,7 +3,7 @@ schema, the ways spreadsheets and loggers write CSV (BOM, CRLF, semicolons and d
 empty rows), and what the reader sets aside (dead sensors, extra columns) or refuses (wrong
 units, duplicate names, an experiments.csv that does not match the data).
 
-The data come from the small model below (not ``compendium.xu2022_reconstruction``): each sensor
+The data come from the small model below (not ``papers.xu2022_reconstruction``): each sensor
 warms from an offset towards a steady rise with its own time constant, and the error line's
 slope and intercept follow two of the rises, plus a pitch error; files are written by hand so
 that every byte of their format is chosen here.

@@ -60,7 +60,7 @@ placement of :func:`mtaccuracy.machines.vertical_xyfz.placements` with S_xz = +E
 exponential of an error twist is :func:`mtaccuracy.kinematics.screw_exp`.  This module holds
 the layouts and the conventions; the paper's study (the model with the pose as inputs, the
 closed-form indices of the linearised model, the tool lengths) is
-:mod:`mtaccuracy.compendium.rong`.
+:mod:`mtaccuracy.papers.rong`.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ mark the rows that use it ``fitted``.  The search is the same whatever the stati
   a fixed order resolve exactly equal misfits the same way on every machine.
 
 Canonical choices among symmetric or tied optima depend on the machine's symmetry group and
-are the caller's (``compendium.zheng2024.rank_poses`` for notebook 01's AC turntable); ties by
+are the caller's (``papers.zheng2024.rank_poses`` for notebook 01's AC turntable); ties by
 misfit within a relative tolerance are broken by :func:`~mtaccuracy.sensitivity.rank_with_ties`.
 """
 

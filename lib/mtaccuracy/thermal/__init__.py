@@ -22,7 +22,7 @@
 =================  ========================================================================
 
 The seeded reconstruction of the paper's dataset, calibrated to its printed tables, is paper
-code: :mod:`mtaccuracy.compendium.xu2022_reconstruction`.
+code: :mod:`mtaccuracy.papers.xu2022_reconstruction`.
 
 Everything public in ``data``, ``schema``, ``io``, ``clustering``, ``models``, ``svr``,
 ``validation`` and ``baselines`` is importable from here.
