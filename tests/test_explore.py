@@ -7,10 +7,12 @@ Monte Carlo regression on the exact chain, a finite-difference Jacobian and an a
 the dominant-error map against single-pose computations and to one batched Jacobian call; the
 spindle transfer against the harmonics theory cancels; the thermal prediction against a
 least-squares fit written out here.  The app is built in Python (no browser: see
-``test_explore_browser.py``) to check that a bad topology shows the library's message.
+``test_explore_browser.py``) to check that each tab starts from the notebooks' declarations, shows
+the numbers the model computes, and shows the library's message for a bad topology.
 """
 
 import html
+import re
 import signal
 import socket
 
@@ -23,7 +25,7 @@ from mtaccuracy.apps import explore_model as M
 from mtaccuracy.compendium.notebook import ROOT
 from mtaccuracy.machines.iso import iso_machine
 from mtaccuracy.machines.topology import parse_topology
-from mtaccuracy.papers import guo2016, rong, xu2022, yang2021, zheng2024
+from mtaccuracy.papers import guo2016, rong, xu2022, yang2021, your_spindle, zheng2024
 
 TOPOLOGY = "w C b X Y Z B t"      # notebook 06's swivel-head machine
 
@@ -104,8 +106,6 @@ def test_the_range_sliders_scale_their_group_only(setups):
     moved = M.error_half_ranges(s, angular_arcsec=s.angular_arcsec / 4)
     assert np.allclose(moved[~trans], base[~trans] / 4) and np.array_equal(moved[trans],
                                                                           base[trans])
-    with pytest.raises(ValueError, match="finite and >= 0"):
-        M.error_half_ranges(s, position_um=-1.0)
 
 
 def test_pose_ranges_come_from_the_travels_when_known(setups):
@@ -219,15 +219,13 @@ def test_the_map_is_one_batched_jacobian_call_and_not_trivial(setups, monkeypatc
     assert len(calls) == 1 and calls[0]["C"] == (625,) and calls[0]["A"] == (625,)
     assert d.error.shape == (25, 25, 6) and np.allclose(d.u, np.linspace(0, 360, 25))
     assert len(np.unique(d.error[:, :, 0])) >= 3       # the map shows more than one error
-    with pytest.raises(ValueError, match="steps"):
-        M.dominant_map(s, steps=1)
 
 
-def test_the_slider_update_returns_both_and_is_timed_positive(setups):
+def test_the_slider_update_returns_both(setups):
     s = setups["vertical_xyfz"]
     r, d = M.slider_update(s, dict(x=250.0), axes=("y", "z"), steps=5)
     assert r.indices.shape == (21, 6) and d.error.shape == (5, 5, 6) and d.axes == ("y", "z")
-    assert M.time_slider_update(s, repeat=1, steps=5) > 0
+    assert np.array_equal(r.indices, M.indices_at_pose(s, dict(x=250.0)).indices)
 
 
 # ------------------------------------------------------------------------------------------
@@ -247,29 +245,111 @@ def test_a_bad_topology_gives_the_library_message(bad):
         M.topology_setup("vertical_xyfz")
 
 
-def test_the_app_shows_the_library_message_not_a_traceback():
+@pytest.fixture(scope="module")
+def app():
     pytest.importorskip("panel")
     from mtaccuracy.apps import explore
 
-    app = explore.create_app()
+    return explore.create_app()
+
+
+def _shown_top(tab) -> dict:
+    """The top-error table of the Machine tab as shown: output -> (error, index)."""
+    rows = re.findall(r'data-output="(\w+)" data-error="([^"]*)" data-index="([^"]*)"',
+                      tab.top.object)
+    return {o: (html.unescape(e), float(v) if v else None) for o, e, v in rows}
+
+
+def _check_machine_tab_shows_the_model(tab):
+    """What the Machine tab shows equals the model's numbers at its controls' values."""
+    kw = dict(position_um=tab.position_um, angular_arcsec=tab.angular_arcsec)
+    res = M.indices_at_pose(tab.setup, tab.pose_values(), **kw)
+    want = {o: (e, round(v, 6)) for o, e, v in M.top_errors(res)}
+    assert _shown_top(tab) == {o: want.get(o, ("", None)) for o in res.outputs}
+    heat = tab.heat_src.data                              # error-major, NaN: no first-order term
+    assert list(heat["error"][::len(res.outputs)]) == res.names
+    assert np.array_equal(heat["index"], np.where(res.first_order, res.indices, np.nan).ravel(),
+                          equal_nan=True)
+    d = M.dominant_map(tab.setup, tab.pose_values(), axes=(tab.across, tab.up), **kw)
+    k = d.outputs.index(tab.output)
+    names = np.array([*d.names, "no first-order term"])    # -1: the last
+    assert list(tab.map_src.data["error"]) == names[d.error[:, :, k].ravel()].tolist()
+    assert np.array_equal(tab.map_src.data["index"], d.index[:, :, k].ravel())
+    assert tab.dmap.title.text == f"Dominant error for {tab.output}"
+
+
+def test_the_machine_tab_shows_the_model_and_the_library_message(app):
     tab = app.tabs["machine"]
+    z = M.machine_setup("ac_double_turntable")
+    assert (tab.setup.key, tab.pose_values()) == (z.key, {a.name: a.default for a in z.axes})
+    assert (tab.position_um, tab.angular_arcsec) == (z.position_um, z.angular_arcsec)
+    assert (tab.across, tab.up) == ("C", "A")          # notebook 06's two rotary axes
+    _check_machine_tab_shows_the_model(tab)
     before = tab.setup.label
-    tab.topology.value = "w C A b Y X Q t"
+    tab.topology = "w C A b Y X Q t"
     with pytest.raises(ValueError) as lib:
         parse_topology("w C A b Y X Q t")
-    assert tab.error.visible and html.escape(str(lib.value)) in tab.error.object
-    assert "Traceback" not in tab.error.object and tab.setup.label == before
-    tab.topology.value = TOPOLOGY                     # a good one replaces the machine
-    assert not tab.error.visible and tab.setup.machine.n_errors == 37
-    assert [s.name for s in tab.sliders] == ["C (°)", "x (mm)", "y (mm)", "z (mm)", "B (°)"]
-    # moving a pose slider changes the indices shown
-    shown = tab.top.object
-    tab.machine.value = "horizontal_3axis"
-    tab.sliders[0].value = 690.0
-    assert tab.top.object != shown and 'data-output="Px"' in tab.top.object
-    thermal = app.tabs["thermal"]                     # notebook 04's split, fitted at once
-    assert (thermal.train.value, thermal.test.value, thermal.inputs.value) == (
-        [1, 2, 3], 4, "published") and "RMSE" in thermal.summary.object
+    shown = app.tabs["machine"].view()[0][2].object     # the error pane of the controls
+    assert tab.error == str(lib.value) and html.escape(str(lib.value)) in shown
+    assert "Traceback" not in shown and tab.setup.label == before
+    tab.topology = TOPOLOGY                               # a good one replaces the machine
+    assert tab.error == "" and tab.setup.machine.n_errors == 37 and tab.machine == M.TOPOLOGY
+    assert [tab.pose.param[a].label for a in ("C", "x", "y", "z", "B")] == [
+        "C (°)", "x (mm)", "y (mm)", "z (mm)", "B (°)"]
+    assert _shown_top(tab)["Vz"] == ("", None)            # no first-order term at the centre
+    _check_machine_tab_shows_the_model(tab)
+    tab.pose.B = 30.0
+    tab.param.update(output="Py", across="x", up="B", position_um=2.0)
+    _check_machine_tab_shows_the_model(tab)
+    tab.machine = "horizontal_3axis"                      # moving a slider changes what is shown
+    shown = _shown_top(tab)
+    tab.pose.x = 690.0
+    assert _shown_top(tab) != shown
+    _check_machine_tab_shows_the_model(tab)
+
+
+def test_the_spindle_tab_starts_from_notebook_05_and_shows_the_model(app):
+    tab = app.tabs["spindle"]
+    p = yang2021.Parameters.defaults()
+    assert (tab.probe2, tab.probe3, tab.probe4) == M.YANG_DEG[1:]
+    assert (tab.max_harmonic, tab.a3) == (p["worst_k"], p["a3"])
+    assert tab.amplified_above == your_spindle.Parameters.defaults()["amplified_above"]
+    tab.layout = "four probes equally spaced"             # a preset sets the angles
+    assert (tab.probe2, tab.probe3, tab.probe4) == (90.0, 180.0, 270.0)
+    summary = tab.plots()[0][0].object
+    assert "Cancelled by the layout: <b>3, 5, 7, 9, 11, 13, 15, 17, 19</b>" in summary
+    tab.param.update(probe2=100.0, weights="eq5", a3=1.0, max_harmonic=30)
+    assert tab.layout == "custom"                         # an angle moved: no preset
+    t = M.probe_transfer([0, 100, 180, 270], max_harmonic=30, weights="eq5", a3=1.0,
+                         amplified_above=tab.amplified_above)
+    worst = t.q_least_squares[np.isfinite(t.q_least_squares)].max()
+    summary = tab.plots()[0][0].object
+    assert f"Worst q_k: least squares {worst:.3f}" in summary
+    assert "a_0..a_3: " + ", ".join(f"{v:.4f}" for v in np.round(t.weights, 4) + 0.0) in summary
+    tab.probe2 = 180.0                                    # two probes at one angle
+    with pytest.raises(ValueError) as lib:
+        M.probe_transfer([0, 180, 180, 270])
+    assert html.escape(str(lib.value)) in tab.plots().object
+    tab.layout = tab.param.layout.objects[0]             # back to notebook 05's layout
+    assert (tab.probe2, tab.probe3, tab.probe4) == M.YANG_DEG[1:]
+
+
+def test_the_thermal_tab_starts_from_notebook_04_and_shows_the_model(app, thermal_data):
+    """Outside a server the fit runs at once (no event loop): the view shows its result."""
+    tab = app.tabs["thermal"]
+    assert (tab.train, tab.test, tab.inputs, tab.kind) == ([1, 2, 3], 4, "published", "mlr")
+    summary = tab.plots()[0].object
+    want = M.thermal_prediction(thermal_data, train=[1, 2, 3], test=4)
+    assert f'data-rmse="{want.rmse:.6f}"' in summary and f"RMSE {want.rmse:.3f} µm" in summary
+    assert xu2022.RECONSTRUCTED_LABEL in summary and (tab.status, tab.busy) == ("done", False)
+    tab.param.update(train=[2, 4], test=1, inputs="selected")
+    want = M.thermal_prediction(thermal_data, train=[2, 4], test=1, inputs="selected")
+    summary = tab.plots()[0].object
+    assert f'data-rmse="{want.rmse:.6f}"' in summary
+    assert f"k from {', '.join(want.inputs['k'])}" in summary
+    tab.test = 2
+    tab.train = [2]
+    assert "is also a training experiment" in tab.plots().object and not tab.busy
 
 
 # ------------------------------------------------------------------------------------------
@@ -299,7 +379,7 @@ def test_eq5_weights_on_the_symmetric_layout_cancel_k_2_mod_4_when_a3_is_1():
 
 
 def test_the_yang_layout_and_the_gauss_markov_bound():
-    ang = M.yang_layout_deg()
+    ang = M.YANG_DEG
     assert ang == pytest.approx([0.0, 39.375, 182.8125, 326.25])
     for rule in ("optimal", "eq5"):
         t = M.probe_transfer(ang, max_harmonic=40, weights=rule)
@@ -369,9 +449,11 @@ def test_the_mlr_prediction_equals_a_direct_least_squares_fit(thermal_data, trai
 def test_thermal_splits_are_checked(thermal_data):
     with pytest.raises(ValueError, match="also a training experiment"):
         M.thermal_prediction(thermal_data, train=[1, 2], test=2)
-    with pytest.raises(ValueError, match="not in the data"):
+    with pytest.raises(ValueError, match="no training experiment"):
+        M.thermal_prediction(thermal_data, train=[], test=2)
+    with pytest.raises(ValueError, match=r"unknown experiment\(s\) \[9\]"):   # the library's
         M.thermal_prediction(thermal_data, train=[1, 2], test=9)
-    with pytest.raises(ValueError, match="SVR needs at least 2"):
+    with pytest.raises(ValueError, match="needs at least 2 training experiments"):
         M.thermal_prediction(thermal_data, train=[1], test=4, kind="svr")
     with pytest.raises(ValueError, match="inputs must be"):
         M.thermal_prediction(thermal_data, train=[1, 2], test=4, inputs="mine")

@@ -154,6 +154,8 @@ def test_the_explorer_in_a_browser(server, browser):
         expect(rmse).to_contain_text("trained on experiment(s) 1, 2, 3, predicting experiment 4")
         expect(rmse).to_contain_text("RMSE")
         assert 0 < float(rmse.get_attribute("data-rmse")) < 5
+    except AssertionError as exc:          # with what the page reported on the way
+        raise AssertionError(f"{exc}\npage problems: {problems}") from None
     finally:
         context.close()
     assert not external, f"requests left 127.0.0.1: {external}"
