@@ -78,9 +78,9 @@ def test_a_run_that_cannot_fit_is_refused_naming_the_limit(monkeypatch):
     monkeypatch.setattr(workflow, "available_memory", lambda: (3e8, "the cgroup limit"))
     with pytest.raises(ParameterError, match=r"need about 0\.\d+ GB .* 0\.3 GB left \(the "
                                              r"cgroup limit\)"):
-        workflow.check_memory({GUO: {}}, 2)
+        workflow.check_memory({GUO: {}})
     monkeypatch.setattr(workflow, "available_memory", lambda: (8e9, "available memory"))
-    assert workflow.check_memory({GUO: {}}, 2) == 8000
+    assert workflow.check_memory({GUO: {}}) == 8000
 
 
 def test_available_memory_is_positive_and_says_what_limits_it():

@@ -61,15 +61,16 @@ def available_memory() -> tuple[float, str]:
     return have, what
 
 
-def check_memory(filled: NotebookParameters, *, share: int = 1) -> None:
+def check_memory(filled: NotebookParameters, *, available: tuple[float, str] | None = None
+                 ) -> None:
     """Refuse a run whose declared peak memory exceeds what the machine has left.
 
     Parameters
     ----------
     filled : NotebookParameters
         The run's parameters.
-    share : int
-        Runs that will share the memory at once.
+    available : (float, str), optional
+        :func:`available_memory`, when the caller has it already.
 
     Raises
     ------
@@ -77,12 +78,11 @@ def check_memory(filled: NotebookParameters, *, share: int = 1) -> None:
         Naming the need, what is left and what limits it.
     """
     need = filled.memory_bytes()
-    have, what = available_memory()
-    if need > have / share:
+    have, what = available or available_memory()
+    if need > have:
         raise ParameterError(
             f"{filled.stem}: these parameters need about {need / 1e9:.3g} GB of memory, more "
-            f"than the {have / share / 1e9:.3g} GB left ({what}"
-            f"{f', shared by {share} runs' if share > 1 else ''}); lower the sample sizes")
+            f"than the {have / 1e9:.3g} GB left ({what}); lower the sample sizes")
 
 
 def output_folder(value, stem: str) -> Path:
@@ -140,6 +140,12 @@ def input_path(value, what: str) -> Path:
     return p
 
 
+def files_of(path: Path) -> list[Path]:
+    """The files an input path stands for: itself, or a folder's files (its record left out)."""
+    files = [path] if path.is_file() else sorted(x for x in path.rglob("*") if x.is_file())
+    return [f for f in files if f.name != provenance.SIDECAR]
+
+
 class Run:
     """One run of a notebook: its parameters, its output folder and its provenance record.
 
@@ -170,9 +176,9 @@ class Run:
     def input(self, value, what: str) -> Path:
         """The input file or folder a parameter names (:func:`input_path`), recorded.
 
-        A folder's files are recorded one by one (its ``provenance.json`` left out)."""
+        A folder's files are recorded one by one (:func:`files_of`)."""
         p = input_path(value, what)
-        for f in [p] if p.is_file() else sorted(x for x in p.rglob("*") if x.is_file()):
+        for f in files_of(p):
             self.track(f)
         return p
 

@@ -16,12 +16,13 @@ coordinate and no PNG pixel changed.
 from __future__ import annotations
 
 import io
-import os
 import re
 from pathlib import Path
 
 import matplotlib as mpl
 import matplotlib.pyplot as plt
+
+from .provenance import write_atomic
 
 STYLE = {
     "figure.dpi": 100,
@@ -166,9 +167,7 @@ def save(fig, path, *, stamp: str, formats=("png", "svg"), title: str | None = N
         data = buf.getvalue()
         if fmt == "svg":
             data = stable_svg_ids(data.decode("utf-8")).encode("utf-8")
-        tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-        tmp.write_bytes(data)
-        os.replace(tmp, target)
+        write_atomic(target, data)
         written.append(target)
     return written
 

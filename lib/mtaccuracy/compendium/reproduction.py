@@ -13,7 +13,6 @@ import fnmatch
 import hashlib
 import io
 import math
-import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -21,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ..papers.printed import half_unit
+from .provenance import write_atomic
 
 COLUMNS = ["item", "quantity", "published", "reproduced", "unit", "tolerance", "verdict",
            "basis", "note"]
@@ -563,10 +563,7 @@ def write_table(df: pd.DataFrame, path, *, float_format: str = "%.6g", tolerance
     buf = io.StringIO()
     df.to_csv(buf, index=False, float_format=float_format, lineterminator="\n")
     data = buf.getvalue().encode("utf-8")
-    if not path.exists() or path.read_bytes() != data:
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        tmp.write_bytes(data)
-        os.replace(tmp, path)
+    write_atomic(path, data)
     if measured:
         return {"measured": True}
     return {"sha256": hashlib.sha256(data).hexdigest(), **({"tolerance": tol} if tol else {})}

@@ -162,7 +162,8 @@ def bases_markdown() -> str:
     return "\n".join(f"- `{b}`: {d}." for b, d in BASES.items()) + "\n"
 
 
-def _crosstab_markdown(t: pd.DataFrame) -> str:
+def crosstab_markdown(t: pd.DataFrame) -> str:
+    """A verdict x basis table (:func:`~.reproduction.crosstab`) as Markdown."""
     lines = ["| basis | " + " | ".join(VERDICTS) + " | total |",
              "| --- | " + " | ".join("---:" for _ in VERDICTS) + " | ---: |"]
     for b, r in t.iterrows():
@@ -184,7 +185,7 @@ def scorecard_markdown(cards: pd.DataFrame, full: bool = True, notes: bool = Tru
                      + " | ".join(str(r[v]) for v in VERDICTS)
                      + f" | {r['total']} | {r['independent']} |")
     out = ((headline(cards) + "\n\n" if len(cards) else "") + "\n".join(lines) + "\n\n"
-           + "Verdict x basis, all papers:\n\n" + _crosstab_markdown(crosstab(cards)))
+           + "Verdict x basis, all papers:\n\n" + crosstab_markdown(crosstab(cards)))
     return out + ("\n" + rows_markdown(cards, notes) if full else "")
 
 

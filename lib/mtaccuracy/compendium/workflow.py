@@ -46,8 +46,17 @@ import pandas as pd
 from ..papers import guo2016, rong, xu2022, yang2021, your_machine, your_spindle, zheng2024
 from ..papers.parameters import NotebookParameters, ParameterError, check, values
 from . import provenance
-from .notebook import FIGURES, NOTEBOOKS, ROOT, available_memory, input_path, output_folder
-from .reproduction import VERDICTS
+from .notebook import (
+    FIGURES,
+    NOTEBOOKS,
+    ROOT,
+    available_memory,
+    files_of,
+    input_path,
+    output_folder,
+)
+from .notebook import check_memory as refuse_oversized
+from .reproduction import VERDICTS, write_table
 
 #: Every notebook's declaration, in notebook order.
 DECLARATIONS = tuple(m.Parameters for m in (zheng2024, rong, guo2016, xu2022, yang2021,
@@ -161,18 +170,14 @@ def edited_outputs(folder: Path, stem: str) -> list[str]:
                   and provenance.sha256(folder / n) != e["sha256"])
 
 
-def check_memory(runs: dict[str, dict], cores: int) -> int:
+def check_memory(runs: dict[str, dict]) -> int:
     """Refuse a run that cannot fit in the memory left; return that memory in MB.
 
     Snakemake then schedules the runs so that their declared bounds never add up to more."""
-    have, what = available_memory()
+    have = available_memory()
     for stem, given in runs.items():
-        need = check(declaration(stem), given).memory_bytes()
-        if need > have:
-            raise ParameterError(f"{stem}: these parameters need about {need / 1e9:.3g} GB of "
-                                 f"memory, more than the {have / 1e9:.3g} GB left ({what}); "
-                                 f"lower the sample sizes")
-    return int(have / 1e6)
+        refuse_oversized(check(declaration(stem), given), available=have)
+    return int(have[0] / 1e6)
 
 
 # --- what Snakemake needs to know of a run --------------------------------------------------
@@ -197,9 +202,7 @@ def inputs(stem: str, given: dict) -> list[str]:
     filled = check(declaration(stem), given)
     found = set(provenance.library_modules(NOTEBOOKS / f"{stem}.ipynb"))
     for name in type(filled).files():
-        p = input_path(getattr(filled, name), name)
-        files = [p] if p.is_file() else sorted(p.rglob("*"))
-        found.update(f for f in files if f.is_file() and f.name != provenance.SIDECAR)
+        found.update(files_of(input_path(getattr(filled, name), name)))
     last = provenance.read(target(stem, given)[0]).get("run", {}).get("inputs", {})
     for name in last:
         p = Path(name) if Path(name).is_absolute() else ROOT / name
@@ -496,11 +499,9 @@ def summarise(stem: str, runs: dict[str, dict], folders: dict[str, Path], out: P
         .sum(axis=1) > 1
     out.mkdir(parents=True, exist_ok=True)
     record = {"notebook": f"{stem} (sweep)", "runs": runs}
-    files = {}
-    for name, table in (("values.csv", df.drop(columns="verdict")),
-                        ("verdict_stability.csv", counts)):
-        table.to_csv(out / name, index=False, lineterminator="\n")
-        files[name] = {"sha256": provenance.sha256(out / name)}
+    files = {name: write_table(table, out / name)
+             for name, table in (("values.csv", df.drop(columns="verdict")),
+                                 ("verdict_stability.csv", counts))}
     provenance.write_sidecar(out, {"run": record, "files": files})
 
 
@@ -632,7 +633,7 @@ def main(argv=None) -> int:
                                          f"compendium wrote it; a run would overwrite it: move "
                                          f"it away first")
             cores = _cores(args.cores)
-            mem = check_memory(runs, cores)
+            mem = check_memory(runs)
             return _snakemake({"runs": runs}, cores=cores, mem_mb=mem, force=args.force,
                               workdir=args.workdir, profile=args.profile)
         if args.command == "sweep":
@@ -642,7 +643,7 @@ def main(argv=None) -> int:
             out = output_folder(given.get("output_dir",
                                           declaration(stem).param["output_dir"].default), stem)
             cores = _cores(args.cores)
-            mem = check_memory({stem: max(runs.values(), key=lambda g: memory_mb(stem, g))}, cores)
+            mem = check_memory({stem: max(runs.values(), key=lambda g: memory_mb(stem, g))})
             return _snakemake({"sweep": {"stem": stem, "runs": runs, "out": str(out)}},
                               cores=cores, mem_mb=mem, force=False, targets=["sweep"],
                               profile=args.profile)

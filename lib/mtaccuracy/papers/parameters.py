@@ -122,20 +122,25 @@ class NotebookParameters(param.Parameterized):
                          f"# {cls.param[n].doc}" for n in cls.names())
 
     @classmethod
+    def allowed(cls, name: str) -> str:
+        """What a parameter allows beyond its type, in words ("" when nothing more)."""
+        p = cls.param[name]
+        if isinstance(p, param.Selector):
+            return f"one of {'|'.join(map(str, p.objects))}"
+        if isinstance(p, NumberList):
+            return f"each in {p.describe_items()}"
+        if isinstance(p, param.Number) and p.bounds is not None:
+            (lo, hi), inc = p.bounds, p.inclusive_bounds
+            return (f"{'[' if inc[0] else '('}{'-inf' if lo is None else lo}, "
+                    f"{'inf' if hi is None else hi}{']' if inc[1] else ')'}")
+        if isinstance(p, OutputFolder):
+            return "its own folder under figures/ or a folder outside the repository"
+        return ""
+
+    @classmethod
     def describe(cls, name: str) -> str:
         """One line on a parameter: name, default, type, what is allowed, help."""
-        p = cls.param[name]
-        allowed = ""
-        if isinstance(p, param.Selector):
-            allowed = f"one of {'|'.join(map(str, p.objects))}"
-        elif isinstance(p, NumberList):
-            allowed = f"each in {p.describe_items()}"
-        elif isinstance(p, param.Number) and p.bounds is not None:
-            (lo, hi), inc = p.bounds, p.inclusive_bounds
-            allowed = (f"{'[' if inc[0] else '('}{'-inf' if lo is None else lo}, "
-                       f"{'inf' if hi is None else hi}{']' if inc[1] else ')'}")
-        elif isinstance(p, OutputFolder):
-            allowed = "its own folder under figures/ or a folder outside the repository"
+        p, allowed = cls.param[name], cls.allowed(name)
         return (f"{name} = {p.default!r} ({type_name(p)}{'; ' + allowed if allowed else ''})"
                 f"  {p.doc}")
 
