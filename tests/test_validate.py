@@ -46,3 +46,28 @@ def test_rng_continues_a_generator_and_seeds_reproducibly():
     for bad in (True, -1, "x"):
         with pytest.raises(ValueError, match="seed must be"):
             rng(bad)
+
+
+def test_file_bytes_refuses_what_is_not_a_regular_file(tmp_path):
+    """A FIFO would hang open(), a link to /dev/zero would fill memory: both refused at once."""
+    import os
+
+    from mtaccuracy.validate import FileRefused, file_bytes
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    zero = tmp_path / "zero.csv"
+    zero.symlink_to("/dev/zero")
+    dangling = tmp_path / "gone.csv"
+    dangling.symlink_to(tmp_path / "nothing")
+    cases = {fifo: "FIFO", zero: "character device", tmp_path: "directory",
+             dangling: "not found"}
+    for path, words in cases.items():
+        with pytest.raises(FileRefused, match=words):
+            file_bytes(path, max_bytes=100)
+    big = tmp_path / "big.csv"
+    big.write_bytes(b"x" * 101)
+    with pytest.raises(FileRefused, match="101 bytes; files up to 100"):
+        file_bytes(big, max_bytes=100)
+    good = tmp_path / "link.csv"
+    good.symlink_to(big)
+    assert file_bytes(good, max_bytes=101) == b"x" * 101

@@ -13,10 +13,12 @@ layer's lowest module depend on scikit-learn.
 from __future__ import annotations
 
 import numbers
+import os
+import stat
 
 import numpy as np
 
-__all__ = ["integer", "probability", "rng"]
+__all__ = ["integer", "probability", "rng", "file_bytes", "FileRefused"]
 
 
 def _range(low, high) -> str:
@@ -114,3 +116,74 @@ def rng(seed) -> np.random.Generator:
     except (TypeError, ValueError) as exc:
         raise ValueError(f"seed must be None, an integer >= 0 or a numpy Generator, "
                          f"got {seed!r}") from exc
+
+
+class FileRefused(ValueError):
+    """A path that is not a readable regular file within its reader's size (:func:`file_bytes`);
+    ``str()`` is the problem alone, for the reader to put after its file's name."""
+
+
+_KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISSOCK, "a socket"))
+
+
+def _kind(mode: int) -> str | None:
+    """What a file that is not regular is, from its ``st_mode``; None for a regular file."""
+    if stat.S_ISREG(mode):
+        return None
+    return next((name for test, name in _KINDS if test(mode)), "not a regular file")
+
+
+def file_bytes(path, *, max_bytes: int) -> bytes:
+    """The bytes of a regular file of at most ``max_bytes``, refused before a byte is read.
+
+    Every reader of a user's file (probe file, thermal folder, axis table, ranges) reads
+    through this, so that a directory, a FIFO, a device, a socket, or a link to any of them is
+    refused at once instead of hanging (a FIFO) or filling memory (a link to ``/dev/zero``).
+    The file is opened non-blocking and checked again on its descriptor (it cannot be swapped
+    between the check and the read), and at most ``max_bytes + 1`` bytes are read (a file that
+    grows while being read is refused too).  Written by hand: ``open()`` and ``pathlib`` block
+    on a FIFO and read devices.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file; a symbolic link is followed to what it points at.
+    max_bytes : int
+        The reader's documented largest file.
+
+    Returns
+    -------
+    bytes
+
+    Raises
+    ------
+    FileRefused
+        Naming the problem: not found, not a regular file (which kind), larger than
+        ``max_bytes``, or unreadable (the operating system's reason).
+    """
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise FileRefused("file not found") from None
+    except (OSError, ValueError) as exc:          # a dangling link loop, a NUL in the path
+        raise FileRefused(f"cannot be read ({exc.strerror if isinstance(exc, OSError) else exc})"
+                          ) from None
+    kind = _kind(st.st_mode)
+    if kind is not None:
+        raise FileRefused(f"is {kind}, not a regular file")
+    if st.st_size > max_bytes:
+        raise FileRefused(f"{st.st_size} bytes; files up to {max_bytes} bytes are read")
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as exc:
+        raise FileRefused(f"cannot be read ({exc.strerror})") from None
+    with os.fdopen(fd, "rb") as handle:
+        kind = _kind(os.fstat(fd).st_mode)
+        if kind is not None:
+            raise FileRefused(f"is {kind}, not a regular file")
+        raw = handle.read(max_bytes + 1)
+    if len(raw) > max_bytes:
+        raise FileRefused(f"more than {max_bytes} bytes; files up to {max_bytes} bytes are read")
+    return raw
