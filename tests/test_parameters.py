@@ -5,6 +5,7 @@ The notebook's cell tagged ``parameters`` is the declaration's rendering, which 
 
 import json
 import math
+import re
 
 import papermill
 import param
@@ -164,3 +165,20 @@ def test_literals_are_what_papermill_and_python_read_back():
         assert eval(literal(v)) == v  # noqa: S307 - a literal we wrote
     assert literal("figures/x") == '"figures/x"'
     assert not math.isnan(check(your_spindle.Parameters, {}).amplified_above)
+
+
+@pytest.mark.parametrize("path, words", [
+    ("/tmp/caf\udce9.csv", "not valid UTF-8 text (byte 0xe9 at character 8)"),
+    ("data/x\x00.csv", "holds a NUL character"),
+])
+def test_a_path_that_is_not_utf8_text_is_refused_naming_the_parameter(path, words):
+    """A Latin-1 file name reaches Python with surrogate escapes; it cannot go into the
+    notebook's JSON, so the parameter check refuses it, for input files, folders and outputs."""
+    for declared, name in ((your_spindle.Parameters, "probe_file"),
+                           (xu2022.Parameters, "data_dir"),
+                           (guo2016.Parameters, "output_dir")):
+        pattern = f"parameter '{name}': the path .*{re.escape(words)}"
+        with pytest.raises(ParameterError, match=pattern):
+            check(declared, {name: path})
+    assert check(your_spindle.Parameters, {"probe_file": "/tmp/café.csv"}).probe_file \
+        == "/tmp/café.csv"

@@ -59,15 +59,37 @@ class NumberList(param.List):
                 f"{'inf' if hi is None else hi}{']' if self.item_inclusive[1] else ')'}")
 
 
-class InputFile(param.String):
+class _Path(param.String):
+    """A path parameter: a string that is valid UTF-8 text and holds no NUL.
+
+    A path that is not UTF-8 (a Latin-1 file name, given on the command line, arrives with
+    surrogate escapes) cannot go into the executed notebook's JSON, and a NUL ends a path for the
+    operating system: both are refused here, naming the parameter, before any work."""
+
+    def _validate_value(self, val, allow_None):
+        super()._validate_value(val, allow_None)
+        if isinstance(val, str):
+            try:
+                val.encode("utf-8")
+            except UnicodeEncodeError as exc:
+                raise ValueError(f"parameter '{self.name}': the path {val!r} is not valid UTF-8 "
+                                 f"text (byte 0x{ord(val[exc.start]) & 0xff:02x} at character "
+                                 f"{exc.start}); rename the file or folder with UTF-8 "
+                                 f"characters") from None
+            if "\0" in val:
+                raise ValueError(f"parameter '{self.name}': the path {val!r} holds a NUL "
+                                 f"character")
+
+
+class InputFile(_Path):
     """The path of an input file: relative to the repository root, or absolute."""
 
 
-class InputFolder(param.String):
+class InputFolder(_Path):
     """The path of an input folder: relative to the repository root, or absolute."""
 
 
-class OutputFolder(param.String):
+class OutputFolder(_Path):
     """Where a run writes its figures and tables (``figures/<stem>`` or outside the repository)."""
 
 
