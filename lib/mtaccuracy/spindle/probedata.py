@@ -1,7 +1,8 @@
 """A multi-probe measurement, whatever file it came from, and the checks it passes.
 
 :class:`ProbeData` is what a reader of probe readings returns (:func:`~mtaccuracy.spindle.
-probefile.read_probe_file` for the angle-sampled CSV file of ``data/spindle/README.md``), and
+probefile.read_probe_file` for the angle- or time-sampled CSV file of
+``data/spindle/README.md``), and
 :class:`ProbeFileError` what it raises, naming the file and the line.  The checks here hold
 for any file format: the probe columns ``probe_<mounting angle in degrees>_um``, plausible
 readings in micrometres, and a probe layout that separates the harmonics asked for
@@ -26,7 +27,7 @@ from .probes import (
 )
 from .separation import TWO_PI, CancelledHarmonicsWarning
 
-__all__ = ["ProbeFileError", "ProbeData", "probe_column", "MAX_SAMPLES", "MAX_ABS_UM",
+__all__ = ["ProbeFileError", "ProbeData", "Resampling", "probe_column", "MAX_SAMPLES", "MAX_ABS_UM",
            "MIN_SPAN_UM"]
 
 #: Samples per revolution: up to 16384 (harmonics up to 8191; a roundness instrument takes 3600
@@ -64,6 +65,84 @@ class ProbeFileError(ValueError):
 
 
 @dataclass(frozen=True)
+class Resampling:
+    """How a time-sampled probe file was resampled onto equal spindle angles.
+
+    Made by :mod:`~mtaccuracy.spindle.timefile`, for a notebook to print (:meth:`describe`).
+
+    Attributes
+    ----------
+    reference : {"index", "encoder"}
+        What gave the spindle angle: a once-per-revolution index pulse or an encoder.
+    sample_rate_hz : float
+        The data acquisition's sample rate (Hz), fitted to ``time_s``.
+    samples_per_revolution : float
+        The mean samples per revolution of the file, S.
+    n_samples : int
+        N, the equal angles per revolution resampled onto.
+    marks : int
+        The index pulses (or the encoder's zero crossings) the speed was fitted to.
+    revolutions : int
+        The complete revolutions resampled, R.
+    speed_rpm : float
+        The fitted mean speed (rev/min) over the marks.
+    drift_per_s : float
+        The fitted relative change of speed per second (1/s; 0.005 is +0.5 %/s).
+    fit_degree : int
+        The degree of the polynomial of the spindle's revolutions in time.
+    residual_s : float
+        The largest residual of the fit, in time (s): a mark's, or an encoder sample's.
+    residual_limit_s : float
+        What the sample period explains (s): beyond it the reader warned that the speed is not
+        steady.
+    spline_degree : int
+        The degree of the interpolating spline of the probes in time.
+    interpolation_bound : float
+        The interpolation's largest relative error at the top harmonic separated (relative to
+        that harmonic's amplitude in the readings; lower harmonics much less).
+    first_line, last_line : int
+        The file lines of the first and the last mark used.
+    start_s : float
+        The fitted time (s, the file's ``time_s``) of the first resampled revolution's
+        theta = 0.
+    """
+
+    reference: str
+    sample_rate_hz: float
+    samples_per_revolution: float
+    n_samples: int
+    marks: int
+    revolutions: int
+    speed_rpm: float
+    drift_per_s: float
+    fit_degree: int
+    residual_s: float
+    residual_limit_s: float
+    spline_degree: int
+    interpolation_bound: float
+    first_line: int
+    last_line: int
+    start_s: float
+
+    def describe(self) -> str:
+        """One line saying how the file was resampled.
+
+        Returns
+        -------
+        str
+        """
+        return (f"time-sampled at {self.sample_rate_hz:.6g} Hz, {self.samples_per_revolution:.1f}"
+                f" samples per revolution; {self.marks} {self.reference} marks (lines "
+                f"{self.first_line}-{self.last_line}) fitted together: {self.speed_rpm:.2f} rpm, "
+                f"drift {100 * self.drift_per_s:+.3f} %/s (degree {self.fit_degree}), largest "
+                f"residual {1e6 * self.residual_s:.3g} us (sample period "
+                f"{1e6 * self.residual_limit_s:.3g} us); {self.revolutions} complete revolutions "
+                f"resampled onto N = {self.n_samples} angles by a degree-"
+                f"{self.spline_degree} spline (error <= {self.interpolation_bound:.1e} of the "
+                f"top harmonic's amplitude)")
+
+
+@dataclass(frozen=True)
 class ProbeData:
     """A checked multi-probe measurement, as a reader returns it.
 
@@ -92,6 +171,9 @@ class ProbeData:
         Other columns of the file, not used.
     header_line : int
         The line of the header.
+    resampling : Resampling or None
+        How a time-sampled file was resampled onto equal angles; None for an angle-sampled
+        file.
     """
 
     path: str
@@ -104,6 +186,7 @@ class ProbeData:
     cancelled: tuple = ()
     ignored_columns: tuple = ()
     header_line: int = 1
+    resampling: Resampling | None = None
 
     @property
     def phi(self) -> np.ndarray:
@@ -129,6 +212,25 @@ class ProbeData:
     def n_samples(self) -> int:
         """int: N, samples per revolution."""
         return self.signals_um.shape[2]
+
+
+def _show_number(value) -> str:
+    """A number for a message: the shortest text that reads back as the same float (never
+    rounded into another value, as ``:g`` would), positional unless very large or small.
+
+    Parameters
+    ----------
+    value : float
+
+    Returns
+    -------
+    str
+        E.g. ``360``, ``0.1``, ``1e+25``.
+    """
+    v = float(value)
+    if v == 0 or 1e-6 <= abs(v) < 1e16:
+        return np.format_float_positional(v, trim="-")
+    return repr(v)
 
 
 def probe_column(angle_deg: float) -> str:
@@ -212,14 +314,16 @@ def _check_values(path, columns, values, lines, header_line) -> None:
         if big.any():
             rows = np.flatnonzero(big)
             raise ProbeFileError(path, lines(rows[0]), (
-                f"column {c!r} reads {v[rows[0]]:g} um, beyond +-{MAX_ABS_UM:g} um (10 mm), "
+                f"column {c!r} reads {_show_number(v[rows[0]])} um, beyond +-{MAX_ABS_UM:g} um "
+                f"(10 mm), "
                 f"more than a displacement probe's range; lines {lines.some(rows)}: in nm? "
                 f"(um = nm / 1000)"))
         span = float(np.ptp(v))
         if span < MIN_SPAN_UM:
             raise ProbeFileError(path, header_line, (
-                f"column {c!r} spans only {span:.3g} um over the whole file ({v.min():g} .. "
-                f"{v.max():g}), less than the {MIN_SPAN_UM:g} um (10 nm) that probe noise, the "
+                f"column {c!r} spans only {span:.3g} um over the whole file "
+                f"({_show_number(v.min())} .. {_show_number(v.max())}), less than the "
+                f"{MIN_SPAN_UM:g} um (10 nm) that probe noise, the "
                 f"artefact's form and any spindle's error motion give: in mm? (um = mm x "
                 f"1000), or a probe that did not read"))
 

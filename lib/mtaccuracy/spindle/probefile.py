@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .. import csvlines
+from .. import csvlines, validate
+from . import timefile
 from .probedata import (
     MAX_SAMPLES,
     ProbeData,
@@ -32,13 +33,14 @@ from .probedata import (
     _check_layout,
     _check_values,
     _probe_columns,
+    _show_number,
     probe_column,
 )
 from .probes import MIN_SAMPLES
 from .separation import TWO_PI
 
 __all__ = ["read_probe_file", "write_probe_file", "MAX_ROWS", "MAX_FILE_BYTES",
-           "ANGLE_TOLERANCE"]
+           "ANGLE_TOLERANCE", "MAX_REVOLUTION"]
 
 #: Data rows (revolutions x samples): 500 000 rows (e.g. 122 revolutions of 4096 samples) keep a
 #: run of notebook 07 within 0.6 GB of memory and about 20 s (measured with 16 probes); a larger
@@ -52,7 +54,15 @@ MAX_FILE_BYTES = 120_000_000
 #: deviates by a whole step.
 ANGLE_TOLERANCE = 0.05
 
+#: Revolution numbers beyond this are refused: a revolution counter does not reach it (1e15
+#: revolutions at 60 000 rpm take 30 million years), and float64 and int64 hold every whole
+#: number up to it exactly, so a message prints the number as written.
+MAX_REVOLUTION = 10**15
+
 _REQUIRED = ("revolution", "angle_deg")
+_TIME = "time_s"
+_REFERENCES = ("index", "encoder_deg")
+_COMMENT = "#"
 #: The header and the blank lines before it lie within this many characters of the start.
 _HEAD_CHARS = 1_000_000
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+\s*$")
@@ -60,42 +70,83 @@ _COMMA_HINT = ("; decimal commas (1,5)? In a comma-separated file write decimal 
                "save the file semicolon-separated")
 
 
-def _text(path: Path) -> str:
+def _text(raw: bytes) -> str:
     """The file's text (UTF-8, a byte-order mark allowed; checked when it was first read)."""
-    return path.read_bytes().decode("utf-8-sig")
+    return raw.decode("utf-8-sig")
+
+
+def _show(v) -> str:
+    """A number as parsed, shortest round-trip: never rounded into another value."""
+    return _show_number(v)
 
 
 def _records(text: str, sep: str):
-    """The records of a file's text with their lines (:func:`mtaccuracy.csvlines.records`),
-    the header first, the fields as the file has them (swapped back in a semicolon file), rows
-    whose every field is empty left out (pandas' rows and these stay in step)."""
-    for rec in csvlines.records(text, sep=sep):
+    """The records of a file's text with their lines (:func:`mtaccuracy.csvlines.records`,
+    ``#`` comments dropped), the header first, the fields as the file has them (swapped back in
+    a semicolon file), rows whose every field is empty left out (pandas' rows and these stay in
+    step)."""
+    for rec in csvlines.records(text, sep=sep, comment=_COMMENT):
         if any(f.strip() for f in rec.fields):
             yield rec
 
 
-class _Lines:
-    """The physical lines of data rows, found (the file read again, one pass of
-    :func:`csvlines.records`) only when a message needs them."""
+def _csv_refusal(path, exc: csvlines.CSVLineError) -> ProbeFileError:
+    """A record the csv module cannot read, named at its line."""
+    if "field limit" in exc.reason:
+        return ProbeFileError(path, exc.line, (
+            f"a field of more than {_FIELD_LIMIT} characters (the csv module's limit): no "
+            f"value of a probe file is that long; a line without its line ends, or not a CSV "
+            f"file?"))
+    return ProbeFileError(path, exc.line, exc.reason)
 
-    def __init__(self, path: Path, sep: str):
-        self.path, self.sep, self._cache = path, sep, None
+
+_FIELD_LIMIT = 131072
+
+
+class _Lines:
+    """The physical lines of data rows, found (one pass of :func:`csvlines.records` over the
+    bytes read once) only when a message needs them.  A record the csv module cannot read
+    (a field over 128 KiB) is refused at its own line when a message needs a row after it."""
+
+    def __init__(self, path: Path, raw: bytes, sep: str, names=()):
+        self.path, self.raw, self.sep, self.names = path, raw, sep, list(names)
+        self._cache, self._error = None, None
 
     def _all(self):
         if self._cache is None:
             first = []
-            recs = _records(_text(self.path), self.sep)
+            recs = _records(_text(self.raw), self.sep)
             try:
                 next(recs, None)
-                first = [r.first for r in recs]
-            except csvlines.CSVLineError:
-                pass
+                for r in recs:
+                    first.append(r.first)
+            except csvlines.CSVLineError as exc:
+                self._error = exc
             self._cache = first
         return self._cache
 
     def __call__(self, row: int) -> int:
         lines = self._all()
-        return lines[row] if 0 <= row < len(lines) else -1
+        if 0 <= row < len(lines):
+            return lines[row]
+        if self._error is not None:
+            raise _csv_refusal(self.path, self._error)
+        raise ProbeFileError(self.path, None, (
+            f"data row {row + 1} could not be matched to a line of the file (not a readable "
+            f"CSV file?)"))
+
+    def cell(self, row: int, column: str) -> str:
+        """The text of a data row's cell, as written."""
+        j = self.names.index(column)
+        recs = _records(_text(self.raw), self.sep)
+        try:
+            next(recs, None)
+            for k, rec in enumerate(recs):
+                if k == row:
+                    return rec.fields[j].strip() if j < len(rec.fields) else ""
+        except csvlines.CSVLineError as exc:
+            raise _csv_refusal(self.path, exc) from None
+        return "?"
 
     def some(self, rows, limit: int = 10) -> str:
         rows = list(rows)
@@ -117,7 +168,8 @@ def _header(path, text):
     it lie within :data:`_HEAD_CHARS` characters).  The first non-blank line tells the
     separator: ``;`` when it holds one (a spreadsheet's CSV in a locale with decimal commas),
     else ``,``."""
-    first = next((ln for ln in text.splitlines() if ln.strip()), "")
+    first = next((ln for ln in text.splitlines() if ln.split(_COMMENT, 1)[0].strip()), "")
+    first = first.split(_COMMENT, 1)[0] if '"' not in first else first
     sep = ";" if ";" in first else ","
     if sep == "," and "\t" in first and "," not in first:
         number = text.splitlines().index(first) + 1
@@ -129,15 +181,44 @@ def _header(path, text):
     try:
         head = next(recs, None)
     except csvlines.CSVLineError as exc:
-        raise ProbeFileError(path, exc.line, exc.reason) from None
+        raise _csv_refusal(path, exc) from None
     if head is None:
         raise ProbeFileError(path, None, "the file is empty; it needs the header revolution,"
-                                         "angle_deg,probe_<angle>_um,... and data rows")
+                                         "angle_deg,probe_<angle>_um,... (or time_s,index,"
+                                         "probe_<angle>_um,...) and data rows")
     names = [_name(f, sep) for f in head.fields]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise ProbeFileError(path, head.first, f"column(s) {twice} appear more than once")
     return head.first, names, sep
+
+
+def _layout(path, line, names) -> str:
+    """The file's layout from its header: ``"angle"`` (``revolution``, ``angle_deg``) or
+    ``"time"`` (``time_s`` and one of ``index``, ``encoder_deg``); refuses a header with
+    neither, or with both ``index`` and ``encoder_deg``."""
+    if _TIME in names and not any(n in names for n in _REQUIRED):
+        refs = [n for n in _REFERENCES if n in names]
+        if len(refs) == 2:
+            raise ProbeFileError(path, line, (
+                "both 'index' and 'encoder_deg': a time-sampled file takes its spindle angle "
+                "from one of them; drop the other column (or rename it)"))
+        if not refs:
+            like = [n for n in names if n.lower() in ("idx", "trigger", "once_per_rev",
+                                                      "encoder", "angle", "tacho")]
+            hint = f" ({like[0]!r} found: rename it 'index' or 'encoder_deg')" if like else ""
+            raise ProbeFileError(path, line, (
+                f"a time-sampled file (time_s) needs an 'index' column (1 where the "
+                f"once-per-revolution mark is seen, else 0) or an 'encoder_deg' column (the "
+                f"spindle angle){hint}"))
+        return "time"
+    if any(n in names for n in _REFERENCES) and not any(n in names for n in _REQUIRED):
+        like = [n for n in names if n.lower() in ("time", "t", "time_ms", "timestamp", "t_s")]
+        hint = (f" ({like[0]!r} found: rename it 'time_s'; times in seconds)") if like else ""
+        raise ProbeFileError(path, line, f"missing column 'time_s'{hint}; a time-sampled file "
+                                         f"needs time_s, index or encoder_deg, and "
+                                         f"probe_<angle>_um columns")
+    return "angle"
 
 
 def _require_columns(path, line, names) -> None:
@@ -148,16 +229,18 @@ def _require_columns(path, line, names) -> None:
             like = [n for n in names if n.lower() in alts or n.lower() == want]
             hint = (f" ({like[0]!r} found: rename it {want!r}"
                     + ("; angles in degrees" if want == "angle_deg" else "") + ")") if like else ""
-            raise ProbeFileError(path, line, f"missing column {want!r}{hint}; the header needs "
-                                             f"revolution, angle_deg and probe_<angle>_um columns")
+            raise ProbeFileError(path, line, (
+                f"missing column {want!r}{hint}; the header needs revolution, angle_deg and "
+                f"probe_<angle>_um columns (an angle-sampled file), or time_s, index or "
+                f"encoder_deg and probe_<angle>_um columns (a time-sampled file)"))
 
 
-def _parse(path, raw, names, header_line, sep):
+def _parse(path, raw, names, header_line, sep, lines):
     """The data rows as a DataFrame (pandas' C parser; blank rows, and rows whose every field
     is empty, skipped), or a message naming the line of a row with more fields than the
     header."""
     def ragged():
-        recs = _records(_text(path), sep)
+        recs = _records(_text(raw), sep)
         try:
             next(recs, None)
             for rec in recs:
@@ -171,7 +254,7 @@ def _parse(path, raw, names, header_line, sep):
             return ProbeFileError(path, exc.line, "a quoted field opens here and is never "
                                                   "closed (a '\"' is missing)")
         except csvlines.CSVLineError as exc:
-            return ProbeFileError(path, exc.line, exc.reason)
+            return _csv_refusal(path, exc)
         return ProbeFileError(path, None, "not a readable CSV file")
 
     with warnings.catch_warnings(record=True) as caught:
@@ -179,7 +262,8 @@ def _parse(path, raw, names, header_line, sep):
         try:
             df = pd.read_csv(io.BytesIO(raw), encoding="utf-8-sig", sep=sep,
                              decimal="," if sep == ";" else ".", na_filter=False,
-                             skipinitialspace=True, index_col=False, nrows=MAX_ROWS + 1)
+                             skipinitialspace=True, index_col=False, nrows=MAX_ROWS + 1,
+                             comment=_COMMENT)
         except pd.errors.ParserError:
             raise ragged() from None
         except pd.errors.EmptyDataError:
@@ -195,7 +279,7 @@ def _parse(path, raw, names, header_line, sep):
     if df.empty:
         raise ProbeFileError(path, header_line, "the file has a header but no data rows")
     if len(df) > MAX_ROWS:
-        raise ProbeFileError(path, _Lines(path, sep)(MAX_ROWS), (
+        raise ProbeFileError(path, lines(MAX_ROWS), (
             f"more than {MAX_ROWS} data rows; at most {MAX_ROWS} (revolutions x samples per "
             f"revolution) are read, to keep a run within about 0.6 GB of memory: keep fewer "
             f"revolutions"))
@@ -217,7 +301,8 @@ def _numbers(path, df, column, lines, sep) -> np.ndarray:
     bad = ~np.isfinite(values)
     if bad.any():
         rows = np.flatnonzero(bad)
-        shown = ", ".join(repr(t) for t in text.iloc[rows[:3]])
+        shown = ", ".join(repr(t if len(t) <= 40 else t[:37] + "...") for t in
+                          text.iloc[rows[:3]])
         comma = sep == "," and any(_DECIMAL_COMMA.match(t) for t in text.iloc[rows[:3]])
         hint = _COMMA_HINT if comma else "; every cell needs a finite number"
         raise ProbeFileError(path, lines(rows[0]), (
@@ -229,25 +314,45 @@ def _numbers(path, df, column, lines, sep) -> np.ndarray:
 def _check_structure(path, rev, ang, lines):
     """Revolutions in order and of equal length, angles increasing and equally spaced, the same
     every revolution; returns (revolution numbers, N, the first revolution's angles)."""
+    big = np.abs(rev) > MAX_REVOLUTION
+    if big.any():
+        row = int(np.flatnonzero(big)[0])
+        raise ProbeFileError(path, lines(row), (
+            f"revolution {lines.cell(row, 'revolution')} is beyond {MAX_REVOLUTION:.0e}, more "
+            f"than a revolution counter reaches: number the file's revolutions from 1"))
     if np.any(rev != np.round(rev)):
         row = int(np.flatnonzero(rev != np.round(rev))[0])
-        raise ProbeFileError(path, lines(row), f"revolution {rev[row]:g} is not a whole number")
-    back = np.flatnonzero(np.diff(rev) < 0)
+        raise ProbeFileError(path, lines(row), (
+            f"revolution {lines.cell(row, 'revolution')} is not a whole number"))
+    rn = rev.astype(np.int64)                      # exact: whole and within MAX_REVOLUTION
+    back = np.flatnonzero(np.diff(rn) < 0)
     if back.size:
         i = int(back[0])
         raise ProbeFileError(path, lines(i + 1), (
-            f"revolution {rev[i + 1]:g} comes after revolution {rev[i]:g} (line {lines(i)}): "
+            f"revolution {rn[i + 1]} comes after revolution {rn[i]} (line {lines(i)}): "
             f"the rows of a revolution must stand together and the revolutions in the order "
             f"measured"))
-    starts = np.r_[0, np.flatnonzero(np.diff(rev) > 0) + 1]
-    sizes = np.diff(np.r_[starts, len(rev)])
+    gap = np.flatnonzero(np.diff(rn) > 1)
+    if gap.size:
+        i = int(gap[0])
+        missing = (f"revolution {rn[i] + 1} is" if rn[i + 1] - rn[i] == 2 else
+                   f"revolutions {rn[i] + 1}..{rn[i + 1] - 1} are")
+        raise ProbeFileError(path, lines(i + 1), (
+            f"revolution {rn[i + 1]} follows revolution {rn[i]} (line {lines(i)}): {missing} "
+            f"missing; the asynchronous motion and its spectrum need consecutive revolutions: "
+            f"keep only a run of consecutive revolutions (renumbering them would join "
+            f"revolutions that were not measured one after the other)"))
+    starts = np.r_[0, np.flatnonzero(np.diff(rn) > 0) + 1]
+    sizes = np.diff(np.r_[starts, len(rn)])
     if np.any(sizes != sizes[0]):
         j = int(np.flatnonzero(sizes != sizes[0])[0])
         a, b = starts[j], starts[j] + sizes[j] - 1
         raise ProbeFileError(path, lines(a), (
-            f"unequal samples per revolution: revolution {rev[a]:g} (lines {lines(a)}-"
-            f"{lines(b)}) has {sizes[j]} samples, revolution {rev[0]:g} (lines {lines(0)}-"
-            f"{lines(sizes[0] - 1)}) has {sizes[0]}; every revolution needs the same samples"))
+            f"unequal samples per revolution: revolution {rn[a]} (lines {lines(a)}-"
+            f"{lines(b)}) has {sizes[j]} samples, revolution {rn[0]} (lines {lines(0)}-"
+            f"{lines(sizes[0] - 1)}) has {sizes[0]}; every revolution needs the same samples"
+            f" (a file sampled in time? Write time_s and index or encoder_deg instead of "
+            f"revolution and angle_deg, and the reader resamples it)"))
     n, n_rev = int(sizes[0]), len(starts)
     if not MIN_SAMPLES <= n <= MAX_SAMPLES:
         raise ProbeFileError(path, lines(0), (
@@ -256,7 +361,7 @@ def _check_structure(path, rev, ang, lines):
     if np.any(np.abs(a[0]) > 720):
         row = int(np.flatnonzero(np.abs(a[0]) > 720)[0])
         raise ProbeFileError(path, lines(row), (
-            f"angle_deg = {ang[row]:g}: the spindle angle within a revolution, in degrees, "
+            f"angle_deg = {_show(ang[row])}: the spindle angle within a revolution, in degrees, "
             f"lies within -360..720"))
     step = np.diff(a, axis=1)
     if np.any(step <= 0):
@@ -269,8 +374,9 @@ def _check_structure(path, rev, ang, lines):
         else:
             hint = ""
         raise ProbeFileError(path, lines(row), (
-            f"angle_deg must increase within a revolution: {a[r, i + 1]:g} deg does not come "
-            f"after {a[r, i]:g} deg (line {lines(row - 1)}) in revolution {rev[r * n]:g}{hint}"))
+            f"angle_deg must increase within a revolution: {_show(a[r, i + 1])} deg does not "
+            f"come after {_show(a[r, i])} deg (line {lines(row - 1)}) in revolution "
+            f"{rn[r * n]}{hint}"))
     pitch = 360.0 / n
     expected = a[0, :1] + pitch * np.arange(n)
     off = np.abs(a[0] - expected) > ANGLE_TOLERANCE * pitch
@@ -279,8 +385,8 @@ def _check_structure(path, rev, ang, lines):
         span = a[0, -1] - a[0, 0]
         if abs(span - 360.0) < ANGLE_TOLERANCE * 360.0 / (n - 1):
             raise ProbeFileError(path, lines(n - 1), (
-                f"the last sample of revolution {rev[0]:g} ({a[0, -1]:g} deg) repeats its "
-                f"first ({a[0, 0]:g} deg, line {lines(0)}), 360 deg later: the N samples of a "
+                f"the last sample of revolution {rn[0]} ({_show(a[0, -1])} deg) repeats its "
+                f"first ({_show(a[0, 0])} deg, line {lines(0)}), 360 deg later: the N samples of a "
                 f"revolution are 360 / N apart and end one step before 360 deg; drop the "
                 f"repeated sample from every revolution"))
         hint = ""
@@ -288,19 +394,20 @@ def _check_structure(path, rev, ang, lines):
             hint = (f"; they span {span:.4g}, 2 pi (N - 1) / N: radians? (deg = rad x 180 / "
                     f"pi)")
         raise ProbeFileError(path, lines(i), (
-            f"angle_deg is not equally spaced over the revolution: {a[0, i]:g} deg where "
-            f"{n} samples from {a[0, 0]:g} deg (line {lines(0)}), 360 / {n} = {pitch:.6g} deg "
+            f"angle_deg is not equally spaced over the revolution: {_show(a[0, i])} deg where "
+            f"{n} samples from {_show(a[0, 0])} deg (line {lines(0)}), 360 / {n} = {pitch:.6g} deg "
             f"apart, put sample {i + 1} at {expected[i]:.6g} deg (tolerance "
             f"{ANGLE_TOLERANCE:g} of a step){hint}"))
     moved = np.abs(a - a[:1]) > ANGLE_TOLERANCE * pitch
     if moved.any():
         r, i = (int(v) for v in np.argwhere(moved)[0])
         raise ProbeFileError(path, lines(r * n + i), (
-            f"revolution {rev[r * n]:g} has sample {i + 1} at {a[r, i]:g} deg where revolution "
-            f"{rev[0]:g} has it at {a[0, i]:g} deg (line {lines(i)}); every revolution needs "
+            f"revolution {rn[r * n]} has sample {i + 1} at {_show(a[r, i])} deg where "
+            f"revolution {rn[0]} has it at {_show(a[0, i])} deg (line {lines(i)}); every "
+            f"revolution needs "
             f"the same angles: angle_deg is the angle within the revolution (if it counts on "
             f"across revolutions, write it modulo 360)"))
-    return rev[starts].astype(int), n, a[0]
+    return rn[starts], n, a[0]
 
 
 def read_probe_file(path, *, max_harmonic: int | None = None, allow_cancelled: bool = False,
@@ -358,15 +465,14 @@ def read_probe_file(path, *, max_harmonic: int | None = None, allow_cancelled: b
         Naming the file, the line and the problem.
     """
     path = Path(path)
-    if not path.is_file():
-        raise ProbeFileError(path, None, "file not found (the probe file: revolution, "
-                                         "angle_deg, probe_<angle>_um columns; see "
-                                         "data/spindle/README.md)")
-    size = path.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise ProbeFileError(path, None, f"{size} bytes; files up to {MAX_FILE_BYTES} bytes "
-                                         f"are read ({MAX_ROWS} rows of 16 probes take less)")
-    raw = path.read_bytes()
+    try:
+        raw = validate.file_bytes(path, max_bytes=MAX_FILE_BYTES)
+    except validate.FileRefused as exc:
+        hint = (" (the probe file: revolution, angle_deg, probe_<angle>_um columns, or time_s, "
+                "index or encoder_deg, probe_<angle>_um; see data/spindle/README.md)"
+                if str(exc) == "file not found" else
+                f" ({MAX_ROWS} rows of 16 probes take less)" if "bytes" in str(exc) else "")
+        raise ProbeFileError(path, None, f"{exc}{hint}") from None
     try:
         head = raw.decode("utf-8-sig")[:_HEAD_CHARS]
     except UnicodeDecodeError as exc:
@@ -375,24 +481,43 @@ def read_probe_file(path, *, max_harmonic: int | None = None, allow_cancelled: b
     if on_read is not None:
         on_read(path)
     header_line, names, sep = _header(path, head)
-    _require_columns(path, header_line, names)
-    probes, angles, ignored = _probe_columns(path, header_line, names, _REQUIRED)
-    df = _parse(path, raw, names, header_line, sep)
-    del raw
-    lines = _Lines(path, sep)
-    rev = _numbers(path, df, "revolution", lines, sep)
-    ang = _numbers(path, df, "angle_deg", lines, sep)
+    layout = _layout(path, header_line, names)
+    if layout == "angle":
+        _require_columns(path, header_line, names)
+        own = _REQUIRED
+    else:
+        own = (_TIME, *_REFERENCES)
+    probes, angles, ignored = _probe_columns(path, header_line, names, own)
+    lines = _Lines(path, raw, sep, names)
+    df = _parse(path, raw, names, header_line, sep, lines)
     values = [_numbers(path, df, c, lines, sep) for c in probes]
-    revolutions, n, sample_deg = _check_structure(path, rev, ang, lines)
-    _check_values(path, probes, values, lines, header_line)
+    resampling = None
+    if layout == "angle":
+        rev = _numbers(path, df, "revolution", lines, sep)
+        ang = _numbers(path, df, "angle_deg", lines, sep)
+        del df
+        revolutions, n, sample_deg = _check_structure(path, rev, ang, lines)
+        _check_values(path, probes, values, lines, header_line)
+        signals = np.stack(values).reshape(len(probes), len(revolutions), n).transpose(1, 0, 2)
+    else:
+        ref = next(c for c in _REFERENCES if c in names)
+        time_s = _numbers(path, df, _TIME, lines, sep)
+        mark = _numbers(path, df, ref, lines, sep)
+        del df
+        _check_values(path, probes, values, lines, header_line)
+        signals, resampling = timefile.resample_time_series(
+            time_s, np.stack(values, axis=1), path=str(path), lines=lines,
+            header_line=header_line, stacklevel=2, **{ref: mark})
+        n = resampling.n_samples
+        revolutions = np.arange(1, signals.shape[0] + 1)
+        sample_deg = 360.0 * np.arange(n) / n
     k_top, cancelled = _check_layout(path, header_line, angles, n, max_harmonic,
                                      allow_cancelled)
-    signals = np.stack(values).reshape(len(probes), len(revolutions), n).transpose(1, 0, 2)
     return ProbeData(path=str(path), columns=tuple(probes), angles_deg=angles,
                      sample_deg=sample_deg, revolutions=revolutions,
                      signals_um=np.ascontiguousarray(signals), max_harmonic=k_top,
                      cancelled=tuple(cancelled), ignored_columns=tuple(ignored),
-                     header_line=header_line)
+                     header_line=header_line, resampling=resampling)
 
 
 def write_probe_file(path, signals_um, angles_deg, sample_deg, *, revolutions=None,
