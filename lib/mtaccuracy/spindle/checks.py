@@ -54,8 +54,9 @@ onto lower harmonics.  Two criteria, either of which warns:
 
 Neither fires on what is negligible: a synchronous misfit, or a top band's amplitude, below
 :data:`NEGLIGIBLE` (a thousandth) of the readings' rms (a noise-free simulation has no noise to
-compare with, and its second-order terms are not aliasing).  Limits: probes on the sample grid read an aliased harmonic exactly as the harmonic it folds
-onto, so only the spectrum criterion sees it; with one revolution the noise is estimated from
+compare with, and its second-order terms are not aliasing).  Limits: probes on the sample
+grid read an aliased harmonic exactly as the harmonic it folds onto, so only the spectrum
+criterion sees it; with one revolution the noise is estimated from
 the whole misfit, which aliasing inflates, so the spectrum criterion is then conservative.
 
 Why hand-written: these are the separation's own residual statistics (numpy FFT, pseudo-inverse).

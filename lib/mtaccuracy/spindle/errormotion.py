@@ -13,7 +13,8 @@ ISO 230-7:2015 (Geometric accuracy of axes of rotation), Clause 3, in brief:
   in the probes' frame; ``rotation="cw"``) a direction fixed to the spindle that points at
   ``alpha`` when ``theta = 0`` points at ``alpha - theta``: ``u = x cos(alpha - theta) + y
   sin(alpha - theta)``; with ``rotation="ccw"`` (the probe reads ``r(phi - theta)``, the
-  spindle turns the artefact by ``+theta``) it points at ``alpha + theta``.  (``x cos(theta + alpha) + y sin(theta + alpha)``, Eq. 9 of Yang et al. 2021 and
+  spindle turns the artefact by ``+theta``) it points at ``alpha + theta``.  (``x cos(theta +
+  alpha) + y sin(theta + alpha)``, Eq. 9 of Yang et al. 2021 and
   :func:`~mtaccuracy.spindle.separation.rotation_error`, turns against the spindle under this
   geometry: a centring error fixed to the artefact would read as a twice-per-revolution
   motion there, and as the constant it is here.)
