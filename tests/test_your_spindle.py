@@ -85,5 +85,6 @@ def test_the_profile_caption_states_the_truth_only_where_there_is_one():
 def test_every_centre_is_named_and_every_caption_says_where_its_data_come_from():
     assert set(your_spindle.CENTRES) == set(your_spindle.Parameters.param["centre"].objects)
     assert list(your_spindle.FIGURES) == ["probe_readings", "layout_harmonics",
-                                          "separated_profile", "radial_error_motion_polar"]
+                                          "separated_profile", "radial_error_motion_polar",
+                                          "error_motion", "asynchronous_spectrum"]
     assert all(c.text.endswith("{source}") for c in your_spindle.FIGURES.values())

@@ -1,13 +1,16 @@
 """Roundness of a sampled profile: least-squares circle, minimum zone, harmonics, low-pass.
 
 Least-squares circle (limacon model, ``scipy.linalg.lstsq``) and minimum zone (a linear
-programme, ``scipy.optimize.linprog``), the profile's Fourier coefficients, and a low-pass
-filter.  Reusable for any roundness measurement; lengths in any one unit.
+programme, ``scipy.optimize.linprog``), the profile's Fourier coefficients, a sharp low-pass
+filter (:func:`lowpass`) and the Gaussian filter of ISO 16610-21 in undulations per revolution
+(:func:`upr_filter`, the filter ISO 12181-2 prescribes for roundness and ISO 230-7 asks to be
+stated for error motion).  Reusable for any roundness measurement; lengths in any one unit.
 """
 
 from __future__ import annotations
 
-__all__ = ["harmonic_coefficients", "lowpass", "lsc_roundness", "mz_roundness"]
+__all__ = ["harmonic_coefficients", "lowpass", "lsc_roundness", "mz_roundness",
+           "gaussian_transmission", "upr_filter", "GAUSSIAN_ALPHA"]
 
 import numpy as np
 import scipy.linalg
@@ -69,6 +72,84 @@ def lowpass(signals, max_harmonic: int) -> np.ndarray:
     spec = np.fft.rfft(x, axis=-1)
     spec[..., max_harmonic + 1:] = 0
     return np.fft.irfft(spec, n=n, axis=-1)
+
+
+#: ``alpha = sqrt(ln 2 / pi)`` of the Gaussian filter (ISO 16610-21 / ISO 11562): 50 %
+#: transmission at the cutoff.
+GAUSSIAN_ALPHA = float(np.sqrt(np.log(2.0) / np.pi))
+
+
+def gaussian_transmission(frequency, *, cutoff: float) -> np.ndarray:
+    """Amplitude transmission ``a(f) = exp(-pi (alpha f / f_c)^2)`` of the Gaussian filter.
+
+    ISO 16610-21 (formerly ISO 11562), in undulations per revolution for a roundness profile
+    (ISO 12181-2) or an error motion (ISO 230-7): 50 % at the cutoff ``f_c``, 1 at ``f = 0``.
+
+    Parameters
+    ----------
+    frequency : array
+        Frequencies (undulations, i.e. cycles, per revolution; any sign).
+    cutoff : float
+        The cutoff ``f_c`` (UPR), > 0.
+
+    Returns
+    -------
+    array
+        The transmission, the shape of ``frequency``.
+    """
+    if not (np.isfinite(cutoff) and cutoff > 0):
+        raise ValueError(f"cutoff must be a positive number of undulations per revolution, got "
+                         f"{cutoff!r}")
+    f = np.asarray(frequency, dtype=float)
+    return np.exp(-np.pi * (GAUSSIAN_ALPHA * f / cutoff) ** 2)
+
+
+def upr_filter(values, *, max_upr: float, continuous: bool = False) -> np.ndarray:
+    """The Gaussian low-pass filter in undulations per revolution (UPR), applied by FFT.
+
+    ISO 12181-2 filters a roundness profile with the Gaussian filter of ISO 16610-21 at a
+    cutoff in UPR (15, 50, 150, 500 or 1500); ISO 230-7 asks for the filter of an error motion
+    measurement to be stated, in UPR, and the usual spindle analysers (Lion Precision's SEA,
+    Renishaw's) offer the same Gaussian low-pass: so this one filter serves both, with
+    :func:`gaussian_transmission` (50 % at the cutoff; no phase shift, as the profile is
+    periodic and filtered in the frequency domain).  ``max_upr = 0``: no filter.
+
+    Parameters
+    ----------
+    values : array (..., N) or (..., R, N)
+        Samples over one revolution (a profile: each revolution filtered as a periodic
+        signal), or with ``continuous`` R revolutions of N samples taken as one record of R N
+        samples (an error motion; its frequencies in steps of 1 / R cycles per revolution,
+        the record treated as periodic over its R revolutions), any length unit.
+    max_upr : float
+        The cutoff (UPR), >= 0; 0 leaves the values as they are.
+    continuous : bool
+        Filter the last two axes as one continuous record.
+
+    Returns
+    -------
+    array
+        The filtered values, the shape of ``values``, in their unit.
+    """
+    x = np.array(values, dtype=float)
+    if not (np.isfinite(max_upr) and max_upr >= 0):
+        raise ValueError(f"max_upr must be 0 (no filter) or a positive cutoff in undulations "
+                         f"per revolution, got {max_upr!r}")
+    if max_upr == 0:
+        return x
+    if continuous:
+        if x.ndim < 2:
+            raise ValueError(f"a continuous record needs values (..., R, N), got {x.shape}")
+        shape = x.shape
+        x = x.reshape(shape[:-2] + (shape[-2] * shape[-1],))
+        per_rev = shape[-1]
+    else:
+        per_rev = x.shape[-1]
+    m = x.shape[-1]
+    f = np.fft.rfftfreq(m, 1.0 / per_rev)                    # cycles per revolution
+    out = np.fft.irfft(np.fft.rfft(x, axis=-1) * gaussian_transmission(f, cutoff=max_upr),
+                       n=m, axis=-1)
+    return out.reshape(shape) if continuous else out
 
 
 def _profile(profile):

@@ -125,6 +125,10 @@ class Parameters(NotebookParameters):
                                           doc="the rotating sensitive direction at angle 0 (°)")
     centre = param.Selector(default="LSC", objects=["LSC", "MRS"],
                             doc="centre of the ISO 230-7 polar plots and values")
+    rotation = param.Selector(default="cw", objects=["cw", "ccw"],
+                              doc="cw: probe at phi reads r(theta + phi); ccw: r(phi - theta)")
+    max_upr = param.Number(0.0, bounds=(0.0, 100000.0),
+                           doc="Gaussian low-pass cutoff (undulations per revolution); 0: none")
     amplified_above = param.Number(3.0, bounds=(1.0, 1000.0), inclusive_bounds=(False, True),
                                    doc="amplified: the layout multiplies noise by more than this")
     output_dir = OutputFolder("figures/07_your_spindle", doc="where figures and tables are written")
@@ -165,4 +169,18 @@ FIGURES = figures(
             "containing the synchronous plot. Titles give the synchronous and asynchronous "
             "values, e.g. {synchronous:.3f} and {asynchronous:.3f} µm along {direction:g}°"
             "{truth}. {source}"),
+    Caption("error_motion", "Figure 5",
+            "The separated radial error motion x and y (µm, in the probes' frame) of every sample "
+            "over the {n_revolutions} revolutions as one record ({filter}), with the synchronous "
+            "motion (the mean of the revolutions at each angle) repeated in each revolution: what "
+            "error_motion.csv holds. Their difference is the asynchronous motion, largest spread "
+            "{asynchronous:.3f} µm along {direction:g}°. {source}"),
+    Caption("asynchronous_spectrum", "Figure 6",
+            "Amplitude spectrum of the asynchronous radial error motion (the motion less its mean "
+            "over the revolutions, one continuous record of {n_revolutions} revolutions; single-"
+            "sided amplitude of the motion vector, sqrt(Ax² + Ay²), µm) against frequency in "
+            "cycles per revolution, resolution 1/{n_revolutions}; {filter}. Dotted: the "
+            "frequencies of the largest synchronous harmonics ({marked}), where the asynchronous "
+            "amplitude is zero by construction. Largest peak {peak:.4f} µm at {peak_cpr:g} "
+            "cycles per revolution. {source}"),
 )

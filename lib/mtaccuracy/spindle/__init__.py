@@ -26,10 +26,15 @@ Modules:
     writer;
 ``example``
     the shipped simulated example and its truth;
+``checks``
+    what a separation tells about its data: the sense of rotation
+    (:class:`~mtaccuracy.spindle.checks.RotationSenseWarning`) and aliasing
+    (:class:`~mtaccuracy.spindle.checks.AliasingWarning`);
 ``errormotion``
     radial error motion in ISO 230-7 terms: fixed and rotating sensitive directions,
     synchronous, asynchronous and total error motion values about the LSC or MRS centre, the
-    profile about its least-squares circle.
+    profile about its least-squares circle; the separated motion per sample, the spectrum of its
+    asynchronous part, the ISO 230-7 low-pass filter in undulations per revolution.
 
 Roundness (least-squares circle, minimum zone) is :mod:`mtaccuracy.roundness`.  Every public name
 is importable from here: ``from mtaccuracy import spindle as S; S.separate(...)``.
@@ -46,6 +51,7 @@ optimisation at a time, looping over the population in Python, and hundreds of r
 from .. import roundness  # noqa: F401
 from ..roundness import *  # noqa: F403
 from . import (  # noqa: F401
+    checks,
     design,
     errormotion,
     example,
@@ -57,6 +63,7 @@ from . import (  # noqa: F401
     separation,
     simulate,
 )
+from .checks import *  # noqa: F403
 from .design import *  # noqa: F403
 from .errormotion import *  # noqa: F403
 from .example import *  # noqa: F403

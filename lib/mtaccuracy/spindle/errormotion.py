@@ -10,9 +10,11 @@ ISO 230-7:2015 (Geometric accuracy of axes of rotation), Clause 3, in brief:
   ``u = x cos(alpha) + y sin(alpha)``.  *Rotating*: it turns with the spindle (a boring bar, a
   milling cutter).  With the probe file's geometry (:mod:`~mtaccuracy.spindle.probes`: the
   probe at ``phi`` reads ``r(theta + phi)``, so the spindle turns the artefact by ``-theta``
-  in the probes' frame) a direction fixed to the spindle that points at ``alpha`` when
-  ``theta = 0`` points at ``alpha - theta``: ``u = x cos(alpha - theta) + y sin(alpha -
-  theta)``.  (``x cos(theta + alpha) + y sin(theta + alpha)``, Eq. 9 of Yang et al. 2021 and
+  in the probes' frame; ``rotation="cw"``) a direction fixed to the spindle that points at
+  ``alpha`` when ``theta = 0`` points at ``alpha - theta``: ``u = x cos(alpha - theta) + y
+  sin(alpha - theta)``; with ``rotation="ccw"`` (the probe reads ``r(phi - theta)``, the
+  spindle turns the artefact by ``+theta``) it points at ``alpha + theta``.  (``x cos(theta +
+  alpha) + y sin(theta + alpha)``, Eq. 9 of Yang et al. 2021 and
   :func:`~mtaccuracy.spindle.separation.rotation_error`, turns against the spindle under this
   geometry: a centring error fixed to the artefact would read as a twice-per-revolution
   motion there, and as the constant it is here.)
@@ -40,6 +42,13 @@ is that of the synchronous plot (every revolution has the same angles).  Why han
 definitions are the standard's; the fits are scipy's (``linalg.lstsq``, ``optimize.linprog``),
 the MRS of a band (the total plot) a small ``linprog`` beside :func:`mz_roundness`; no
 maintained package evaluates ISO 230-7.
+
+**Filter.**  ISO 230-7 asks for the measurement's bandwidth to be stated, in undulations per
+revolution (UPR).  ``max_upr`` (:func:`error_motion_table`, :func:`filter_motion`) is the
+Gaussian low-pass of ISO 16610-21 (:func:`~mtaccuracy.roundness.upr_filter`, 50 % at the
+cutoff), applied to the motion of all the revolutions as one continuous record; 0 is no filter.
+The probes' noise is white up to ``N / 2`` UPR, so without a filter it widens the asynchronous
+band by about its own size; below the cutoff it stays.
 """
 
 from __future__ import annotations
@@ -50,21 +59,25 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import linprog
 
-from ..roundness import TWO_PI, lsc_roundness, mz_roundness
+from ..roundness import TWO_PI, lsc_roundness, mz_roundness, upr_filter
+from .checks import ROTATIONS
 
 __all__ = ["CENTRES", "ErrorMotion", "sensitive_component", "radial_error_motion",
-           "error_motion_table", "fixed_directions", "about_lsc"]
+           "error_motion_table", "fixed_directions", "about_lsc", "filter_motion",
+           "error_motion_samples", "asynchronous_spectrum"]
 
 #: The polar-plot centres offered (ISO 230-7): LSC (the default) and MRS.
 CENTRES = ("LSC", "MRS")
 
 
-def sensitive_component(dx, dy, theta, *, direction, rotating: bool = False) -> np.ndarray:
+def sensitive_component(dx, dy, theta, *, direction, rotating: bool = False,
+                        rotation: str = "cw") -> np.ndarray:
     """The radial error motion along a fixed or rotating sensitive direction (ISO 230-7, Cl. 3).
 
     Fixed: ``u = x cos(alpha) + y sin(alpha)``.  Rotating (the direction turns with the spindle,
     pointing at ``alpha`` when ``theta = 0``; module docstring for the sense):
-    ``u = x cos(alpha - theta) + y sin(alpha - theta)``.
+    ``u = x cos(alpha -+ theta) + y sin(alpha -+ theta)``, ``-`` for ``rotation="cw"``, ``+`` for
+    ``"ccw"``.
 
     Parameters
     ----------
@@ -77,6 +90,8 @@ def sensitive_component(dx, dy, theta, *, direction, rotating: bool = False) -> 
         ``alpha`` (rad): the fixed direction, or the rotating one at ``theta = 0``.
     rotating : bool
         A rotating sensitive direction instead of a fixed one.
+    rotation : {"cw", "ccw"}
+        The sense the spindle turns in (:func:`~mtaccuracy.spindle.probes.separate_probes`).
 
     Returns
     -------
@@ -93,8 +108,11 @@ def sensitive_component(dx, dy, theta, *, direction, rotating: bool = False) -> 
     if alpha.ndim > 1 or not np.all(np.isfinite(alpha)):
         raise ValueError(f"direction must be a finite angle or a 1-D array of them (rad), got "
                          f"{direction!r}")
+    if rotation not in ROTATIONS:
+        raise ValueError(f"rotation must be 'cw' or 'ccw', got {rotation!r}")
     a = alpha.reshape(alpha.shape + (1,) * dx.ndim)
-    ang = a - theta if rotating else a + 0.0 * theta
+    turn = -theta if rotation == "cw" else theta
+    ang = a + turn if rotating else a + 0.0 * theta
     return dx * np.cos(ang) + dy * np.sin(ang)
 
 
@@ -226,8 +244,10 @@ def radial_error_motion(u, *, centre: str = "LSC") -> ErrorMotion:
 
 
 def error_motion_table(dx, dy, theta, *, fixed_directions, rotating_direction,
-                       centre: str = "LSC"):
+                       centre: str = "LSC", rotation: str = "cw", max_upr: float = 0.0):
     """ISO 230-7 radial error motion values along fixed sensitive directions and a rotating one.
+
+    The motion is first low-pass filtered at ``max_upr`` (:func:`filter_motion`; 0: not).
 
     Parameters
     ----------
@@ -241,6 +261,10 @@ def error_motion_table(dx, dy, theta, *, fixed_directions, rotating_direction,
         The rotating sensitive direction at ``theta = 0`` (rad).
     centre : {"LSC", "MRS"}
         The polar plots' centre.
+    rotation : {"cw", "ccw"}
+        The sense the spindle turns in: the rotating direction points at ``alpha -+ theta``.
+    max_upr : float
+        The Gaussian low-pass cutoff (undulations per revolution), 0 for none.
 
     Returns
     -------
@@ -251,9 +275,10 @@ def error_motion_table(dx, dy, theta, *, fixed_directions, rotating_direction,
         In the table's order (the polar plots).
     """
     fixed = np.atleast_1d(np.asarray(fixed_directions, dtype=float))
+    dx, dy = filter_motion(dx, dy, max_upr=max_upr)
     u_fixed = sensitive_component(dx, dy, theta, direction=fixed)                 # (D, R, N)
     u_rot = sensitive_component(dx, dy, theta, direction=float(rotating_direction),
-                                rotating=True)
+                                rotating=True, rotation=rotation)
     motions = [radial_error_motion(u, centre=centre) for u in (*u_fixed, u_rot)]
     table = pd.DataFrame({
         "sensitive_direction": ["fixed"] * len(fixed) + ["rotating"],
@@ -313,3 +338,91 @@ def fixed_directions(data, report_probes) -> np.ndarray:
                              f"at {', '.join(f'{v:g}' for v in data.angles_deg)} deg")
         out.append(data.phi[hit[0]])
     return np.array(out)
+
+
+def filter_motion(dx, dy, *, max_upr: float):
+    """The radial error motion low-pass filtered in undulations per revolution (ISO 230-7).
+
+    The Gaussian filter of ISO 16610-21 (:func:`~mtaccuracy.roundness.upr_filter`, 50 % at the
+    cutoff) on the R revolutions taken as one continuous record (module docstring).
+
+    Parameters
+    ----------
+    dx, dy : arrays (..., R, N)
+        Radial error motion of every revolution (any length unit).
+    max_upr : float
+        The cutoff (undulations per revolution), >= 0; 0 returns the motion as it is.
+
+    Returns
+    -------
+    dx, dy : arrays (..., R, N)
+        Filtered, in the unit of ``dx``.
+    """
+    return (upr_filter(dx, max_upr=max_upr, continuous=True),
+            upr_filter(dy, max_upr=max_upr, continuous=True))
+
+
+def error_motion_samples(dx, dy, *, revolutions, angle_deg) -> pd.DataFrame:
+    """The separated radial error motion per sample, as a table.
+
+    Parameters
+    ----------
+    dx, dy : arrays (R, N)
+        Radial error motion in the probes' frame (um), filtered as the caller states.
+    revolutions : array of int (R,)
+        The revolutions' numbers.
+    angle_deg : array (N,)
+        The spindle angle of each sample (deg).
+
+    Returns
+    -------
+    DataFrame
+        ``revolution, angle_deg, x_um, y_um``, R N rows, revolution by revolution.
+    """
+    dx, dy = np.asarray(dx, dtype=float), np.asarray(dy, dtype=float)
+    revolutions, angle_deg = np.asarray(revolutions), np.asarray(angle_deg, dtype=float)
+    if dx.ndim != 2 or dx.shape != dy.shape or dx.shape != (len(revolutions), len(angle_deg)):
+        raise ValueError(f"dx, dy must be (R, N) = ({len(revolutions)}, {len(angle_deg)}), got "
+                         f"{dx.shape} and {dy.shape}")
+    r, n = dx.shape
+    return pd.DataFrame({"revolution": np.repeat(revolutions, n),
+                         "angle_deg": np.tile(angle_deg, r),
+                         "x_um": dx.ravel(), "y_um": dy.ravel()})
+
+
+def asynchronous_spectrum(dx, dy) -> pd.DataFrame:
+    """The amplitude spectrum of the asynchronous radial error motion, in cycles per revolution.
+
+    The asynchronous part is the motion less its mean over the revolutions at each angle (the
+    synchronous part), taken as one continuous record of the R revolutions, R N samples.  Its
+    discrete Fourier transform ``X_m``, ``Y_m`` gives the frequencies ``m / R`` cycles per
+    revolution, ``m = 0..R N / 2`` (resolution ``1 / R``).  The amplitude is the single-sided
+    amplitude of the radial motion vector, ``sqrt(A_x^2 + A_y^2)`` with ``A_x = 2 |X_m| / (R
+    N)`` (``|X_m| / (R N)`` at 0 and at ``N / 2``), likewise ``A_y``: a motion ``a cos(2 pi f
+    t)`` along any one direction reads ``a`` at ``f``; a circular whirl of radius ``a`` reads
+    ``sqrt(2) a``.  The synchronous part holds every integer frequency (``m`` a multiple of R),
+    so there the asynchronous amplitude is 0 by construction and is written as exactly 0.
+
+    Parameters
+    ----------
+    dx, dy : arrays (R, N)
+        Radial error motion of every revolution (um), R >= 2.
+
+    Returns
+    -------
+    DataFrame
+        ``frequency_cpr``, ``amplitude_um``: R N / 2 + 1 rows (N even), ascending frequency.
+    """
+    dx, dy = np.asarray(dx, dtype=float), np.asarray(dy, dtype=float)
+    if dx.ndim != 2 or dx.shape != dy.shape or dx.shape[0] < 2:
+        raise ValueError(f"dx, dy must share a shape (R, N) with R >= 2 revolutions, got "
+                         f"{dx.shape} and {dy.shape}")
+    r, n = dx.shape
+    amp = []
+    for v in (dx, dy):
+        a = np.abs(np.fft.rfft((v - v.mean(axis=0)).ravel())) / (r * n)
+        a[1:(r * n + 1) // 2] *= 2                      # single-sided; not at 0 or R N / 2
+        a[::r] = 0.0                                    # integer frequencies: synchronous
+        amp.append(a)
+    m = np.arange(len(amp[0]))
+    return pd.DataFrame({"frequency_cpr": m / r, "amplitude_um": np.hypot(*amp)})

@@ -51,6 +51,8 @@ import scipy.special
 import scipy.stats
 
 from .. import validate
+from . import checks as _checks
+from .checks import ROTATIONS, AliasingWarning, RotationSenseWarning, SeparationChecks
 from .least_squares import _ls_design
 from .separation import (
     _MIN_SAMPLES,
@@ -391,6 +393,11 @@ class ProbeSeparation:
         ``2 pi n / N``).
     residual_rms : array (..., R)
         RMS misfit of the probes, per revolution, once the profile and the motion are fitted.
+    rotation : str
+        The sense of rotation separated under (:data:`~mtaccuracy.spindle.checks.ROTATIONS`).
+    checks : SeparationChecks or None
+        The statistics of the sense and aliasing checks
+        (:class:`~mtaccuracy.spindle.checks.SeparationChecks`).
     """
 
     profile: np.ndarray
@@ -404,6 +411,8 @@ class ProbeSeparation:
     max_harmonic: int
     first_harmonic: np.ndarray
     residual_rms: np.ndarray
+    rotation: str = "cw"
+    checks: SeparationChecks | None = None
 
 
 def _significant(values, digits: int) -> np.ndarray:
@@ -429,7 +438,8 @@ _CANCELLED_HINT = ("; move a probe by a few degrees so that the angles between p
 
 def separate_probes(signals, phi, *, method: str = "least_squares", weights=None,
                     max_harmonic: int | None = None, rcond: float = RCOND,
-                    allow_cancelled: bool = False) -> ProbeSeparation:
+                    allow_cancelled: bool = False, rotation: str = "cw",
+                    theta0: float = 0.0) -> ProbeSeparation:
     """Separate profile and radial error motion from L >= 3 probes at any angles, R revolutions.
 
     Steps (module docstring): remove each probe's mean (its unknown zero); average the
@@ -444,6 +454,25 @@ def separate_probes(signals, phi, *, method: str = "least_squares", weights=None
     (``R_k exp(i k phi_l)``) and fit ``x, y`` at every sample of every revolution to the rest by
     least squares over the probes (Eq. 7); give the profile's first harmonic the mean
     once-per-revolution motion that turns with the artefact (the eccentricity convention).
+
+    **The sense of rotation.**  ``rotation="cw"`` is the model above (Eq. 7: the probe at
+    ``phi`` reads ``r(theta + phi)``).  ``rotation="ccw"``: the spindle turns in the sense the
+    probe angles count, the probe reads ``r(phi - theta) + x cos(phi) + y sin(phi)``.  With
+    ``phi' = -phi`` and ``r'(u) = r(-u)`` that is ``r'(theta + phi') + x cos(phi') + (-y)
+    sin(phi')``: Eq. 7 again, so the separation runs on the negated angles and gives ``r'`` and
+    ``(x, -y)``; ``y`` is negated back, and the profile is turned back to ``r`` at the sample
+    angles, ``r(theta_0 + u_n) = r'(-theta_0 - u_n)``, by its Fourier series (exact: the
+    profile has no harmonic above ``max_harmonic < N / 2``).  In both senses the profile is the
+    artefact's radius at the angle it has in the probes' frame at ``theta = 0``, and ``(x, y)``
+    is in the probes' frame.
+
+    **Checks** (:mod:`~mtaccuracy.spindle.checks`, statistics in ``checks``): a
+    :class:`~mtaccuracy.spindle.checks.RotationSenseWarning` when the data look like the other
+    sense (a large once-per-revolution motion turning against the spindle: the artefact's
+    centring read under the wrong sense), an
+    :class:`~mtaccuracy.spindle.checks.AliasingWarning` when the readings carry more than N
+    samples a revolution resolve (a synchronous misfit, or a spectrum not decayed at the top
+    harmonics).
 
     Parameters
     ----------
@@ -466,19 +495,43 @@ def separate_probes(signals, phi, *, method: str = "least_squares", weights=None
         A layout that cancels harmonics within 2..max_harmonic is refused (``ValueError``
         naming them) unless this is True; then they are set aside (zero in the profile) with a
         :class:`~mtaccuracy.spindle.separation.CancelledHarmonicsWarning`.
+    rotation : {"cw", "ccw"}
+        The sense the spindle turns in (above): ``"cw"``, the probe at ``phi`` reads
+        ``r(theta + phi)`` (Yang et al. 2021, Eq. 7; the default); ``"ccw"``, ``r(phi - theta)``.
+    theta0 : float
+        The spindle angle of the first sample (rad); it matters only to turn a ``"ccw"``
+        profile back to the sample angles.
 
     Returns
     -------
     ProbeSeparation
-        ``profile`` (..., N) at the sample angles, ``dx, dy`` (..., R, N), and the estimator's
-        weights, amplification and set-aside harmonics.
+        ``profile`` (..., N) at the sample angles ``theta0 + 2 pi n / N`` (the artefact's
+        angles in the probes' frame at ``theta = 0``), ``dx, dy`` (..., R, N) in the probes'
+        frame, the estimator's weights, amplification and set-aside harmonics, and the checks'
+        statistics.
+
+    Warns
+    -----
+    RotationSenseWarning
+        The data look like the other ``rotation``.
+    AliasingWarning
+        The readings carry more than N samples a revolution resolve.
     """
     if method not in ("least_squares", "weighted"):
         raise ValueError(f"method must be 'least_squares' or 'weighted', got {method!r}")
     if not (np.isfinite(rcond) and 0 < rcond < 1):
         raise ValueError(f"rcond must be in (0, 1), got {rcond!r}")
+    if rotation not in ROTATIONS:
+        raise ValueError(f"rotation must be 'cw' (the probe at phi reads r(theta + phi), Eq. 7) "
+                         f"or 'ccw' (it reads r(phi - theta)), got {rotation!r}")
+    theta0 = float(theta0)
+    if not np.isfinite(theta0):
+        raise ValueError(f"theta0 must be a finite angle (rad), got {theta0!r}")
     y = np.asarray(signals, dtype=float)
     phi = _check_phi(phi)
+    shown_deg = np.rad2deg(phi)
+    if rotation == "ccw":
+        phi = -phi                                  # Eq. 7 in the mirrored frame (docstring)
     if y.ndim < 3 or y.shape[-2] != phi.shape[0]:
         raise ValueError(f"signals must have shape (..., R, L, N) with L = {phi.shape[0]} "
                          f"probes (one per angle), got {y.shape}")
@@ -489,7 +542,7 @@ def separate_probes(signals, phi, *, method: str = "least_squares", weights=None
     harmonics = np.arange(2, k_top + 1)
     cancelled = layout_cancelled(phi, k_top, rcond=rcond)
     kept = np.setdiff1d(harmonics, cancelled)
-    msg = _cancelled_message(np.rad2deg(phi), cancelled, n, k_top) if cancelled else ""
+    msg = _cancelled_message(shown_deg, cancelled, n, k_top) if cancelled else ""
     if not kept.size:
         raise ValueError(msg + "; that is every harmonic: nothing to separate" + _CANCELLED_HINT)
     w = None
@@ -540,16 +593,61 @@ def separate_probes(signals, phi, *, method: str = "least_squares", weights=None
     residual_rms = np.sqrt((misfit ** 2).mean(axis=(-2, -1)))
     z = dxy[..., 0, :] + 1j * dxy[..., 1, :]                            # (..., R, N)
     grid = TWO_PI * np.arange(n) / n
+    found = _run_checks(y, spec, misfit, z, phi, ks, kept, grid, rotation)
     c = (z * np.exp(1j * grid)).mean(axis=(-2, -1))                     # coefficient of e^-it
     z = z - c[..., None, None] * np.exp(-1j * grid)
     profile = r0 + c.real[..., None] * np.cos(grid) + c.imag[..., None] * np.sin(grid)
+    first = np.stack([c.real, c.imag], -1)
+    if rotation == "ccw":
+        z = z.conj()                                                    # y' = -y
+        spec_p = np.fft.fft(profile, axis=-1)                           # of r'(theta0 + u_n)
+        mirrored = spec_p[..., -np.arange(n) % n] * np.exp(2j * ks * theta0)
+        profile = np.fft.ifft(mirrored, axis=-1).real                   # r(theta0 + u_n)
+        first = np.stack([2 * (profile * np.cos(grid)).mean(axis=-1),
+                          2 * (profile * np.sin(grid)).mean(axis=-1)], -1)
     return ProbeSeparation(profile=profile, dx=z.real, dy=z.imag, method=method, weights=w,
                            harmonics=harmonics, amplification=amp, cancelled=list(cancelled),
-                           max_harmonic=k_top, first_harmonic=np.stack([c.real, c.imag], -1),
-                           residual_rms=residual_rms)
+                           max_harmonic=k_top, first_harmonic=first,
+                           residual_rms=residual_rms, rotation=rotation, checks=found)
 
 
-def separate_probe_data(data, *, method: str = "least_squares") -> ProbeSeparation:
+def _run_checks(y, spec, misfit, z, phi, ks, kept, grid, rotation) -> SeparationChecks:
+    """The sense and aliasing checks of :mod:`~mtaccuracy.spindle.checks` on one separation,
+    in the separation's frame (``phi`` negated for ``ccw``), warning when they fire."""
+    n_probes, n = phi.shape[0], y.shape[-1]
+    g = np.column_stack([np.cos(phi), np.sin(phi)])
+    gram_trace = float(np.trace(np.linalg.inv(g.T @ g)))
+    noise_var = np.mean(misfit ** 2, axis=(-3, -2, -1)) * n_probes / (n_probes - 2)
+    co, counter, se, wrong = _checks._sense_statistics(z, grid, noise_var, gram_trace)
+    # the least-squares misfit of the revolutions' average, whatever the estimator
+    solve = np.isin(np.abs(ks), kept)
+    resid = np.array(spec)
+    design = _ls_design(phi, ks[solve])                                 # (K, L, 3)
+    proj = np.einsum("klj,kjm->klm", design, np.linalg.pinv(design))     # (K, L, L)
+    resid[..., solve] -= np.einsum("klm,...mk->...lk", proj, spec[..., solve])
+    pg = g @ np.linalg.pinv(g)
+    resid[..., ~solve] -= np.einsum("lm,...mk->...lk", pg, spec[..., ~solve])
+    resid[..., ks == 0] = 0.0
+    ss_mean = (np.abs(resid) ** 2).sum(axis=(-2, -1)) / n
+    dof_mean = int(solve.sum()) * (n_probes - 3) + int((~solve).sum() - 1) * (n_probes - 2)
+    sd, mratio, sratio, band, aliased = _checks._aliasing_statistics(
+        y, spec, misfit, ss_mean, dof_mean)
+    # a wrong sense leaves a synchronous misfit of its own (warned as such): not aliasing
+    aliased = aliased & np.stack([~wrong, np.ones_like(wrong), np.ones_like(wrong)], axis=-1)
+    found = SeparationChecks(co_rotating=co, counter_rotating=counter,
+                             counter_standard_error=se, wrong_sense=wrong, noise_sd=sd,
+                             misfit_ratio=mratio, spectrum_ratio=sratio, top_harmonics=band,
+                             aliased=aliased)
+    if np.any(wrong):
+        warnings.warn(_checks._rotation_message(found, rotation), RotationSenseWarning,
+                      stacklevel=3)
+    if np.any(aliased):                                                 # (..., 3) criteria
+        warnings.warn(_checks._aliasing_message(found, n), AliasingWarning, stacklevel=3)
+    return found
+
+
+def separate_probe_data(data, *, method: str = "least_squares",
+                        rotation: str = "cw") -> ProbeSeparation:
     """:func:`separate_probes` on a checked probe file, with its ``max_harmonic``.
 
     The harmonics its reader set aside stay aside (the reader already refused or warned about
@@ -561,17 +659,30 @@ def separate_probe_data(data, *, method: str = "least_squares") -> ProbeSeparati
         From :func:`~mtaccuracy.spindle.probefile.read_probe_file`.
     method : {"least_squares", "weighted"}
         The estimator of the profile.
+    rotation : {"cw", "ccw"}
+        The sense the spindle turns in (:func:`separate_probes`); the first sample's angle is
+        the file's.
 
     Returns
     -------
     ProbeSeparation
         In um.
+
+    Warns
+    -----
+    RotationSenseWarning, AliasingWarning
+        As :func:`separate_probes`.
     """
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", CancelledHarmonicsWarning)
-        return separate_probes(data.signals_um, data.phi, method=method,
-                               max_harmonic=data.max_harmonic,
-                               allow_cancelled=bool(data.cancelled))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        s = separate_probes(data.signals_um, data.phi, method=method,
+                            max_harmonic=data.max_harmonic,
+                            allow_cancelled=bool(data.cancelled), rotation=rotation,
+                            theta0=float(np.deg2rad(data.sample_deg[0])))
+    for w in caught:
+        if not issubclass(w.category, CancelledHarmonicsWarning):
+            warnings.warn(f"{data.path}: {w.message}", w.category, stacklevel=2)
+    return s
 
 
 def probe_noise_estimate(separation: ProbeSeparation, n_probes: int) -> float:
