@@ -24,6 +24,9 @@ Modules:
 ``probefile``
     the probe file (``revolution``, ``angle_deg``, ``probe_<angle>_um``): its reader and
     writer;
+``timefile``
+    a DAQ's time-sampled readings (``time_s`` with ``index`` or ``encoder_deg``) resampled onto
+    equal angles, the speed and its drift fitted to all marks together;
 ``example``
     the shipped simulated example and its truth;
 ``checks``
@@ -62,6 +65,7 @@ from . import (  # noqa: F401
     probes,
     separation,
     simulate,
+    timefile,
 )
 from .checks import *  # noqa: F403
 from .design import *  # noqa: F403
@@ -74,3 +78,4 @@ from .probefile import *  # noqa: F403
 from .probes import *  # noqa: F403
 from .separation import *  # noqa: F403
 from .simulate import *  # noqa: F403
+from .timefile import *  # noqa: F403
