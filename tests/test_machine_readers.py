@@ -515,11 +515,11 @@ def test_a_range_in_another_unit_is_refused_with_the_likely_unit(tmp_path, machi
      r"-2, 2 urad; if it is in deg, write -34.91, 34.91 urad; used as written$"),
     # smaller than anything measured: another unit, or meant to make the error negligible
     ("EYZ", "EYZ,-6e-6,6e-6,um",
-     r"the range \(-6e-6, 6e-6\) um reaches only 6e-06 um, less than the 0.0001 um "
+     r"the range \(-6e-6, 6e-6\) um reaches only 6e-6 um, less than the 0.0001 um "
      r"\(1e-07 mm\) of an atom \(0.1 nm\): .*; if it is in m, write -6, 6 um; used as "
      r"written$"),
     ("EBB", "EBB,-1.5e-5,1.5e-5,urad",
-     r"the range \(-1.5e-5, 1.5e-5\) urad reaches only 1.5e-05 urad, less than the "
+     r"the range \(-1.5e-5, 1.5e-5\) urad reaches only 1.5e-5 urad, less than the "
      r"0.001 urad \(1e-09 rad\) below which no "
      r"angular error is measured .*; if it is in rad, write -1.5e-05, 1.5e-05 rad; used as "
      r"written$"),

@@ -324,7 +324,10 @@ def check(lim: Limits, low: float, high: float, *, unit: str,
     verb = "spans" if lim.measure == "span" else "reaches only" if name == "warn_below" \
         else "reaches"
     shown = f"{written[0]}, {written[1]}" if written else f"{low:g}, {high:g}"
-    text = f"{lim.what} ({shown}) {unit} {verb} {_num(m, 6)} {unit}"
+    reach = _num(m, 6)
+    if written and lim.measure == "size":       # the larger end as written, not rounded
+        reach = written[0 if abs(low) >= abs(high) else 1].lstrip("+-")
+    text = f"{lim.what} ({shown}) {unit} {verb} {reach} {unit}"
     d = 6 if size == 1 else _digits(size)
     if name == "bound":
         text += f", beyond +-{_num(lim.bound / size, d)} {unit}"
