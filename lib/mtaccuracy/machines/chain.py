@@ -58,7 +58,6 @@ machine (travels, pivots, error ranges) from files.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -75,91 +74,42 @@ from ..kinematics import (
     matmul3,
     motion_rows,
 )
-from .topology import DIRECTION, LINEAR, ROTARY, Topology, parse_topology
+from .topology import (  # noqa: F401  (COMPONENTS, Placement: re-exported, their old home)
+    COMPONENTS,
+    DIRECTION,
+    LINEAR,
+    ROTARY,
+    SLOTS,
+    Placement,
+    _Block,
+    _check_placements,
+    parse_topology,
+)
 
 #: the forms of a block of errors: ``euler`` (elementary rotations, applied one by one) and
 #: the forms of :func:`mtaccuracy.kinematics.motion_rows`
 FORMS = ("euler", *ROW_FORMS)
-#: error components of a block: translations along x, y, z, rotations about x, y, z
-COMPONENTS = ("X", "Y", "Z", "A", "B", "C")
-SLOTS = ("motion", "pre", "post", "tilt")
 ORIENTATIONS = {"rotation_vector": ("Px", "Py", "Pz", "Rx", "Ry", "Rz"),
                 "tool_axis": ("Px", "Py", "Pz", "Vx", "Vy", "Vz")}
 
 
 # ------------------------------------------------------------------------------------------
-# Where each error goes
-# ------------------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Placement:
-    """Where one error column enters the chain: an axis, a slot, a component and a sign.
-
-    ``axis``, ``slot`` (``motion``: the axis' error-motion block; ``pre``/``post``: its location
-    block before/after the motion; ``tilt``: a rotation of its direction of motion),
-    ``component`` (0-2 translation along x, y, z; 3-5 rotation about x, y, z) and ``sign`` (+1,
-    or -1 where a paper defines the error the other way).
-
-    Attributes
-    ----------
-    axis : str
-        The axis whose block the error enters.
-    slot : {"motion", "pre", "post", "tilt"}
-        Which block.
-    component : int
-        0-2 translation along x, y, z (mm); 3-5 rotation about x, y, z (rad).
-    sign : float
-        +1 or -1.
-    """
-
-    axis: str
-    slot: str
-    component: int
-    sign: float = 1.0
-
-
-@dataclass
-class _Block:
-    cols: list = field(default_factory=list)     # error columns
-    comps: list = field(default_factory=list)    # their components 0-5
-    signs: list = field(default_factory=list)
-
-
-def _check_placements(topology: Topology, catalogue, placements) -> list[Placement]:
-    syms = [e.symbol for e in catalogue]
-    missing = [s for s in syms if s not in placements]
-    if missing:
-        raise ValueError(f"no placement for error(s) {missing}")
-    extra = [s for s in placements if s not in syms]
-    if extra:
-        raise ValueError(f"placement for unknown error(s) {extra}; the catalogue has {syms}")
-    out, seen = [], {}
-    for s in syms:
-        p = placements[s]
-        if p.axis not in topology.axes:
-            raise ValueError(f"error {s} is placed on axis {p.axis!r}, which is not in the "
-                             f"topology {topology.text!r} (axes {', '.join(topology.axes)})")
-        if p.slot not in SLOTS:
-            raise ValueError(f"error {s}: unknown slot {p.slot!r}; allowed: {', '.join(SLOTS)}")
-        if not 0 <= p.component <= 5 or (p.slot == "tilt" and p.component < 3):
-            raise ValueError(f"error {s}: component {p.component} not allowed in slot "
-                             f"{p.slot!r} (0-5; a tilt is a rotation, 3-5)")
-        if p.slot == "tilt" and p.axis not in LINEAR:
-            raise ValueError(f"error {s}: only a linear axis has a direction to tilt, not "
-                             f"{p.axis}")
-        key = (p.axis, p.slot, p.component)
-        if key in seen:
-            raise ValueError(f"errors {seen[key]} and {s} both occupy component "
-                             f"{COMPONENTS[p.component]} of the {p.slot} slot of {p.axis}")
-        seen[key] = s
-        out.append(p)
-    return out
-
-
-
-# ------------------------------------------------------------------------------------------
 # The machine
 # ------------------------------------------------------------------------------------------
+
+def _check_references(topology, references) -> dict:
+    """The Abbe references of :class:`ChainMachine`, checked: linear axes, finite mm."""
+    out = {}
+    for a, r in dict(references or {}).items():
+        if a not in topology.axes or a not in LINEAR:
+            raise ValueError(f"reference given for {a!r}, not a linear axis of the topology "
+                             f"{topology.text!r}")
+        if isinstance(r, bool) or not isinstance(r, int | float | np.floating | np.integer) \
+                or not np.isfinite(r):
+            raise ValueError(f"reference of {a} must be a finite number (mm), got {r!r}")
+        out[a] = float(r)
+    return out
+
 
 class ChainMachine:
     """A machine built from a topology and an error placement (see the module docstring).
@@ -201,12 +151,34 @@ class ChainMachine:
         allocated once per call).
     axis_names : sequence of str, optional
         The order of the axes' pose names (messages, tables); default the topology's.
+    references : mapping of str to float, optional
+        Linear axis (``X Y Z``) -> its Abbe reference ``r``, mm: the position on its travel
+        to which its error motions are referred (default 0, every axis).  See Notes.
 
     Notes
     -----
     The error motions are ISO 230-1's (six per axis, in the frame after the motion), the
     location errors ISO 230-7's (the axis average line; before the motion, or after it in
     Zheng et al.'s reading of their Eq. 9).
+
+    **Abbe references.**  The error motions of a linear axis K are referred to one point of
+    its moving body: the point that stands at the origin of the bed's frame when K and the
+    linear axes between it and the bed (same side) stand at their references.  In K's frame
+    after its motion that point is ``a_K = -sum_J s_J r_J e_J`` (J = K and those axes), so
+    its block of error motions ``D`` enters as ``T(a_K) D T(-a_K)``: its translations are
+    those of that point ("the positional errors are those at the reference") and its
+    rotations turn about it.  For a table axis (s = -1) the tool then sits at ``q - r`` along
+    the axis from the point its angular error motions turn about: the Abbe arm is ``q - r``,
+    not ``q`` (the Abbe error of a pitch ``w`` is ``w (q - r)``); a head axis carries the
+    tool, whose arm does not change with its own ``q``.  A tilted direction ``d'`` (squareness
+    errors) is followed from the reference, the move is ``s (r e_K + (q - r) d')``, so a
+    squareness error moves the tool by ``(q - r) (w x e_K)``.  With every ``r = 0`` (the
+    default) the chain is exactly the one without references.  Shifting an axis' zero and
+    its reference by the same amount, with the offsets of what it carries (pivots, tool
+    offsets) shifted back, leaves every pose error unchanged when the linear axes it carries
+    are reached from it without a rotary axis between; rotary axes keep their error motions
+    about their own frame's origin, and their location errors, as they are.  Pre and post
+    location blocks of a linear axis (the papers' machines) are not referred.
 
     Examples
     --------
@@ -231,7 +203,8 @@ class ChainMachine:
                  tool_offsets: Sequence[str] = ("L",), orientation: str = "rotation_vector",
                  pivots: Mapping[str, Sequence[float]] | None = None,
                  travels: Mapping[str, tuple[float, float]] | None = None, chunk: int = 4096,
-                 axis_names: Sequence[str] | None = None):
+                 axis_names: Sequence[str] | None = None,
+                 references: Mapping[str, float] | None = None):
         self.topology = parse_topology(topology)
         if form not in FORMS:
             raise ValueError(f"unknown block form {form!r}; allowed: {', '.join(FORMS)}")
@@ -267,6 +240,7 @@ class ChainMachine:
             if np.shape(p) != (3,) or not np.all(np.isfinite(p)):
                 raise ValueError(f"pivot of {a} must be 3 finite numbers (mm), got {p!r}")
         self.pivots = {a: np.asarray(p, dtype=float) for a, p in pivots.items()}
+        self.references = _check_references(self.topology, references)
         self.travels = dict(travels or {})
         unknown = [k for k in self.travels if k not in self.axes]
         if unknown:
@@ -282,6 +256,7 @@ class ChainMachine:
         self._euler_angles = sorted(
             j for (_, slot), b in self._blocks.items() if form == "euler" and slot != "tilt"
             for j, c in zip(b.cols, b.comps, strict=True) if c >= 3)
+        self._about = self._reference_points()
         self._factors = self._build_factors()
         self._plan = self._build_plan()
 
@@ -403,6 +378,22 @@ class ChainMachine:
                 if a in self.topology.tool for f in fs]
         return list(reversed(work)) + tool
 
+    def _reference_points(self) -> dict:
+        """Linear axis -> the point ``a_K`` (3,) of its moving body about which its error
+        motions act, in its frame after the motion (class Notes); only where it is not 0."""
+        out = {}
+        for side_axes in (self.topology.work, self.topology.tool):
+            a = np.zeros(3)
+            for axis in side_axes:                  # from the bed outwards
+                if axis in ROTARY:                  # a rotary axis turns the frames after it
+                    a = np.zeros(3)
+                    continue
+                a = a.copy()
+                a[DIRECTION[axis]] -= self.topology.side(axis) * self.references.get(axis, 0.0)
+                if np.any(a != 0.0):
+                    out[axis] = a
+        return out
+
     # -- evaluation ------------------------------------------------------------------------
     def _direction(self, e, axis, k):
         """The (possibly tilted) direction of a linear axis: 3 rows or scalars."""
@@ -432,6 +423,11 @@ class ChainMachine:
                 d = self._direction(e, axis, k)
                 sq = -q if side < 0 else q
                 t = [None if (np.ndim(di) == 0 and di == 0.0) else di * sq for di in d]
+                r = self.references.get(axis, 0.0)
+                if r != 0.0 and self._blocks[(axis, "tilt")].cols:   # s (r e + (q - r) d')
+                    sr, i0 = -r if side < 0 else r, DIRECTION[axis]
+                    t = [(d[i] * (sq - sr) + (sr if i == i0 else 0.0))
+                         if t[i] is not None else None for i in range(3)]
                 ops = [("t", t)]
                 return [("t", [None if ti is None else -ti for ti in t])] if side < 0 else ops
             c, sn = cos_sin(q)
@@ -440,7 +436,12 @@ class ChainMachine:
             if piv is not None:
                 ops = [("t", [-piv[i] for i in range(3)]), *ops, ("t", [piv[i] for i in range(3)])]
             return ops
-        b = self._blocks[(axis, slot)]
+        if slot == "motion" and axis in self._about:   # T(a) D T(-a): about the reference
+            a = self._about[axis]
+            inner = self._ops(e, p, side, axis, "origin", k, trig)
+            return [("t", [-a[i] for i in range(3)]), *inner, ("t", [a[i] for i in range(3)])
+                    ] if inner else []
+        b = self._blocks[(axis, "motion" if slot == "origin" else slot)]
         if not b.cols:
             return []
         d, w = [None] * 3, [None] * 3
@@ -682,9 +683,15 @@ class ChainMachine:
         pos, kind = np.zeros(m, dtype=int), np.zeros(m, dtype=int)
         unit, ek, scale = np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m)
         tilt_axis = [""] * m
+        about = np.zeros((m, 3))                   # the point its rotations turn about
+        ref = np.zeros(m)                          # tilts: the reference of their axis
         for j, pl in enumerate(self.placements):
             i, side = where[(pl.axis, pl.slot)]
             pos[j] = i
+            if pl.slot == "motion" and pl.axis in self._about:
+                about[j] = self._about[pl.axis]
+            if pl.slot == "tilt":
+                ref[j] = self.references.get(pl.axis, 0.0)
             unit[j, pl.component % 3] = 1.0
             scale[j] = pl.sign * side
             if pl.slot == "tilt":
@@ -694,7 +701,7 @@ class ChainMachine:
                 scale[j] = pl.sign * side * side    # the move is by s q, s = side for linear
             else:
                 kind[j] = 0 if pl.component < 3 else 1
-        return pos, kind, unit, ek, scale, tilt_axis
+        return pos, kind, unit, ek, scale, tilt_axis, about, ref
 
     def jacobian(self, pose: Mapping, *, step: float | None = None) -> np.ndarray:
         """The Jacobian d(pose error)/d(errors) at zero errors: exact, in closed form.
@@ -705,7 +712,9 @@ class ChainMachine:
         tip by ``R_A (w x p_B + v)`` and turns the tool by ``R_A w`` (the tool axis by
         ``R_A (w x a_B)``), with the opposite sign on the workpiece side (the inverse of I + xi
         is I - xi to first order).  A tilt ``w`` of a linear axis moved by ``s q`` is the
-        translation ``s q (w x e_k)``.  All forms agree to first order.
+        translation ``s (q - r) (w x e_k)``; the rotations of a referred block turn about its
+        point ``a_K``, ``w x (p_B - a_K)`` (Abbe references, class Notes).  All forms agree to
+        first order.
 
         Parameters
         ----------
@@ -754,15 +763,16 @@ class ChainMachine:
             side, axis, slot = seq[i]
             if slot == "move":
                 self._run(v, self._ops(zero_e, p, side, axis, slot, n), scratch)
-        pos, kind, unit, ek, scale, tilt_axis = self._plan
+        pos, kind, unit, ek, scale, tilt_axis, about, ref = self._plan
         ra = np.stack(before)                                     # (F, n, 3, 3)
         aft = np.stack(after)                                     # (F, 2, 3, n)
         tip, ax = aft[pos, 0], aft[pos, 1]                        # (E, 3, n)
         u = unit[:, :, None]                                      # (E, 3, 1)
         dp = np.where(kind[:, None, None] == 0, u, 0.0)           # translations
         rotn = kind[:, None, None] == 1
-        dp = np.where(rotn, np.cross(u, tip, axis=1), dp)
-        q = np.stack([p[self._axis_pose[a_]] if a_ else np.zeros(n) for a_ in tilt_axis])
+        dp = np.where(rotn, np.cross(u, tip - about[:, :, None], axis=1), dp)
+        q = np.stack([p[self._axis_pose[a_]] if a_ else np.zeros(n) for a_ in tilt_axis]) \
+            - ref[:, None]                                        # (q - r) (w x e_k)
         dp = np.where(kind[:, None, None] == 2, np.cross(u, ek[:, :, None], axis=1)
                       * q[:, None, :], dp)
         dr = (np.cross(u, ax, axis=1) if self.orientation == "tool_axis"

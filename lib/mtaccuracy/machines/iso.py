@@ -10,6 +10,8 @@ them (notebook 06).
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from .. import errors as _errors
@@ -126,6 +128,12 @@ def redundant_location_errors(machine: ChainMachine, *, n_poses: int = 64, seed=
     them), and the rank test of columns mixing such entries with ordinary ones is not
     meaningful; the scaling only keeps the arithmetic finite.
     """
+    return [(s, why) for s, why, _ in _redundant(machine, n_poses=n_poses, seed=seed, rtol=rtol)]
+
+
+def _redundant(machine: ChainMachine, *, n_poses: int, seed, rtol: float):
+    """:func:`redundant_location_errors` with, per error, the datums that absorb it in plain
+    words (:func:`_absorbed`): ``(symbol, reason, absorbed_by)`` triples."""
     n_poses = validate.integer(n_poses, "n_poses", low=1)
     rng = validate.rng(seed)
     pose = {}
@@ -156,29 +164,37 @@ def redundant_location_errors(machine: ChainMachine, *, n_poses: int = 64, seed=
     # effects that are not errors: the zero of each axis, a rigid set-up error of the
     # workpiece (6 dof, in the workpiece frame) and a tool offset error (along the tool
     # frame's axes)
-    nuisance, labels = [], []
+    nuisance, labels, plain = [], [], []
     for j, pl in enumerate(machine.placements):   # an axis' zero: its own-direction error
         own = DIRECTION[pl.axis] + (3 if pl.axis in ROTARY else 0)
         if pl.slot == "motion" and pl.component == own:
             nuisance.append(jac[:, :, j])
             labels.append(f"the zero of {machine._axis_pose[pl.axis]}")
+            plain.append(f"the zero of {pl.axis} (its home or reference position)")
     unit = np.eye(3)
     for c in range(3):
         nuisance.append(as_error(-np.broadcast_to(unit[c], tt.shape), np.zeros_like(tt)))
         labels.append(f"the workpiece set-up along {'xyz'[c]}")
+        plain.append(f"the work offset (G54) in {'xyz'[c]}")
     for c in range(3):
         u = np.broadcast_to(unit[c], tt.shape)
         nuisance.append(as_error(-np.cross(u, tt), -u))
         labels.append(f"the workpiece set-up about {'xyz'[c]}")
+        plain.append(f"a rotation of the work offset about {'xyz'[c]} (the part's alignment)")
     for c in range(3):
         nuisance.append(as_error(rt[:, :, c], np.zeros_like(tt)))
         labels.append(f"the tool offset along {'xyz'[c]}")
-    basis, names_b = [], []
-    for col, lab in zip(nuisance, labels, strict=True):
+        # the chain's tool axis is the tool frame's z (the tool-axis orientation output)
+        plain.append("the tool length offset (gauge line to tip, along the tool axis)" if c == 2
+                     else f"the tool tip's offset along the tool frame's {'xyz'[c]}, across the "
+                          f"tool axis (a pivot calibration finds it with the length)")
+    basis, names_b, datums = [], [], []
+    for col, lab, words in zip(nuisance, labels, plain, strict=True):
         vec = _unit(col.reshape(-1))
         if vec is not None:
             basis.append(vec)
             names_b.append(lab)
+            datums.append((vec, words))
     out = []
 
     def explain(vec):
@@ -193,15 +209,37 @@ def redundant_location_errors(machine: ChainMachine, *, n_poses: int = 64, seed=
             continue
         vec = _unit(jac[:, :, j].reshape(-1))
         if vec is None:
-            out.append((spec.symbol, "no effect on the pose error"))
+            out.append((spec.symbol, "no effect on the pose error", "nothing (no effect)"))
             continue
         res, used = explain(vec)
         if res < rtol:
-            out.append((spec.symbol, _same_effect(used)))
+            out.append((spec.symbol, _same_effect(used), _absorbed(vec, datums, rtol)))
             continue
         basis.append(vec)
         names_b.append(spec.symbol)
     return out
+
+
+def _absorbed(vec, datums, rtol: float) -> str:
+    """Which datums a redundant error's column equals or combines with, in a machine user's
+    words: the fewest datum columns (one, then two, then three) whose span holds ``vec``,
+    every such set (``or`` between alternatives), or, when three do not suffice, that the
+    datums together with location errors already kept absorb it.  Derived from the chain's
+    columns (``datums``: (unit column, plain words) pairs), never from the error's name."""
+    # a calibration datum (tool, work offset) named before an axis zero that does the same
+    datums = sorted(datums, key=lambda d: d[1].startswith("the zero of"))
+    cols = [d for d, _ in datums]
+    for size in (1, 2, 3):
+        found = []
+        for idx in itertools.combinations(range(len(cols)), size):
+            m = np.stack([cols[i] for i in idx], 1)
+            coef, *_ = np.linalg.lstsq(m, vec, rcond=None)
+            if np.linalg.norm(vec - m @ coef) < rtol and np.all(np.abs(coef) > 1e-6):
+                found.append(" + ".join(datums[i][1] for i in idx))
+        if found:
+            how = "absorbed by " if size == 1 else "absorbed by a combination of "
+            return how + " or by ".join(found)
+    return "absorbed by the datums together with location errors already kept"
 
 
 def _unit(vec):
@@ -244,7 +282,10 @@ def iso_machine(topology: str, *, name: str = "iso_machine", keep_redundant: boo
     Returns
     -------
     ChainMachine
-        With ``machine.removed``: the (symbol, reason) of every removed location error.
+        With ``machine.removed``: the (symbol, reason) of every removed location error, and
+        ``machine.absorbed_by``: symbol -> the datum(s) that absorb it, in the words of a
+        machine's user (the tool length offset, the work offset G54, an axis zero ...; the
+        fewest datum columns of the chain whose combination equals its column).
         Location errors sit before their axis' motion (ISO 230-7), squareness errors tilt the
         directions of the linear axes (:func:`iso_catalogue`).
 
@@ -271,11 +312,13 @@ def iso_machine(topology: str, *, name: str = "iso_machine", keep_redundant: boo
     options.setdefault("orientation", "tool_axis" if any(a in ROTARY for a in topo.axes)
                        else "rotation_vector")
     full = ChainMachine(topology, cat, placements, name=name, **options)
-    removed = [] if keep_redundant else redundant_location_errors(full)
+    found = [] if keep_redundant else _redundant(full, n_poses=64, seed=0, rtol=1e-9)
+    removed = [(s, why) for s, why, _ in found]
     drop = {s for s, _ in removed}
     if drop:
         cat = tuple(e for e in cat if e.symbol not in drop)
         full = ChainMachine(topology, cat, {s: placements[s] for s in (e.symbol for e in cat)},
                             name=name, **options)
     full.removed = removed
+    full.absorbed_by = {s: words for s, _, words in found}
     return full

@@ -11,7 +11,8 @@ the workpiece to the tool, with ``b`` for the bed (the machine's base)::
                           the serial reading of Guo et al. 2016's Eq. 9
     "w C b X Y Z B t"     a swivel-head mill on a rotary table (notebook 06)
 
-An optional ``s`` (spindle) before ``t`` is accepted and ignored.  Each axis ``K`` is the body
+An optional ``s`` (spindle) before ``t`` is accepted and ignored.  :class:`Placement` says where
+each error of a catalogue enters the chain.  Each axis ``K`` is the body
 that moves along (or about) the coordinate direction ``k`` of the frame it rides on.
 :func:`parse_topology` reads the string into a :class:`Topology`;
 :class:`mtaccuracy.machines.chain.ChainMachine` builds the machine's chain from it.
@@ -21,7 +22,7 @@ from __future__ import annotations
 
 import re
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 LINEAR = "XYZ"
 ROTARY = "ABC"
@@ -178,3 +179,76 @@ def parse_topology(text: str) -> Topology:
         raise ValueError(f"axis {dup} appears more than once in topology {shown}")
     return Topology(text, work, tool)
 
+
+# ------------------------------------------------------------------------------------------
+# Where each error goes (the placements of :class:`.chain.ChainMachine`)
+# ------------------------------------------------------------------------------------------
+
+#: error components of a block: translations along x, y, z, rotations about x, y, z
+COMPONENTS = ("X", "Y", "Z", "A", "B", "C")
+SLOTS = ("motion", "pre", "post", "tilt")
+
+
+@dataclass(frozen=True)
+class Placement:
+    """Where one error column enters the chain: an axis, a slot, a component and a sign.
+
+    ``axis``, ``slot`` (``motion``: the axis' error-motion block; ``pre``/``post``: its location
+    block before/after the motion; ``tilt``: a rotation of its direction of motion),
+    ``component`` (0-2 translation along x, y, z; 3-5 rotation about x, y, z) and ``sign`` (+1,
+    or -1 where a paper defines the error the other way).
+
+    Attributes
+    ----------
+    axis : str
+        The axis whose block the error enters.
+    slot : {"motion", "pre", "post", "tilt"}
+        Which block.
+    component : int
+        0-2 translation along x, y, z (mm); 3-5 rotation about x, y, z (rad).
+    sign : float
+        +1 or -1.
+    """
+
+    axis: str
+    slot: str
+    component: int
+    sign: float = 1.0
+
+
+@dataclass
+class _Block:
+    cols: list = field(default_factory=list)     # error columns
+    comps: list = field(default_factory=list)    # their components 0-5
+    signs: list = field(default_factory=list)
+
+
+def _check_placements(topology: Topology, catalogue, placements) -> list[Placement]:
+    syms = [e.symbol for e in catalogue]
+    missing = [s for s in syms if s not in placements]
+    if missing:
+        raise ValueError(f"no placement for error(s) {missing}")
+    extra = [s for s in placements if s not in syms]
+    if extra:
+        raise ValueError(f"placement for unknown error(s) {extra}; the catalogue has {syms}")
+    out, seen = [], {}
+    for s in syms:
+        p = placements[s]
+        if p.axis not in topology.axes:
+            raise ValueError(f"error {s} is placed on axis {p.axis!r}, which is not in the "
+                             f"topology {topology.text!r} (axes {', '.join(topology.axes)})")
+        if p.slot not in SLOTS:
+            raise ValueError(f"error {s}: unknown slot {p.slot!r}; allowed: {', '.join(SLOTS)}")
+        if not 0 <= p.component <= 5 or (p.slot == "tilt" and p.component < 3):
+            raise ValueError(f"error {s}: component {p.component} not allowed in slot "
+                             f"{p.slot!r} (0-5; a tilt is a rotation, 3-5)")
+        if p.slot == "tilt" and p.axis not in LINEAR:
+            raise ValueError(f"error {s}: only a linear axis has a direction to tilt, not "
+                             f"{p.axis}")
+        key = (p.axis, p.slot, p.component)
+        if key in seen:
+            raise ValueError(f"errors {seen[key]} and {s} both occupy component "
+                             f"{COMPONENTS[p.component]} of the {p.slot} slot of {p.axis}")
+        seen[key] = s
+        out.append(p)
+    return out

@@ -270,7 +270,8 @@ def _likely(lim: Limits, lo: float, hi: float, unit: str) -> list[tuple[str, str
     return out
 
 
-def check(lim: Limits, low: float, high: float, *, unit: str) -> Finding | None:
+def check(lim: Limits, low: float, high: float, *, unit: str,
+          written: tuple[str, str] | None = None) -> Finding | None:
     """Whether a travel or an error range is plausible for a machine tool in the unit written.
 
     Parameters
@@ -283,6 +284,9 @@ def check(lim: Limits, low: float, high: float, *, unit: str) -> Finding | None:
     unit : str
         The unit written, a key of ``lim.units`` (it may be one the file does not accept,
         e.g. ``deg`` for an angular error: the finding then says what the value is in it).
+    written : (str, str), optional
+        ``low`` and ``high`` as the file writes them, quoted in the message instead of their
+        rounded values (a 26-digit number is shown as written, not as ``1.23457e+25``).
 
     Returns
     -------
@@ -319,7 +323,11 @@ def check(lim: Limits, low: float, high: float, *, unit: str) -> Finding | None:
     m = _measure(lim, low, high)
     verb = "spans" if lim.measure == "span" else "reaches only" if name == "warn_below" \
         else "reaches"
-    text = f"{lim.what} ({low:g}, {high:g}) {unit} {verb} {_num(m, 6)} {unit}"
+    shown = f"{written[0]}, {written[1]}" if written else f"{low:g}, {high:g}"
+    reach = _num(m, 6)
+    if written and lim.measure == "size":       # the larger end as written, not rounded
+        reach = written[0 if abs(low) >= abs(high) else 1].lstrip("+-")
+    text = f"{lim.what} ({shown}) {unit} {verb} {reach} {unit}"
     d = 6 if size == 1 else _digits(size)
     if name == "bound":
         text += f", beyond +-{_num(lim.bound / size, d)} {unit}"
@@ -368,7 +376,8 @@ def suggest(lim: Limits, low: float, high: float, *, unit: str, sure: bool = Tru
     return _said(likely, sure) if likely else ""
 
 
-def in_unit(lim: Limits, low: float, high: float, *, unit: str) -> str:
+def in_unit(lim: Limits, low: float, high: float, *, unit: str,
+            written: tuple[str, str] | None = None) -> str:
     """What numbers written in a unit a file does not take are in the one it does.
 
     Parameters
@@ -380,6 +389,8 @@ def in_unit(lim: Limits, low: float, high: float, *, unit: str) -> str:
     unit : str
         The unit written, not one of ``lim.accepted`` (an alias is read as its unit,
         :func:`canonical`).
+    written : (str, str), optional
+        ``low`` and ``high`` as written, quoted instead of their rounded values.
 
     Returns
     -------
@@ -389,18 +400,19 @@ def in_unit(lim: Limits, low: float, high: float, *, unit: str) -> str:
         written 'um'"`` when ``unit`` is another spelling of an accepted unit; ``""`` when it
         is no unit of ``lim``.
     """
-    written, unit = unit, canonical(unit)
+    spelled, unit = unit, canonical(unit)
     if unit in lim.accepted:
-        return f"{written!r} is written {unit!r}"
+        return f"{spelled!r} is written {unit!r}"
     if unit not in lim.units:
         return ""
-    found = check(lim, low, high, unit=unit)
+    found = check(lim, low, high, unit=unit, written=written)
     if found is not None:
         return f"read in {unit}, {found.message}"
     write = lim.accepted[0]
     factor = lim.units[unit] / lim.units[write]
     d = _digits(factor)
-    return (f"({low:g}, {high:g}) {unit} is ({_num(low * factor, d)}, "
+    shown = f"{written[0]}, {written[1]}" if written else f"{low:g}, {high:g}"
+    return (f"({shown}) {unit} is ({_num(low * factor, d)}, "
             f"{_num(high * factor, d)}) {write}")
 
 
