@@ -457,7 +457,7 @@ def read_lab_export(folder, on_read=None) -> ThermalData:
     for name in sensor_set:
         if name in dropped:
             tp, column, why = dropped[name]
-            warnings.warn(f"{tp}: sensor {name!r} (column {column!r}) {why}: dropped",
+            warnings.warn(f"{tp}: sensor {name!r} (column {column!r}), {why}: dropped",
                           DroppedSensorWarning, stacklevel=3)
             out_dropped[name] = f"{tp.name}, column {column!r}: {why}"
         elif name in filled:
