@@ -421,7 +421,7 @@ def test_a_bidirectional_errors_file_is_refused_naming_the_ignored_column(tmp_pa
     ("T5_C", r"\(found 'C'\); rename it 'T5_degC'"),
     ("T5_degc", r"\(found 'degc'\); rename it 'T5_degC'"),
     ("T5_deg_C", r"\(found 'C'\); rename it 'T5_degC'"),
-    ("T5 [°C]", r"\(found '°C'\); rename it 'T5_degC'"),
+    ("T5 [K]", r"\(found 'K'\); convert the values to degrees Celsius"),
     ("T5 (K)", r"\(found 'K'\); convert the values"),
     ("T5", r"temperatures must be in degrees Celsius, named <sensor>_degC \(found 'no unit'\); "
            r"a column of numbers needs its unit in its name"),

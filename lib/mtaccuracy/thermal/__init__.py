@@ -4,7 +4,9 @@
 ``data``           :class:`ThermalData`, the measurements of one axis; :func:`rises_of`
 ``schema``         the CSV schema of ``data/thermal/README.md``: file names, limits,
                    :class:`DataFormatError` and the readers' warnings
-``io``             :func:`read_measurements` (each file by its own reader),
+``labexport``      a lab export (a logger and a laser file per experiment):
+                   :func:`read_lab_export`, :func:`layout`, :func:`experiment_number`
+``io``             :func:`read_measurements` (either layout; each file by its own reader),
                    :func:`write_measurements`, :func:`save_csv`; the checks of the schema
                    are ``checks``, the reading of one CSV file ``csvfile``
 ``clustering``     fuzzy equivalence clustering (Eqs. 1-3), grey relational grade (Eq. 4),
@@ -24,8 +26,8 @@
 The seeded reconstruction of the paper's dataset, calibrated to its printed tables, is paper
 code: :mod:`mtaccuracy.papers.xu2022_reconstruction`.
 
-Everything public in ``data``, ``schema``, ``io``, ``clustering``, ``models``, ``svr``,
-``validation`` and ``baselines`` is importable from here.
+Everything public in ``data``, ``schema``, ``io``, ``labexport``, ``clustering``, ``models``,
+``svr``, ``validation`` and ``baselines`` is importable from here.
 Units: positions in mm, errors in um, slopes k in um/m (so ``k * x_mm / 1000`` is um),
 temperatures in degrees Celsius.  The position axis is shifted to start at 0 (the paper models
 185..445 mm as 0..260 mm so that the intercept b is the error at the first target).
@@ -47,6 +49,7 @@ from . import (  # noqa: F401
     csvfile,
     data,
     io,
+    labexport,
     models,
     schema,
     svr,
@@ -56,10 +59,11 @@ from .baselines import *  # noqa: F403
 from .clustering import *  # noqa: F403
 from .data import *  # noqa: F403
 from .io import *  # noqa: F403
+from .labexport import *  # noqa: F403
 from .models import *  # noqa: F403
 from .schema import *  # noqa: F403
 from .svr import *  # noqa: F403
 from .validation import *  # noqa: F403
 
-__all__ = [*data.__all__, *schema.__all__, *io.__all__, *clustering.__all__, *models.__all__,
-           *svr.__all__, *validation.__all__, *baselines.__all__]
+__all__ = [*data.__all__, *schema.__all__, *io.__all__, *labexport.__all__, *clustering.__all__,
+           *models.__all__, *svr.__all__, *validation.__all__, *baselines.__all__]

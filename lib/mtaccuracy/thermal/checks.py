@@ -68,8 +68,10 @@ def _check_size(path, what, n, limit, why) -> None:
         raise _problem(path, f"{n} {what}; at most {limit} are supported ({why})")
 
 
-# Columns of temperatures.csv.  Units are part of the names: ``<sensor>_degC`` is a sensor; a
-# name ending in another temperature unit (``_K``, ``_degF``, ``_C``, ``[°C]`` ...: see
+# Columns of temperatures.csv.  Units are part of the names: ``<sensor>_degC`` is a sensor, and
+# so is ``<sensor> [°C]`` (a Celsius unit in brackets, as loggers write it: ``[°C]``, ``(°C)``,
+# ``[degC]``, ``[C]``, ``[Celsius]``; the brackets leave no doubt that it is a unit); a
+# name ending in another temperature unit (``_K``, ``_degF``, ``_C``, ``[K]`` ...: see
 # :func:`_temperature_unit`) is a temperature in the wrong unit or spelling, refused; a name
 # ending in any other unit (``spindle_speed_rpm``) is another quantity, ignored; a name with
 # no unit is refused when the column holds numbers (a sensor that lost its unit: ``T3``) and
@@ -115,8 +117,18 @@ def _holds_numbers(s: pd.Series, sep: str) -> bool:
     return not values.empty and bool(np.isfinite(_parse(values, sep)).all())
 
 
-def _temperature_columns(path: Path, df: pd.DataFrame) -> tuple[dict[str, str], dict[str, str]]:
-    """Sensor name -> its column ``<sensor>_degC``, and the columns ignored (column -> why).
+def _celsius_bracket(name: str) -> str | None:
+    """The sensor of a column ``<sensor> [°C]`` (a Celsius unit in brackets), else None."""
+    m = _BRACKETED.search(name)
+    if m and _temperature_unit(m.group(1)) == "celsius":
+        return name[:m.start()].strip()
+    return None
+
+
+def _temperature_columns(path: Path, df: pd.DataFrame,
+                         keys=(*_KEYS, "timestamp")) -> tuple[dict[str, str], dict[str, str]]:
+    """Sensor name -> its column (``<sensor>_degC`` or ``<sensor> [°C]``), and the columns
+    ignored (column -> why); ``keys`` are the columns that are no sensor.
 
     Refuses temperatures in another unit or spelling and columns of numbers without a unit.
     """
@@ -126,10 +138,11 @@ def _temperature_columns(path: Path, df: pd.DataFrame) -> tuple[dict[str, str], 
     tail = ("; a column that is not a temperature is ignored when its name ends in its own "
             "unit (e.g. spindle_speed_rpm)")
     for c in df.columns:
-        if c in _KEYS:
+        if c in keys:
             continue
-        if c.endswith(_TEMP_UNIT):
-            name = c[:-len(_TEMP_UNIT)].strip()
+        bracketed = _celsius_bracket(c)
+        if c.endswith(_TEMP_UNIT) or bracketed is not None:
+            name = c[:-len(_TEMP_UNIT)].strip() if bracketed is None else bracketed
             if not name:
                 raise _problem(path, f"column {c!r} names no sensor; write <sensor>{_TEMP_UNIT}, "
                                      f"e.g. T1{_TEMP_UNIT}")
@@ -152,7 +165,8 @@ def _temperature_columns(path: Path, df: pd.DataFrame) -> tuple[dict[str, str], 
             m = _BRACKETED.search(c)
             stem = (c[:m.start()] if m else c.rsplit("_", 1)[0]).strip()
             stem = re.sub(r"[_ ]*(degrees?|deg|grad)$", "", stem, flags=re.I) or "<sensor>"
-            fix = (f"rename it {stem + _TEMP_UNIT!r}" if scale == "celsius" else
+            fix = (f"rename it {stem + _TEMP_UNIT!r} or {stem + ' [°C]'!r}"
+                   if scale == "celsius" else
                    f"convert the values to degrees Celsius (degC = K - 273.15 = (degF - 32) / "
                    f"1.8) and rename it {stem + _TEMP_UNIT!r}")
             raise _problem(path, f"column {c!r}: temperatures must be in degrees Celsius, named "
@@ -167,6 +181,31 @@ def _temperature_columns(path: Path, df: pd.DataFrame) -> tuple[dict[str, str], 
                       f"unit)" if unit is not None else
                       "no unit, " + ("empty" if df[c].isna().all() else "text"))
     return sensors, ignored
+
+
+def _constant(values: dict[str, np.ndarray], experiments: np.ndarray) -> dict[str, str]:
+    """The sensors whose reading never changes within any experiment (sensor -> why).
+
+    The why names the value: such a sensor carries no rise, the only thing the models learn
+    from a temperature.
+    """
+    if not values:
+        return {}
+    g = pd.DataFrame(values).groupby(experiments, sort=True)
+    lo, hi = g.min(), g.max()
+    out = {}
+    for name in values:
+        if not (lo[name] == hi[name]).all():
+            continue
+        per = lo[name]
+        if per.nunique() == 1:
+            out[name] = f"reads {per.iloc[0]:g} degC in every measurement"
+        else:
+            shown = ", ".join(f"{v:g} in experiment {e}" for e, v in per.iloc[:4].items())
+            out[name] = (f"reads one value through each experiment ({shown}"
+                         f"{' ...' if len(per) > 4 else ''} degC): it never changes within an "
+                         f"experiment")
+    return out
 
 
 def _check_listed(path: Path, listed: np.ndarray, data: set, files: str) -> None:

@@ -16,13 +16,22 @@ line, the header, tells which (:func:`_separator`); ``csvlines.records(text, sep
 scans either.
 
 Encoding: UTF-8, a byte-order mark allowed; UTF-16 (Excel's "Unicode Text") is refused with
-the way to save the file instead.  Every function here is private to the thermal readers
-(:mod:`~mtaccuracy.thermal.io`); written by hand, as the messages are ours.
+the way to save the file instead.
+
+Read once.  A file is read through :func:`mtaccuracy.validate.file_bytes` (a directory, a FIFO,
+a device or a link to one, or a file over :data:`~mtaccuracy.thermal.schema.MAX_FILE_BYTES`, is
+refused before a byte is read), decoded once, and pandas parses the decoded text; the text is
+kept on the file's :class:`Source` so that a message scans it without reading the file again.
+A physical line longer than :data:`MAX_LINE_CHARS` (the csv module's field limit, 128 KiB) is
+refused naming it: no field of the schema comes near it, and the scanner could not place it.
+Every function here is private to the thermal readers (:mod:`~mtaccuracy.thermal.io`,
+:mod:`~mtaccuracy.thermal.labexport`); written by hand, as the messages are ours.
 """
 
 from __future__ import annotations
 
-import contextlib
+import csv
+import io
 import re
 import warnings
 from pathlib import Path
@@ -30,10 +39,67 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .. import csvlines
+from .. import csvlines, validate
 from .schema import _TEMP_UNIT, MAX_FILE_BYTES, DataFormatError, _problem
 
 __all__: list[str] = []
+
+#: The longest physical line read (characters): the csv module's field limit
+#: (``csv.field_size_limit()``, 131072), beyond which its scanner cannot name a line.  A line of
+#: the schema at its limits (100 sensors of long names, numbers) holds a few thousand.
+MAX_LINE_CHARS = csv.field_size_limit()
+#: The largest whole number read as an experiment or measurement number (as written; beyond
+#: it a number is refused, never wrapped round): 9 digits.
+MAX_WHOLE = 999_999_999
+
+
+class Source(type(Path())):
+    """A file's path that carries its decoded text once :func:`_read_csv` has read it.
+
+    Messages about its lines scan ``text`` instead of reading the file again (a file is read
+    once, through :func:`mtaccuracy.validate.file_bytes`).
+    """
+
+    text: str | None = None
+
+
+def _source(path) -> Source:
+    """``path`` as a :class:`Source` (itself when it is one)."""
+    return path if isinstance(path, Source) else Source(path)
+
+
+def _text(path: Path) -> str:
+    """The decoded text of ``path``: the one kept by :func:`_read_csv`, else read once now."""
+    text = getattr(path, "text", None)
+    if text is None:
+        text = _decode(path, _file_bytes(path))
+        if isinstance(path, Source):
+            path.text = text
+    return text
+
+
+def _file_bytes(path: Path) -> bytes:
+    """The bytes of ``path`` through :func:`mtaccuracy.validate.file_bytes`, or the refusal."""
+    try:
+        return validate.file_bytes(path, max_bytes=MAX_FILE_BYTES)
+    except validate.FileRefused as exc:
+        fix = (" (the schema needs temperatures.csv and errors.csv, or a lab export; see "
+               "data/thermal/README.md)" if str(exc) == "file not found" else
+               " (the size limits of the schema need far less)" if "bytes" in str(exc) else "")
+        raise _problem(path, f"{exc}{fix}") from None
+
+
+def _long_line(path: Path, text: str) -> None:
+    """Refuse a physical line longer than :data:`MAX_LINE_CHARS`, naming it (linear time)."""
+    if len(text) <= MAX_LINE_CHARS:
+        return
+    lengths = [len(line) for line in re.split(r"\r\n|\r|\n", text)]
+    long = next((i for i, n in enumerate(lengths) if n > MAX_LINE_CHARS), None)
+    if long is not None:
+        raise _problem(path, f"line {long + 1} is {lengths[long]} characters long; lines up to "
+                             f"{MAX_LINE_CHARS} characters are read (the csv module's field "
+                             f"limit; no field of numbers and names comes near it: a stray "
+                             f"paste, or not a CSV file?)")
 
 
 def _decode(path: Path, raw: bytes) -> str:
@@ -89,7 +155,7 @@ def _records_of(text: str, sep: str):
 
 def _records(path: Path):
     """The file's records with their lines, the header first (see :func:`_records_of`)."""
-    text = _decode(path, path.read_bytes())
+    text = _text(path)
     return _records_of(text, _separator(path, text))
 
 
@@ -107,10 +173,10 @@ def _where(path: Path, rows, column: int | None = None) -> list[tuple[int, str]]
     """
     wanted = {int(r) for r in rows}
     found: dict[int, tuple[int, str]] = {}
-    text = _decode(path, path.read_bytes())
+    text = _text(path)
     sep = _separator(path, text)
     records = _records_of(text, sep)
-    with contextlib.suppress(csvlines.CSVLineError):
+    try:
         next(records, None)                          # the header
         row = -1
         for rec in records:
@@ -122,6 +188,8 @@ def _where(path: Path, rows, column: int | None = None) -> list[tuple[int, str]]
                 found[row] = (rec.first, f.strip())
                 if len(found) == len(wanted):
                     break
+    except csvlines.CSVLineError as exc:             # pandas read what the csv module cannot
+        raise _problem(path, f"line {exc.line}: {exc.reason}") from None
     return [found.get(int(r), (-1, "")) for r in rows]
 
 
@@ -159,7 +227,7 @@ def _ragged(path: Path) -> DataFormatError | None:
     When the first data rows all have more fields than the header, a comma file with decimal
     commas is the likely cause, and the message says so.
     """
-    text = _decode(path, path.read_bytes())
+    text = _text(path)
     sep = _separator(path, text)
     records = _records_of(text, sep)
     try:
@@ -235,26 +303,24 @@ def _read_csv(path: Path, on_read=None) -> pd.DataFrame:
     (an empty field is NaN), any other as text (:func:`_numeric` converts it and names the
     values that are not numbers).  ``df.attrs["separator"]`` is the separator.
     """
-    if not path.exists():
-        raise _problem(path, "file not found (the schema needs temperatures.csv and errors.csv; "
-                             "see data/thermal/README.md)")
-    size = path.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise _problem(path, f"{size} bytes; files up to {MAX_FILE_BYTES} bytes are read (the "
-                             f"size limits of the schema need far less)")
-    text = _decode(path, path.read_bytes())
+    if not isinstance(path, Source) or path.text is None:
+        text = _decode(path, _file_bytes(path))      # refused before a byte is read
+        if isinstance(path, Source):
+            path.text = text
+    else:
+        text = path.text
+    _long_line(path, text)
     sep = _separator(path, text)
     names = _header(path, text, sep)
     try:
         with warnings.catch_warnings():
             # a column mixing numbers and text, read in chunks: :func:`_numeric` handles it
             warnings.simplefilter("ignore", pd.errors.DtypeWarning)
-            df = pd.read_csv(path, sep=sep, decimal="," if sep == ";" else ".",
-                             encoding="utf-8-sig", keep_default_na=False, na_values=[""],
-                             skipinitialspace=True)
+            df = pd.read_csv(io.StringIO(text), sep=sep, decimal="," if sep == ";" else ".",
+                             keep_default_na=False, na_values=[""], skipinitialspace=True)
         if on_read is not None:
-            on_read(path)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+            on_read(Path(path))
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
         raise _unreadable(path, exc) from None
     if not isinstance(df.index, pd.RangeIndex):
         # pandas takes a first data row with more fields than the header as the sign of an
@@ -308,5 +374,13 @@ def _numeric(path, df, column, integer=False) -> np.ndarray:
         if not np.all(values == np.round(values)):
             raise _problem(path, f"column {column!r} must hold whole numbers (line(s) "
                                  f"{_lines(path, values != np.round(values))})")
-        return values.astype(int)
+        large = np.abs(values) > MAX_WHOLE
+        if large.any():                              # named as written, never wrapped round
+            rows = np.flatnonzero(large)
+            where = _where(path, rows[:10], list(df.columns).index(column))
+            raise _problem(path, f"column {column!r} holds {where[0][1]} on line {where[0][0]}"
+                                 f"{f' (and {len(rows) - 1} more)' if len(rows) > 1 else ''}: "
+                                 f"too large; {column} numbers have at most "
+                                 f"{len(str(MAX_WHOLE))} digits (at most {MAX_WHOLE})")
+        return values.astype(np.int64)
     return values

@@ -42,6 +42,9 @@ class ThermalData:
     ignored_columns : dict
         Column name -> why :func:`~mtaccuracy.thermal.io.read_measurements` ignored it (the file
         holding it and what it is, e.g. ``"temperatures.csv: no unit, text"``); empty when none was.
+    filled : dict
+        Sensor name -> the short gaps of a lab export's logger that were interpolated (file,
+        experiment, lines); empty when none were.
     """
 
     index: pd.DataFrame
@@ -52,6 +55,7 @@ class ThermalData:
     source: str = ""
     dropped: dict = field(default_factory=dict)
     ignored_columns: dict = field(default_factory=dict)
+    filled: dict = field(default_factory=dict)
 
     def __post_init__(self):
         n = len(self.index)
@@ -97,7 +101,7 @@ class ThermalData:
                            self.temperatures[m].reset_index(drop=True), self.errors[m],
                            self.positions_mm,
                            {e: f for e, f in self.feeds.items() if e in experiments}, self.source,
-                           dict(self.dropped), dict(self.ignored_columns))
+                           dict(self.dropped), dict(self.ignored_columns), dict(self.filled))
 
     def rises(self) -> pd.DataFrame:
         """Temperatures relative to the first measurement of each experiment (Eq. 9's T - T0).

@@ -31,13 +31,23 @@ from .checks import (
     _check_span,
     _check_units,
     _check_zeroing,
+    _constant,
     _require,
     _temperature_columns,
 )
-from .csvfile import _is_number_column, _line_numbers, _lines, _numeric, _parse, _read_csv
+from .csvfile import (
+    _is_number_column,
+    _line_numbers,
+    _lines,
+    _numeric,
+    _parse,
+    _read_csv,
+    _source,
+    _where,
+)
 from .data import ThermalData
+from .labexport import _timestamps, layout, read_lab_export
 from .schema import (
-    _KEYS,
     _TEMP_UNIT,
     ERROR_LIMIT_UM,
     ERROR_MIN_SPAN_UM,
@@ -82,31 +92,6 @@ def _readings(path: Path, df: pd.DataFrame, sensors: dict[str, str]):
     return values, dead
 
 
-def _constant(values: dict[str, np.ndarray], experiments: np.ndarray) -> dict[str, str]:
-    """The sensors whose reading never changes within any experiment (sensor -> why).
-
-    The why names the value: such a sensor carries no rise, the only thing the models learn
-    from a temperature.
-    """
-    if not values:
-        return {}
-    g = pd.DataFrame(values).groupby(experiments, sort=True)
-    lo, hi = g.min(), g.max()
-    out = {}
-    for name in values:
-        if not (lo[name] == hi[name]).all():
-            continue
-        per = lo[name]
-        if per.nunique() == 1:
-            out[name] = f"reads {per.iloc[0]:g} degC in every measurement"
-        else:
-            shown = ", ".join(f"{v:g} in experiment {e}" for e, v in per.iloc[:4].items())
-            out[name] = (f"reads one value through each experiment ({shown}"
-                         f"{' ...' if len(per) > 4 else ''} degC): it never changes within an "
-                         f"experiment")
-    return out
-
-
 def _read_temperatures(tp: Path, on_read):
     """Read and check ``temperatures.csv``.
 
@@ -116,9 +101,13 @@ def _read_temperatures(tp: Path, on_read):
     dead sensors (name -> why, column order) and the columns ignored (column -> why).
     """
     t = _read_csv(tp, on_read)
-    if "time_min" not in t.columns:
+    stamped = "timestamp" in t.columns
+    if stamped and "time_min" in t.columns:
+        raise _problem(tp, "holds both 'time_min' and 'timestamp': give the time once (delete "
+                           "one column)")
+    if "time_min" not in t.columns and not stamped:
         _check_units(tp, t.columns, "time", "time_min")
-    _require(tp, t, list(_KEYS))
+    _require(tp, t, ["experiment", "measurement", "timestamp" if stamped else "time_min"])
     sensors, ignored_t = _temperature_columns(tp, t)
     if len(sensors) < MIN_SENSORS:
         raise _problem(tp, f"needs at least {MIN_SENSORS} temperature columns "
@@ -129,7 +118,20 @@ def _read_temperatures(tp: Path, on_read):
                 "the SVR search's time grows with the measurements")
     t_exp = _numeric(tp, t, "experiment", integer=True)
     t_meas = _numeric(tp, t, "measurement", integer=True)
-    t_time = _numeric(tp, t, "time_min")
+    if stamped:                                      # minutes since each experiment's first
+        col = list(t.columns).index("timestamp")
+        blank = t["timestamp"].isna().to_numpy()
+        if blank.any():
+            where = _where(tp, np.flatnonzero(blank)[:10], col)
+            raise _problem(tp, f"column 'timestamp' is empty on line(s) "
+                               f"{[ln for ln, _ in where]}")
+        stamps, _ = _timestamps(tp, t["timestamp"],
+                                lambda i: f"line {_line_numbers(tp, [i])[0]}")
+        first = pd.DataFrame({"e": t_exp, "m": t_meas, "t": stamps}).sort_values(
+            ["e", "m"], kind="stable").groupby("e").t.transform("first")
+        t_time = ((stamps - first.sort_index().to_numpy()) / np.timedelta64(1, "s") / 60.0)
+    else:
+        t_time = _numeric(tp, t, "time_min")
     keys = pd.DataFrame({"experiment": t_exp, "measurement": t_meas, "time_min": t_time,
                          "row": np.arange(len(t))})
     dup = keys.duplicated(["experiment", "measurement"], keep=False)
@@ -253,12 +255,25 @@ def _read_experiments(xp: Path, on_read, experiments: set, files: str):
 
 
 def read_measurements(folder, on_read=None) -> ThermalData:
-    """Read and validate ``temperatures.csv``, ``errors.csv`` (and ``experiments.csv`` if there).
+    """Read and validate a folder of thermal measurements: the schema's files or a lab export.
 
-    The schema (``data/thermal/README.md``):
+    A folder holds one of two layouts (``data/thermal/README.md``; one holding both, or
+    neither, is refused with the fix: :func:`~mtaccuracy.thermal.labexport.layout`):
+
+    * a **lab export**, per experiment ``<experiment>_temperatures.csv`` (a logger's
+      ``timestamp`` and ``<sensor> [°C]`` columns, short gaps interpolated) and
+      ``<experiment>_laser.csv`` (``target_mm`` and one column per run headed by its
+      timestamp): :func:`~mtaccuracy.thermal.labexport.read_lab_export`, with an optional
+      ``experiments.csv``;
+    * the **schema**, ``temperatures.csv``, ``errors.csv`` (and ``experiments.csv`` if there),
+      as follows.
+
+    The schema:
 
     * ``temperatures.csv``: ``experiment, measurement, time_min, <sensor>_degC ...`` one row per
-      measurement, in any row order; at least :data:`MIN_SENSORS` working sensors.
+      measurement, in any row order; at least :data:`MIN_SENSORS` working sensors.  A
+      ``timestamp`` column (ISO 8601) may stand for ``time_min`` (which is then counted from
+      each experiment's first measurement), and ``<sensor> [°C]`` for ``<sensor>_degC``.
     * ``errors.csv``: ``experiment, measurement, position_mm, error_um`` one row per target
       position and measurement; every measurement has the same target positions.
     * ``experiments.csv`` (optional): ``experiment, feed_mm_per_min``, each experiment of the
@@ -279,7 +294,7 @@ def read_measurements(folder, on_read=None) -> ThermalData:
     :attr:`ThermalData.ignored_columns`).
 
     Raises :class:`DataFormatError` naming the file and the problem: a missing file or column,
-    a column in other units (``error_mm``, ``T1_K``, ``T1_degF``, ``T1 [°C]``), a column of
+    a column in other units (``error_mm``, ``T1_K``, ``T1_degF``, ``T1_C``), a column of
     numbers without a unit in ``temperatures.csv`` (``T3``), a column name given twice, a
     missing/NaN/non-numeric value, a value outside its unit's plausible range
     (:data:`TEMPERATURE_RANGE_C`, :data:`ERROR_LIMIT_UM`, :data:`ERROR_MIN_SPAN_UM`,
@@ -295,7 +310,8 @@ def read_measurements(folder, on_read=None) -> ThermalData:
     Parameters
     ----------
     folder : path
-        Holds ``temperatures.csv``, ``errors.csv`` and, optionally, ``experiments.csv``.
+        Holds ``temperatures.csv``, ``errors.csv`` and, optionally, ``experiments.csv``; or a
+        lab export.
     on_read : callable, optional
         Called as ``on_read(path)`` for every file read (the compendium passes
         ``provenance.track`` to hash its inputs).
@@ -318,12 +334,29 @@ def read_measurements(folder, on_read=None) -> ThermalData:
         Once per dead sensor, naming the file, the sensor and its value.
     IgnoredColumnWarning
         Once per file with columns outside the schema, naming them.
+    InterpolatedGapWarning
+        A lab export only: once per sensor and logger file with short gaps, naming the lines.
     """
     folder = Path(folder)
     if not folder.is_dir():
         raise DataFormatError(f"{folder}: not a folder (data_dir must name a folder holding "
-                              f"{TEMPERATURES_FILE} and {ERRORS_FILE})")
-    tp, ep, xp = folder / TEMPERATURES_FILE, folder / ERRORS_FILE, folder / EXPERIMENTS_FILE
+                              f"{TEMPERATURES_FILE} and {ERRORS_FILE}, or a lab export)")
+    tp, ep, xp = (_source(folder / n) for n in (TEMPERATURES_FILE, ERRORS_FILE,
+                                                EXPERIMENTS_FILE))
+    if layout(folder) == "lab":
+        data = read_lab_export(folder, on_read)
+        if not xp.exists():
+            return data
+        feeds, ignored_x = _read_experiments(xp, on_read, set(data.experiments),
+                                             "the lab export")
+        if ignored_x:
+            warnings.warn(f"{xp}: column(s) {ignored_x} ignored: not part of the schema, which "
+                          f"reads experiment, feed_mm_per_min (data/thermal/README.md)",
+                          IgnoredColumnWarning, stacklevel=2)
+        return ThermalData(data.index, data.temperatures, data.errors, data.positions_mm, feeds,
+                           data.source, data.dropped,
+                           {**data.ignored_columns, **{c: f"{xp.name}: not part of the schema"
+                                                       for c in ignored_x}}, data.filled)
 
     keys, temps, t_exp, t_meas, sensors, dead, ignored_t = _read_temperatures(tp, on_read)
     ignored = {tp: list(ignored_t)}

@@ -17,6 +17,7 @@ __all__ = [
     "TEMPERATURES_FILE", "ERRORS_FILE", "EXPERIMENTS_FILE", "TEMPERATURE_RANGE_C",
     "ERROR_LIMIT_UM", "ERROR_MIN_SPAN_UM", "POSITION_MIN_SPAN_MM", "POSITION_LIMIT_MM",
     "MIN_SENSORS", "MAX_SENSORS", "MAX_POSITIONS", "MAX_MEASUREMENTS", "MAX_FILE_BYTES",
+    "InterpolatedGapWarning", "LAB_TEMPERATURES_SUFFIX", "LAB_LASER_SUFFIX", "SHORT_GAP_MIN",
 ]
 
 TEMPERATURES_FILE = "temperatures.csv"
@@ -57,6 +58,22 @@ MAX_MEASUREMENTS = 1000
 MAX_FILE_BYTES = 100_000_000
 
 
+#: A lab export (``data/thermal/README.md``): per experiment a logger file
+#: ``<experiment>_temperatures.csv`` and a laser file ``<experiment>_laser.csv``.
+LAB_TEMPERATURES_SUFFIX = "_temperatures.csv"
+LAB_LASER_SUFFIX = "_laser.csv"
+#: A gap in a logged sensor (blank or NaN cells) is *short*, and interpolated linearly in time,
+#: when the readings on either side of it lie at most this many minutes apart; a longer gap, or
+#: one at the start or end of the log, drops the sensor.  Why 3 min: linear interpolation over
+#: a span h misses a smooth temperature by at most h**2 / 8 * max|T''|; a first-order thermal
+#: node of rise dT and time constant tau has |T''| <= dT / tau**2, and the fastest node a
+#: machine-tool thermal test logs (a motor winding, tau >= 10 min, dT <= 10 degC in a warm-up)
+#: then moves off the line by at most 9 / 8 * 10 / 100 = 0.11 degC over 3 min, the resolution
+#: of a 0.1 degC logger (0.03 degC for tau = 20 min).  At 30 s per sample, up to 5 missing
+#: samples; at 1 min, up to 2.
+SHORT_GAP_MIN = 3.0
+
+
 class DataFormatError(ValueError):
     """A measurement file breaks the CSV schema; the message names the file and the problem."""
 
@@ -66,6 +83,16 @@ class DroppedSensorWarning(UserWarning):
 
     Dead: its reading never changes within an experiment, or it holds no number.  The message
     names the file, the sensor and the value.
+    """
+
+
+class InterpolatedGapWarning(UserWarning):
+    """Short gaps of a logged sensor (blank or NaN cells) were interpolated linearly in time.
+
+    Raised by :func:`~mtaccuracy.thermal.io.read_measurements` on a lab export, once per sensor
+    and logger file; the message names the file, the sensor, the experiment and the lines.  A
+    gap longer than :data:`SHORT_GAP_MIN` drops the sensor instead
+    (:class:`DroppedSensorWarning`).
     """
 
 

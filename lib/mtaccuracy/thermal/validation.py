@@ -40,7 +40,7 @@ __all__ = [
     "decoupled", "eq8_table",
     "eq9_table", "svr_hyperparameters", "SplitResult", "evaluate_split",
     "leave_one_experiment_out", "replicate_split", "metrics_by_experiment",
-    "METRIC_DIGITS",
+    "METRIC_DIGITS", "straight_line_floor", "prediction_table", "FLOOR",
 ]
 
 
@@ -619,3 +619,65 @@ def metrics_by_experiment(frame: pd.DataFrame, column: str) -> pd.DataFrame:
     """
     return pd.DataFrame({e: metrics(g[column]) for e, g in frame.groupby("experiment")}
                         ).T[["rmse", "max_residual"]]
+
+
+#: The name of the straight-line floor in metric tables (:func:`straight_line_floor`).
+FLOOR = "straight-line floor"
+
+
+def straight_line_floor(errors, *, offsets_mm) -> dict:
+    """The straight-line floor: the error left when each measurement is its own best line.
+
+    Every model that predicts a slope k and an intercept b per measurement (the decoupled MLR
+    and SVR, Eqs. 6-9) predicts a straight line in the position; the least-squares line of each
+    measurement (Eq. 6 on the measured errors) is the best of them in RMSE, so no such model
+    can predict that measurement with a smaller RMSE: what is left (a fixed pitch shape, a bow,
+    noise) is a floor.  A point-by-point model, which fits every position on its own, is not
+    bound by it.
+
+    Parameters
+    ----------
+    errors : array (n, P)
+        Measured errors (um) of n measurements at P positions.
+    offsets_mm : array (P,)
+        Positions (mm), e.g. :meth:`ThermalData.offsets_mm`.
+
+    Returns
+    -------
+    dict
+        ``{"rmse", "max_residual", "mae"}`` (um) of the residuals from each measurement's own
+        line (:func:`metrics`), to :data:`METRIC_DIGITS` significant digits.
+    """
+    errors = np.asarray(errors, dtype=float)
+    k, b = decouple(offsets_mm, errors)
+    return _metric_digits(metrics(errors - compose(k, b, offsets_mm)))
+
+
+def prediction_table(split: SplitResult, data: ThermalData) -> pd.DataFrame:
+    """Predicted against measured error at every position and measurement of a split's test.
+
+    Parameters
+    ----------
+    split : SplitResult
+        From :func:`evaluate_split`; every model in ``split.predictions``.
+    data : ThermalData
+        The data the split was computed on.
+
+    Returns
+    -------
+    DataFrame (n_models * n_test * P, 6)
+        ``experiment, measurement, target_mm, measured_um, predicted_um, model``: one row per
+        model (in ``split.predictions``' order), test measurement (stored order) and target
+        position (ascending); errors in um, predictions to 1e-6 um (below lies the solvers'
+        rounding, which another CPU changes).
+    """
+    test = data.subset(split.test)
+    n, p = split.measured.shape
+    frames = [pd.DataFrame({
+        "experiment": np.repeat(test.index.experiment.to_numpy(), p),
+        "measurement": np.repeat(test.index.measurement.to_numpy(), p),
+        "target_mm": np.tile(test.positions_mm, n),
+        "measured_um": split.measured.ravel(),
+        "predicted_um": np.round(np.asarray(pred, dtype=float).ravel(), 6) + 0.0,
+        "model": name}) for name, pred in split.predictions.items()]
+    return pd.concat(frames, ignore_index=True)

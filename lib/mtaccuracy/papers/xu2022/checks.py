@@ -151,7 +151,7 @@ def check_data(stem: str, data, folder, train, test, n_clusters: int, inputs: st
 
 
 def reader_notes(data) -> str:
-    """What the reader set aside (dead sensors, ignored columns), one line each.
+    """What the reader set aside or filled (dropped sensors, ignored columns, filled gaps).
 
     Parameters
     ----------
@@ -161,9 +161,12 @@ def reader_notes(data) -> str:
     Returns
     -------
     str
-        One line per dropped sensor or ignored column, or "the reader set nothing aside".
+        One line per dropped sensor, ignored column or sensor with gaps filled, or "the reader
+        set nothing aside".
     """
     notes = [f"sensor {name} dropped: {why}" for name, why in getattr(data, "dropped", {}).items()]
+    notes += [f"sensor {name}: gaps filled: {why}" for name, why in
+              getattr(data, "filled", {}).items()]
     notes += [f"column {name} ignored: {why}" for name, why in
               getattr(data, "ignored_columns", {}).items()]
     return "\n".join(notes) or "the reader set nothing aside"

@@ -20,7 +20,7 @@ import json
 import sys
 from pathlib import Path
 
-from ... import thermal
+from ... import thermal, validate
 from .. import printed, xu2022_reconstruction
 from ..xu2022_reconstruction import DEFAULT_SEED
 
@@ -172,7 +172,9 @@ def calibrate(**kwargs):
 
 
 def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+    # through validate.file_bytes: a FIFO, a device or an over-size file is refused unread
+    return hashlib.sha256(validate.file_bytes(path, max_bytes=thermal.MAX_FILE_BYTES)
+                          ).hexdigest()
 
 
 def _recorded() -> tuple[int | None, dict]:
