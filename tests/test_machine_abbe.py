@@ -4,7 +4,7 @@ closed-file refusals (issue: notebook 06 depends on where the travel's zero is).
 
 Physical model of our own: a moving-gantry five-axis machine over a trunnion table (A on the bed,
 C on A; the gantry X carries the saddle Y, which carries the ram Z and the tool), entered once
-with X 0..4000 and once with X -2000..2000, the tool offset and the reference shifted with it;
+with X 0..4000 and once with X -2000..2000, the reference shifted with it;
 and a one-axis slide with a tool, computed by hand."""
 
 import os
@@ -31,18 +31,8 @@ def _gantry(low, **kw):
 def _poses(rng, n):
     return dict(x=rng.uniform(0.0, 4000.0, n), y=rng.uniform(-800, 800, n),
                 z=rng.uniform(-500, 0, n), A=rng.uniform(-2, 2, n), C=rng.uniform(0, 6, n),
+                B=rng.uniform(-2, 2, n),
                 tx=np.zeros(n), ty=np.zeros(n), tz=np.full(n, -150.0))
-
-
-def _shifted(pose):
-    """The same physical poses entered with X's zero 2000 mm further: x - 2000, and the tool
-    (riding on X) 2000 mm further along x from the carriage's new origin."""
-    return {**pose, "x": pose["x"] - SHIFT, "tx": pose["tx"] + SHIFT}
-
-
-@pytest.fixture(scope="module")
-def gantries():
-    return _gantry(0.0), _gantry(-SHIFT, references={"X": -SHIFT}), _gantry(-SHIFT)
 
 
 def _errors(machine, rng, n):
@@ -50,25 +40,50 @@ def _errors(machine, rng, n):
     return rng.uniform(-1.0, 1.0, (n, machine.n_errors)) * half
 
 
-def test_a_shifted_zero_with_its_reference_is_the_same_machine(gantries):
-    one, two, unreferred = gantries
+HEADS = {"B": [0.0, 0.0, 150.0], "C": [0.0, 0.0, 300.0], "A": [0.0, 0.0, 150.0]}
+
+
+def _machine(topology, low, **kw):
+    """``topology`` with X's travel from ``low`` (4000 mm long), rotary axes on the head."""
+    rot = [a for a in "ABC" if a in topology.split()]
+    travels = {"x": (low, low + 4000.0), "y": (-800.0, 800.0), "z": (-500.0, 0.0),
+               **{a: (-2.0, 2.0) for a in rot}}
+    return iso_machine(topology, name="gantry", pivots={a: HEADS[a] for a in rot},
+                       tool_offsets=TOOL, travels=travels, **kw)
+
+
+@pytest.mark.parametrize("topology, depends", [("w b X Y Z C A t", False),
+                                               ("w Y b X Z B t", True), ("w X b Y Z B t", True),
+                                               ("w Y X b Z t", True)])
+def test_a_shifted_zero_with_its_reference_is_the_same_machine(topology, depends):
+    """The same machine entered with X 0..4000 and -2000..2000, X's reference shifted with it
+    and nothing else changed (tool offsets, pivots, the other references): a moving gantry with
+    a two-axis head (every error motion turns with the tool carriage: X's zero and reference
+    matter nowhere), a gantry over a moving table, a moving table under a gantry, a cross
+    table (the table's tilts turn about its point under the tool carriage at the references:
+    X's reference matters)."""
+    refs = {"Y": 100.0, "Z": -50.0}
+    one = _machine(topology, 0.0, references={**refs, "X": 2500.0})
+    two = _machine(topology, -SHIFT, references={**refs, "X": 2500.0 - SHIFT})
+    unreferred = _machine(topology, -SHIFT, references={**refs, "X": 2500.0})
     assert one.error_names == two.error_names and one.removed == two.removed
     rng = np.random.default_rng(5)
-    pose = _poses(rng, 400)
+    pose = {k: v for k, v in _poses(rng, 400).items() if k in (*one.axes, *one.tool_offsets)}
+    moved = {**pose, "x": pose["x"] - SHIFT}
     e = _errors(one, rng, 400)
-    p1, p2 = one.pose_error(e, pose), two.pose_error(e, _shifted(pose))
+    p1, p2 = one.pose_error(e, pose), two.pose_error(e, moved)
     # exact chain, squareness errors included: the same pose errors to rounding (mm, rad)
     assert np.abs(p1 - p2).max() < 1e-11 < 1e-3 < np.abs(p1[:, :3]).max()
-    # without the reference the arms are measured from the new zero: a different machine
-    assert np.abs(unreferred.pose_error(e, _shifted(pose)) - p1).max() > 1e-2
+    # with the reference left where it was, a table's arms are measured from elsewhere
+    assert (np.abs(unreferred.pose_error(e, moved) - p1).max() > 1e-2) == depends
     # the closed form and the atlas's indices agree too
-    j1, j2 = one.jacobian(pose), two.jacobian(_shifted(pose))
+    j1, j2 = one.jacobian(pose), two.jacobian(moved)
     assert np.abs(j1 - j2).max() < 1e-9 * np.abs(j1).max()
     var = (2 * np.where([s.translational for s in one.catalogue], 5e-3, 2e-5)) ** 2 / 12
     i1, i2 = S.indices_at_poses(j1, var=var), S.indices_at_poses(j2, var=var)
     assert np.abs(i1 - i2).max() < 1e-10
-    i0 = S.indices_at_poses(unreferred.jacobian(_shifted(pose)), var=var)
-    assert np.abs(i0 - i1).max() > 0.1
+    i0 = S.indices_at_poses(unreferred.jacobian(moved), var=var)
+    assert (np.abs(i0 - i1).max() > 0.01) == depends
 
 
 @pytest.mark.parametrize("form", ["euler", "screw", "first_order"])
@@ -112,9 +127,9 @@ def test_the_abbe_error_is_the_angle_times_the_arm_by_hand(side):
         # by (-w L, 0, +w (q - r)): the Abbe error w (q - r) = 14 um up
         want = [-w * L, 0.0, w * (q - r)]
     else:
-        # the head turns by w about y through its point at the bed's origin when X = r, which
-        # the tool sits (r, 0, L) from: w e_y x (r, 0, L) = (w L, 0, -w r), whatever q
-        want = [w * L, 0.0, -w * r]
+        # the head's error motions are referred to the carriage that holds the tool, whatever
+        # its reference along its own travel: it turns about it, the tool L below: (w L, 0, 0)
+        want = [w * L, 0.0, 0.0]
     # exact to first order: the exact chain adds w**2 x arm / 2 (below 1e-6 of the 14 um)
     np.testing.assert_allclose(got, want, rtol=0, atol=w**2 * q)
     # and a positioning error is the error at the reference, unchanged by the arm (a table's

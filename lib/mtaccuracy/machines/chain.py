@@ -162,23 +162,22 @@ class ChainMachine:
     Zheng et al.'s reading of their Eq. 9).
 
     **Abbe references.**  The error motions of a linear axis K are referred to one point of
-    its moving body: the point that stands at the origin of the bed's frame when K and the
-    linear axes between it and the bed (same side) stand at their references.  In K's frame
-    after its motion that point is ``a_K = -sum_J s_J r_J e_J`` (J = K and those axes), so
-    its block of error motions ``D`` enters as ``T(a_K) D T(-a_K)``: its translations are
-    those of that point ("the positional errors are those at the reference") and its
-    rotations turn about it.  For a table axis (s = -1) the tool then sits at ``q - r`` along
-    the axis from the point its angular error motions turn about: the Abbe arm is ``q - r``,
-    not ``q`` (the Abbe error of a pitch ``w`` is ``w (q - r)``); a head axis carries the
-    tool, whose arm does not change with its own ``q``.  A tilted direction ``d'`` (squareness
-    errors) is followed from the reference, the move is ``s (r e_K + (q - r) d')``, so a
-    squareness error moves the tool by ``(q - r) (w x e_K)``.  With every ``r = 0`` (the
-    default) the chain is exactly the one without references.  Shifting an axis' zero and
-    its reference by the same amount, with the offsets of what it carries (pivots, tool
-    offsets) shifted back, leaves every pose error unchanged when the linear axes it carries
-    are reached from it without a rotary axis between; rotary axes keep their error motions
-    about their own frame's origin, and their location errors, as they are.  Pre and post
-    location blocks of a linear axis (the papers' machines) are not referred.
+    its moving body: the point that stands at the machine's reference point ``c = sum_J r_J
+    e_J`` (J the tool-side linear axes before any rotary one: where the tool carriage stands
+    at the references) when K and the linear axes between it and the bed (same side) stand at
+    their references.  In K's frame after its motion that point is ``a_K = c - sum_J s_J r_J
+    e_J`` (J = K and those axes), so its block of error motions ``D`` enters as ``T(a_K) D
+    T(-a_K)``: its translations are those of that point and its rotations turn about it.  A
+    head axis (s = +1) turns about its own carriage (``a_K`` holds only the references of the
+    axes beyond it), so its arms are the tool's offsets; a table axis (s = -1) turns about its
+    point under the tool carriage: the Abbe arm of a pitch at q is ``q - r`` along the axis.
+    A tilted direction ``d'`` (squareness errors) is followed from the reference, the move is
+    ``s (r e_K + (q - r) d')``.  With every ``r = 0`` (the default) the chain is exactly the
+    one without references.  Shifting an axis' zero and its reference by the same amount
+    leaves every pose error unchanged (``tests/test_machine_abbe.py``), for linear axes and
+    rotary axes on the head; a rotary axis keeps its error motions about its own frame's
+    origin, so a rotary table whose pivot is off the bed's origin is not invariant.  Pre and
+    post location blocks of a linear axis (the papers' machines) are not referred.
 
     Examples
     --------
@@ -380,14 +379,25 @@ class ChainMachine:
 
     def _reference_points(self) -> dict:
         """Linear axis -> the point ``a_K`` (3,) of its moving body about which its error
-        motions act, in its frame after the motion (class Notes); only where it is not 0."""
+        motions act, in its frame after the motion (class Notes); only where it is not 0.
+
+        Every linear axis is referred to one point of the machine: ``c = sum_J r_J e_J`` over
+        the tool-side linear axes J, where the tool carriage stands when they are at their
+        references (before the first tool-side rotary axis).  ``a_K`` is ``c`` less K's frame
+        origin when K and the linear axes between it and the bed (same side) stand at their
+        references.  A rotary axis between the bed and K turns the frames after it: from
+        there on the error motions stay about their frame's origin."""
+        c = np.zeros(3)
+        for axis in self.topology.tool:
+            if axis in ROTARY:
+                break
+            c[DIRECTION[axis]] += self.references.get(axis, 0.0)
         out = {}
         for side_axes in (self.topology.work, self.topology.tool):
-            a = np.zeros(3)
+            a = c.copy()
             for axis in side_axes:                  # from the bed outwards
                 if axis in ROTARY:                  # a rotary axis turns the frames after it
-                    a = np.zeros(3)
-                    continue
+                    break
                 a = a.copy()
                 a[DIRECTION[axis]] -= self.topology.side(axis) * self.references.get(axis, 0.0)
                 if np.any(a != 0.0):
