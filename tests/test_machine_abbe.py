@@ -86,6 +86,32 @@ def test_a_shifted_zero_with_its_reference_is_the_same_machine(topology, depends
     assert (np.abs(i0 - i1).max() > 0.01) == depends
 
 
+@pytest.mark.parametrize("topology", ["w C b X Y Z B t", "w C A b X Y Z t"])
+def test_a_rotary_table_follows_the_shifted_zero_when_its_pivot_is_reentered(topology):
+    """Rotary tables on the bed (notebook 06's default, and a trunnion): their error motions
+    and location errors turn about their point at the reference point, so X 0..4000 and
+    -2000..2000 are the same machine once the pivots, given in the bed's coordinates, are
+    written in the new ones (the table's axis at X 2000 becomes X 0)."""
+    def machine(low):
+        pivots = {"B": [0.0, 0.0, 150.0], "C": [2000.0 + low, 0.0, 50.0],
+                  "A": [2000.0 + low, 0.0, -200.0]}
+        rot = [a for a in "ABC" if a in topology.split()]
+        travels = {"x": (low, low + 4000.0), "y": (-800.0, 800.0), "z": (-500.0, 0.0),
+                   **{a: (-2.0, 2.0) for a in rot}}
+        return iso_machine(topology, pivots={a: pivots[a] for a in rot}, travels=travels,
+                           tool_offsets=TOOL, references={"X": 2500.0 + low, "Z": -100.0})
+    one, two = machine(0.0), machine(-SHIFT)
+    rng = np.random.default_rng(8)
+    pose = {k: v for k, v in _poses(rng, 200).items() if k in (*one.axes, *one.tool_offsets)}
+    moved = {**pose, "x": pose["x"] - SHIFT}
+    e = _errors(one, rng, 200)
+    assert np.abs(one.pose_error(e, pose) - two.pose_error(e, moved)).max() < 1e-11
+    j1 = one.jacobian(pose)
+    assert np.abs(j1 - two.jacobian(moved)).max() < 1e-9 * np.abs(j1).max()
+    # the closed form follows the referred exact chain for the rotary blocks too
+    assert np.abs(j1 - one.jacobian(pose, step=1e-6)).max() < 1e-7 * np.abs(j1).max()
+
+
 @pytest.mark.parametrize("form", ["euler", "screw", "first_order"])
 def test_the_closed_form_follows_the_referred_exact_chain(form):
     m = iso_machine("w X b Y Z B t", form=form, tool_offsets=TOOL, pivots={"B": [0, 0, 150.0]},

@@ -161,23 +161,23 @@ class ChainMachine:
     location errors ISO 230-7's (the axis average line; before the motion, or after it in
     Zheng et al.'s reading of their Eq. 9).
 
-    **Abbe references.**  The error motions of a linear axis K are referred to one point of
-    its moving body: the point that stands at the machine's reference point ``c = sum_J r_J
-    e_J`` (J the tool-side linear axes before any rotary one: where the tool carriage stands
-    at the references) when K and the linear axes between it and the bed (same side) stand at
-    their references.  In K's frame after its motion that point is ``a_K = c - sum_J s_J r_J
-    e_J`` (J = K and those axes), so its block of error motions ``D`` enters as ``T(a_K) D
-    T(-a_K)``: its translations are those of that point and its rotations turn about it.  A
-    head axis (s = +1) turns about its own carriage (``a_K`` holds only the references of the
-    axes beyond it), so its arms are the tool's offsets; a table axis (s = -1) turns about its
-    point under the tool carriage: the Abbe arm of a pitch at q is ``q - r`` along the axis.
-    A tilted direction ``d'`` (squareness errors) is followed from the reference, the move is
-    ``s (r e_K + (q - r) d')``.  With every ``r = 0`` (the default) the chain is exactly the
-    one without references.  Shifting an axis' zero and its reference by the same amount
-    leaves every pose error unchanged (``tests/test_machine_abbe.py``), for linear axes and
-    rotary axes on the head; a rotary axis keeps its error motions about its own frame's
-    origin, so a rotary table whose pivot is off the bed's origin is not invariant.  Pre and
-    post location blocks of a linear axis (the papers' machines) are not referred.
+    **Abbe references.**  Every error block is referred to one point of the machine, the
+    reference point ``c = sum_J r_J e_J`` over the tool-side linear axes J (where the tool
+    carriage stands when they are at their references ``r_J``).  A block acts about the point
+    of its body that stands at ``c`` in the reference state (linear axes at their references,
+    rotary axes at 0): in its frame ``a = c - sum_J s_J r_J e_J`` over the linear axes J from
+    the bed to the block (same side, its own axis included), and it enters as ``T(a) D
+    T(-a)``: its translations are those of that point, its rotations turn about it.  So a head
+    axis (s = +1) turns the tool about its own carriage (the arm: the tool's offsets and the
+    axes beyond it), a table axis (s = -1) about its point under the tool carriage (the Abbe
+    arm of a pitch at q is ``q - r`` along the axis), and a rotary axis' error motions and
+    location errors about its point at the reference point.  A tilted direction ``d'``
+    (squareness errors) is followed from the reference, the move is ``s (r e_K + (q - r)
+    d')``.  With every ``r = 0`` (the default) the chain is exactly the one without
+    references.  Shifting an axis' zero and its reference by the same amount, and the pivots
+    given in the coordinates that shift with it, leaves every pose error unchanged
+    (``tests/test_machine_abbe.py``).  Pre and post location blocks of a linear axis (the
+    papers' machines) are not referred.
 
     Examples
     --------
@@ -378,30 +378,33 @@ class ChainMachine:
         return list(reversed(work)) + tool
 
     def _reference_points(self) -> dict:
-        """Linear axis -> the point ``a_K`` (3,) of its moving body about which its error
-        motions act, in its frame after the motion (class Notes); only where it is not 0.
+        """(axis, slot) -> the point ``a`` (3,) about which that error block acts, in its
+        frame (class Notes); only where it is not 0.
 
-        Every linear axis is referred to one point of the machine: ``c = sum_J r_J e_J`` over
-        the tool-side linear axes J, where the tool carriage stands when they are at their
-        references (before the first tool-side rotary axis).  ``a_K`` is ``c`` less K's frame
-        origin when K and the linear axes between it and the bed (same side) stand at their
-        references.  A rotary axis between the bed and K turns the frames after it: from
-        there on the error motions stay about their frame's origin."""
+        Every error block is referred to one point of the machine, ``c = sum_J r_J e_J`` over
+        the tool-side linear axes J: where the tool carriage stands when they are at their
+        references.  A block acts about the point of its body that stands at ``c`` in the
+        reference state (every linear axis at its reference, every rotary axis at 0, where its
+        motion is the identity, so that all frames are parallel): ``a = c - sum_J s_J r_J e_J``
+        over the linear axes J from the bed to the block (same side, the block's own axis
+        included).  Linear axes: their error motions; rotary axes: their error motions and
+        their location blocks (the papers' pre and post blocks of linear axes stay as they
+        are)."""
         c = np.zeros(3)
         for axis in self.topology.tool:
-            if axis in ROTARY:
-                break
-            c[DIRECTION[axis]] += self.references.get(axis, 0.0)
+            if axis in LINEAR:
+                c[DIRECTION[axis]] += self.references.get(axis, 0.0)
         out = {}
         for side_axes in (self.topology.work, self.topology.tool):
             a = c.copy()
             for axis in side_axes:                  # from the bed outwards
-                if axis in ROTARY:                  # a rotary axis turns the frames after it
-                    break
-                a = a.copy()
-                a[DIRECTION[axis]] -= self.topology.side(axis) * self.references.get(axis, 0.0)
+                if axis in LINEAR:
+                    a = a.copy()
+                    a[DIRECTION[axis]] -= (self.topology.side(axis)
+                                           * self.references.get(axis, 0.0))
+                slots = ("motion",) if axis in LINEAR else ("pre", "motion", "post")
                 if np.any(a != 0.0):
-                    out[axis] = a
+                    out.update({(axis, slot): a for slot in slots})
         return out
 
     # -- evaluation ------------------------------------------------------------------------
@@ -446,12 +449,12 @@ class ChainMachine:
             if piv is not None:
                 ops = [("t", [-piv[i] for i in range(3)]), *ops, ("t", [piv[i] for i in range(3)])]
             return ops
-        if slot == "motion" and axis in self._about:   # T(a) D T(-a): about the reference
-            a = self._about[axis]
-            inner = self._ops(e, p, side, axis, "origin", k, trig)
+        if (axis, slot) in self._about:                # T(a) D T(-a): about the reference
+            a = self._about[(axis, slot)]
+            inner = self._ops(e, p, side, axis, "@" + slot, k, trig)
             return [("t", [-a[i] for i in range(3)]), *inner, ("t", [a[i] for i in range(3)])
                     ] if inner else []
-        b = self._blocks[(axis, "motion" if slot == "origin" else slot)]
+        b = self._blocks[(axis, slot.removeprefix("@"))]
         if not b.cols:
             return []
         d, w = [None] * 3, [None] * 3
@@ -698,8 +701,8 @@ class ChainMachine:
         for j, pl in enumerate(self.placements):
             i, side = where[(pl.axis, pl.slot)]
             pos[j] = i
-            if pl.slot == "motion" and pl.axis in self._about:
-                about[j] = self._about[pl.axis]
+            if (pl.axis, pl.slot) in self._about:
+                about[j] = self._about[(pl.axis, pl.slot)]
             if pl.slot == "tilt":
                 ref[j] = self.references.get(pl.axis, 0.0)
             unit[j, pl.component % 3] = 1.0
