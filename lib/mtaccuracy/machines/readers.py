@@ -342,8 +342,9 @@ def _reference(v, a: str, line: str, travel):
     """The Abbe reference of one row (mm; 0 when empty) and its problem (or None)."""
     text = v["reference_mm"]
     if a not in LINEAR:
-        return None, (f"{line}: a rotary axis has no reference_mm (its error motions act about "
-                      f"its own frame); leave it empty" if text else None)
+        return None, (f"{line}: a rotary axis has no reference_mm (its errors are referred to "
+                      f"the reference point the linear axes' references give); leave it empty"
+                      if text else None)
     if not text:
         return 0.0, None
     try:
