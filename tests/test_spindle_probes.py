@@ -619,7 +619,8 @@ BAD_FILES = [
      rf"{N_FILE - 1} samples, revolution 1 \(lines 2-{N_FILE + 1}\) has {N_FILE}"),
     ("non-monotonic angles", _swap_angles, 11, r"angle_deg must increase within a revolution: "
                                                r".* \(line 10\) in revolution 1$"),
-    ("decreasing angles", _decreasing, 3, r"negate angle_deg and every probe's mounting angle"),
+    ("decreasing angles", _decreasing, 3,
+     r"write it negated \(modulo 360\), keep the probes' angles as mounted"),
     ("not equally spaced", lambda t: _set_field(t, 20, 1, "104"), 20,
      r"not equally spaced .* 104 deg where 64 samples from 0 deg \(line 2\), .* put sample 19 "
      r"at 101.25 deg"),

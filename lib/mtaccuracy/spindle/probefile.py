@@ -368,9 +368,12 @@ def _check_structure(path, rev, ang, lines):
         r, i = (int(v) for v in np.argwhere(step <= 0)[0])
         row = r * n + i + 1
         if np.all(step < 0):
-            hint = ("; the angles decrease throughout: if the spindle turned the other way, "
-                    "negate angle_deg and every probe's mounting angle (the probe angles count "
-                    "in the sense the spindle angle increases)")
+            hint = ("; the angles decrease throughout: angle_deg is the angle the spindle has "
+                    "turned, increasing with time. If your angle counts the other way, write it "
+                    "negated (modulo 360), keep the probes' angles as mounted, and state the "
+                    "sense with rotation: 'cw' when the spindle turns against the sense the "
+                    "probe angles are counted in, 'ccw' when it turns with it (README: "
+                    "Geometry)")
         else:
             hint = ""
         raise ProbeFileError(path, lines(row), (
