@@ -65,9 +65,10 @@ LAB_LASER_SUFFIX = "_laser.csv"
 #: A gap in a logged sensor (blank or NaN cells) is *short*, and interpolated linearly in time,
 #: when the readings on either side of it lie at most this many minutes apart; a longer gap, or
 #: one at the start or end of the log, drops the sensor.  Why 3 min: linear interpolation over
-#: a span h misses a smooth temperature by at most h**2 / 8 * max|T''|; a first-order thermal
-#: node of rise dT and time constant tau has |T''| <= dT / tau**2, and the fastest node a
-#: machine-tool thermal test logs (a motor winding, tau >= 10 min, dT <= 10 degC in a warm-up)
+#: a span h misses a smooth temperature by at most ``h**2 / 8 * max|T''|``; a first-order
+#: thermal node of rise dT and time constant tau has ``|T''| <= dT / tau**2``, and the fastest
+#: node a machine-tool thermal test logs (a motor winding, tau >= 10 min, dT <= 10 degC in a
+#: warm-up)
 #: then moves off the line by at most 9 / 8 * 10 / 100 = 0.11 degC over 3 min, the resolution
 #: of a 0.1 degC logger (0.03 degC for tau = 20 min).  At 30 s per sample, up to 5 missing
 #: samples; at 1 min, up to 2.
