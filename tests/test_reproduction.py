@@ -14,7 +14,8 @@ def _write_card(rows, path):
     return R.write_table(df, path, tolerance={"reproduced": R.PRINTED, "tolerance": R.PRINTED})
 
 ROW = dict(item="Fig. 1", quantity="q", published="1.0", reproduced="1.1", unit="",
-           tolerance="0.2", verdict="reproduced", basis="independent", note="")
+           tolerance="0.2", verdict="reproduced", basis="independent", kind="number",
+           agreement="printed", note="")
 
 
 @pytest.mark.parametrize("pub, ours", [("nan", 1.0), ("1.0", float("nan")),
@@ -120,7 +121,8 @@ def test_gather_fills_the_marked_readme_section(tmp_path):
     text = readme.read_text()
     assert "old" not in text and text.endswith("tail\n")
     assert "| Guo et al. 2016 | `03_guo2016_spearman_21_errors` | 1 | 0 | 1 | 0 | 2 | 1 |" in text
-    assert "1 of the 2 published numbers and claims scored were reproduced independently" in text
+    assert "Of the 2 printed numbers scored, 1 were reproduced independently at their printed "\
+        "precision" in text
     assert "| `independent` | 1 | 0 | 1 | 0 | 2 |" in text and "- `fitted`: an input" in text
     md = (figs / "REPRODUCTION.md").read_text()
     assert "p\\|q" in md and "| note |" in md and "| note |" not in text
@@ -211,8 +213,11 @@ def test_the_basis_follows_the_declared_inputs():
         "simulated"
     row = added(card.claim, "Fig. 4", "z", "printed", why="the paper does not give the data")
     assert (row["verdict"], row["basis"]) == ("not reproducible", "unchecked")
-    row = added(card.claim, "Fig. 5", "z", "printed", why="no data", ours=0.25)
-    assert row["reproduced"] == 0.25
+    row = added(card.claim, "Fig. 5", "z", "printed", why="no data", ours="0.25 (read off)")
+    assert row["reproduced"] == "0.25 (read off)" and row["kind"] == "claim"
+    # a number of ours is scored, never hidden behind claim()
+    with pytest.raises(ValueError, match="our number exists .0.25.: score it with number"):
+        card.claim("Fig. 6", "z", "0.3", why="no data", ours=0.25)
     assert "pose fitted to Table 2" in card.rows[1]["note"]
     assert "derived from other" not in card.rows[1]["note"]
     other = R.Card().fitted("pose", to=["Table 9"], how="x")
@@ -321,3 +326,60 @@ def test_a_bracket_of_defensible_inputs_is_not_reproducible_inside_and_scored_ou
         card.bracket("F7", "x", "1", float("nan"), 2, why="w")
     with pytest.raises(ValueError, match="what is missing"):
         card.bracket("F8", "x", "1", 0, 2, why=" ")
+
+
+def test_each_row_says_its_kind_and_what_a_reproduced_number_agrees_within():
+    """kind: the Card method that made the row (a bracket scores a number); agreement: the
+    printed precision, or only the paper's stated agreement, or only our sampling error."""
+    card = R.Card()
+    assert added(card.number, "T", "a", "0.50", 0.504)["agreement"] == "printed"
+    row = added(card.number, "T", "b", "0.50", 0.52, paper_rel=0.05)
+    assert (row["verdict"], row["agreement"], row["kind"]) == ("reproduced", "paper", "number")
+    assert added(card.number, "T", "c", "0.50", 0.53, sampling_se=0.02)["agreement"] \
+        == "sampling"
+    assert added(card.number, "T", "d", "0.50", 0.9)["agreement"] == ""        # differs
+    assert added(card.count, "T", "e", "21", 21)["kind"] == "count"
+    assert added(card.set, "T", "f", ["a", "b"], ["b", "a"])["kind"] == "set"
+    assert added(card.statement, "T", "g", "x", "y", True)["kind"] == "statement"
+    inside = added(card.bracket, "T", "h", "5", 1.0, 9.0, why="tool length omitted")
+    assert (inside["kind"], inside["verdict"], inside["reproduced"]) == \
+        ("number", "not reproducible", "1-9")
+    outside = added(card.bracket, "T", "i", "50", 1.0, 9.0, why="tool length omitted")
+    assert (outside["kind"], outside["verdict"]) == ("number", "differs")
+    assert set(R.card_frame(card.rows)["kind"]) <= set(R.KINDS)
+
+
+def test_a_check_that_cannot_fail_is_never_an_independent_reproduction():
+    card = R.Card()
+    rigid = card.tautology("rigid-body chain", settles=["Fig. 6: attitude*"],
+                           how="an orientation error depends on angular errors only in every "
+                               "rigid-body model")
+    row = added(card.statement, "Fig. 6", "attitude: only angular errors matter", "x", "y",
+                True, uses=[rigid])
+    assert (row["verdict"], row["basis"]) == ("reproduced", "tautological")
+    assert "cannot fail: rigid-body chain" in row["note"]
+    # a row the tautology does not settle keeps its own basis
+    assert added(card.number, "Fig. 6", "S_T of e_x", "0.5", 0.5, uses=[rigid])["basis"] \
+        == "independent"
+    # and a failing check stays visible as such
+    assert added(card.statement, "Fig. 6", "attitude: other", "x", "y", False,
+                 uses=[card.tautology("t2", settles=["Fig. 6: attitude: other"], how="h")]
+                 )["verdict"] == "differs"
+    with pytest.raises(ValueError, match="name the rows it settles"):
+        card.tautology("t3", settles=[], how="h")
+
+
+def test_the_headline_counts_printed_numbers_apart_from_claims_and_counts():
+    card = R.Card()
+    card.number("T", "a", "0.50", 0.504)                       # printed precision
+    card.number("T", "b", "0.50", 0.52, paper_rel=0.05)        # only the stated 5 %
+    card.count("T", "c", "21", 21)
+    card.statement("T", "d", "x", "y", True)
+    card.claim("T", "e", "x", why="no data")
+    cards = R.card_frame(card.rows)
+    text = scorecard.headline(cards)
+    assert text.startswith("Of the 2 printed numbers scored, 1 were reproduced independently "
+                           "at their printed precision (2 independently within their tolerance)")
+    assert "Of the 3 claims, counts, sets and statements, 2 were reproduced independently" in text
+    assert "1 of them only through the paper's stated agreement (1) or our sampling error (0)" \
+        in text and "1 cannot be checked" in text

@@ -23,8 +23,15 @@ from ..papers.printed import half_unit
 from .provenance import write_atomic
 
 COLUMNS = ["item", "quantity", "published", "reproduced", "unit", "tolerance", "verdict",
-           "basis", "note"]
+           "basis", "kind", "agreement", "note"]
 VERDICTS = ("reproduced", "close", "differs", "not reproducible")
+#: What a row scores, from the :class:`Card` method that made it: a printed ``number``
+#: (:meth:`Card.number`, :meth:`Card.bracket`), a ``count``, a ``set`` of names, a
+#: ``statement`` checked on our results, or a ``claim`` that cannot be checked.
+KINDS = ("number", "count", "set", "statement", "claim")
+#: What a ``reproduced`` number agrees within: the ``printed`` precision (half a unit of its
+#: last digit), only the ``paper``'s stated agreement, or only our ``sampling`` error.
+AGREEMENTS = ("printed", "paper", "sampling")
 
 #: How a row's number was obtained: the one definition (README and the report quote it).
 BASES = {
@@ -40,6 +47,10 @@ BASES = {
                 "published column, used to score another)",
     "simulated": "computed on simulated data standing in for the paper's measurements, with "
                  "no input set to a published value",
+    "tautological": "a check that cannot fail: a claim true of every admissible model (every "
+                    "rigid-body chain, every model linear in its errors), a count of what we "
+                    "typed from the paper, or data generated and analysed under one "
+                    "assumption: it reproduces nothing",
     "unchecked": "nothing was checked: the paper lacks what is needed, or the outcome was made "
                  "true by an assumption of ours (verdict 'not reproducible')",
 }
@@ -70,9 +81,11 @@ class Input:
     ``constructed`` (reconstructed data, a calibration, or a simulation whose inputs were set
     to published values; ``targets`` names them), ``simulated`` (a stand-in for a measurement,
     no input set to a published value), ``printed`` (the paper's own printed numbers, used as
-    an input) or ``assumed`` (an assumption of ours that makes the rows it ``targets`` true by
-    design).  ``targets`` are patterns (:mod:`fnmatch`) matched against a row's ``item`` and
-    against ``"item: quantity"``."""
+    an input), ``assumed`` (an assumption of ours, such as a simulation parameter, that makes
+    the rows it ``targets`` true by design) or ``tautological`` (a property of the model class
+    or of what we typed that makes the rows it ``targets`` hold whatever the paper did).
+    ``targets`` are patterns (:mod:`fnmatch`) matched against a row's ``item`` and against
+    ``"item: quantity"``."""
 
     name: str
     kind: str
@@ -95,6 +108,8 @@ class Input:
                     f"on {self.name}, whose inputs were set to published values")
         if self.kind == "assumed":
             return f"true by design: {self.name} ({self.how})"
+        if self.kind == "tautological":
+            return f"cannot fail: {self.name} ({self.how})"
         shown = ", ".join(self.targets[:3]) + (", ..." if len(self.targets) > 3 else "")
         if self.matches(item, quantity):
             return f"{self.name} fitted to {shown}"
@@ -229,6 +244,17 @@ class Card:
             raise ValueError(f"assumed input {name!r}: name the rows it settles (settles=)")
         return self._input(name, "assumed", settles, how)
 
+    def tautology(self, name: str, settles, how: str) -> Input:
+        """What makes the rows matching ``settles`` hold whatever the paper did.
+
+        A claim true of every admissible model (every rigid-body chain, every model linear in
+        its errors), a count of what we typed from the paper, data generated and analysed under
+        one assumption.  Those rows keep their verdict but take the basis ``tautological``:
+        never an independent reproduction."""
+        if not settles:
+            raise ValueError(f"tautology {name!r}: name the rows it settles (settles=)")
+        return self._input(name, "tautological", settles, how)
+
     def printed(self, name: str, how: str = "printed in the paper") -> Input:
         """The paper's own printed numbers used as an input.
 
@@ -243,17 +269,22 @@ class Card:
             if not isinstance(u, Input) or self.inputs.get(u.name) != u:
                 raise ValueError(f"{item}: {quantity}: uses {u!r}, not an input of this card")
         by_design = any(u.kind == "assumed" and u.matches(item, quantity) for u in uses)
-        kinds = {u.kind for u in uses} - {"assumed"}
+        cannot_fail = any(u.kind == "tautological" and u.matches(item, quantity) for u in uses)
+        uses = [u for u in uses if u.kind != "tautological" or u.matches(item, quantity)]
+        kinds = {u.kind for u in uses} - {"assumed", "tautological"}
         said = "; ".join(u.describe(item, quantity) for u in uses if u.kind != "printed")
         fits = [u for u in uses if u.kind == "fitted"]
-        if "constructed" in kinds:
+        if cannot_fail:
+            basis = "tautological"
+        elif "constructed" in kinds:
             basis = "constructed"
         elif any(u.matches(item, quantity) for u in fits):
             basis = "fitted"
         elif fits or kinds == {"printed"}:
             basis = "internal"
             if not fits:
-                said = "; ".join(u.describe() for u in uses if u.kind != "assumed")
+                said = "; ".join(u.describe() for u in uses
+                                 if u.kind not in ("assumed", "tautological"))
         elif "simulated" in kinds:
             basis = "simulated"
         else:
@@ -261,7 +292,7 @@ class Card:
         return basis, said, by_design
 
     def _add(self, item, quantity, published, reproduced, unit, tolerance, verdict_, uses,
-             note, measured=False) -> None:
+             note, measured=False, *, kind: str, agreement: str = "") -> None:
         item, quantity = str(item), str(quantity)
         if measured:
             quantity = f"{quantity} {MEASURED_MARK}"
@@ -273,15 +304,18 @@ class Card:
         if verdict_ == "not reproducible":
             basis = "unchecked"
         note = "; ".join(x for x in (str(note).strip(), said) if x)
+        if verdict_ != "reproduced":
+            agreement = ""
         row = dict(item=item, quantity=quantity, published=published, reproduced=reproduced,
-                   unit=unit, tolerance=tolerance, verdict=verdict_, basis=basis, note=note)
+                   unit=unit, tolerance=tolerance, verdict=verdict_, basis=basis, kind=kind,
+                   agreement=agreement, note=note)
         _check_row_numbers([row])
         self.rows.append(row)
 
     def number(self, item, quantity, published, ours, unit: str = "", *, uses=(),
                paper_rel=None, paper_abs=None, sampling_se=None, conclusion: str = "",
                holds: bool | None = None, digits: int | None = None, note: str = "",
-               measured: bool = False) -> None:
+               measured: bool = False, kind: str = "number") -> None:
         """A published number against ours.
 
         ``reproduced`` within the tolerance of :func:`tolerance_for`; outside it ``close`` only
@@ -294,6 +328,7 @@ class Card:
         mine = _finite(ours, f"{item}: {quantity}: reproduced")
         if holds is not None and not conclusion.strip():
             raise ValueError(f"{item}: {quantity}: 'holds' needs the conclusion in words")
+        agreement = "printed" if abs(pub - mine) <= half_unit(published) * (1 + 1e-12) else src
         if abs(pub - mine) <= tol * (1 + 1e-12):
             v = "reproduced"
         else:
@@ -306,7 +341,7 @@ class Card:
         elif digits is not None:
             mine = round(mine, digits)
         self._add(item, quantity, str(published), mine, unit, _tolerance_text(tol, src), v,
-                  uses, note, measured)
+                  uses, note, measured, kind=kind, agreement=agreement)
 
     def count(self, item, quantity, published, ours: int, *, uses=(), conclusion: str = "",
               holds: bool | None = None, note: str = "") -> None:
@@ -314,7 +349,7 @@ class Card:
         if int(ours) != ours or int(float(published)) != float(published):
             raise ValueError(f"{item}: {quantity}: a count must be an integer")
         self.number(item, quantity, str(int(float(published))), int(ours), uses=uses,
-                    conclusion=conclusion, holds=holds, note=note)
+                    conclusion=conclusion, holds=holds, note=note, kind="count")
 
     def set(self, item, quantity, published, ours, *, uses=(), ordered: bool = False,
             note: str = "") -> None:
@@ -331,7 +366,7 @@ class Card:
         join = (lambda xs: " ".join(map(str, xs))) if ordered else \
             (lambda xs: " ".join(sorted(map(str, xs))))
         self._add(item, quantity, join(pub), join(mine) or "(none)", "",
-                  "ordered, exact" if ordered else "exact set", v, uses, note)
+                  "ordered, exact" if ordered else "exact set", v, uses, note, kind="set")
 
     def statement(self, item, quantity, published: str, ours: str, holds: bool, *, uses=(),
                   note: str = "", measured: bool = False) -> None:
@@ -339,7 +374,8 @@ class Card:
 
         ``reproduced`` when it ``holds``, else ``differs``."""
         self._add(item, quantity, str(published), str(ours), "", "claim",
-                  "reproduced" if holds else "differs", uses, note, measured)
+                  "reproduced" if holds else "differs", uses, note, measured,
+                  kind="statement")
 
     def bracket(self, item, quantity, published, low, high, unit: str = "", *, why: str,
                 uses=(), digits: int | None = None) -> None:
@@ -357,8 +393,9 @@ class Card:
         pub = _finite(published, f"{item}: {quantity}: published")
         fmt = (lambda v: f"{v:.{digits}f}") if digits is not None else (lambda v: f"{v:g}")
         if lo <= pub <= hi:
-            self.claim(item, quantity, published, why=f"{why}; the published value lies inside",
-                       ours=f"{fmt(lo)}-{fmt(hi)}", unit=unit)
+            self._add(item, quantity, str(published), f"{fmt(lo)}-{fmt(hi)}", unit, "",
+                      "not reproducible", (), f"{why}; the published value lies inside",
+                      kind="number")
             return
         near = lo if abs(pub - lo) <= abs(pub - hi) else hi
         self.number(item, quantity, published, near, unit, uses=uses, digits=digits,
@@ -371,9 +408,13 @@ class Card:
         scored), e.g. for a figure whose data the paper does not give."""
         if not str(why).strip():
             raise ValueError(f"{item}: {quantity}: say what the paper lacks (why=...)")
-        if isinstance(ours, float | np.floating):
-            ours = _finite(ours, f"{item}: {quantity}: reproduced")
-        self._add(item, quantity, str(published), ours, unit, "", "not reproducible", (), why)
+        if isinstance(ours, int | float | np.integer | np.floating) \
+                and not isinstance(ours, bool):
+            raise ValueError(f"{item}: {quantity}: our number exists ({ours!r}): score it with "
+                             f"number(), or with bracket() when an omitted input decides it; "
+                             f"claim() is for what cannot be computed")
+        self._add(item, quantity, str(published), ours, unit, "", "not reproducible", (), why,
+                  kind="claim")
 
     # -- output --------------------------------------------------------------------------------
     def frame(self, measured: bool = False) -> pd.DataFrame:
@@ -458,6 +499,12 @@ def card_frame(rows: list[dict]) -> pd.DataFrame:
     bad = sorted(set(df["basis"]) - set(BASES))
     if bad:
         raise ValueError(f"unknown basis {bad}; allowed: {', '.join(BASES)}")
+    bad = sorted(set(df["kind"]) - set(KINDS))
+    if bad:
+        raise ValueError(f"unknown kind(s) {bad}; allowed: {', '.join(KINDS)}")
+    bad = sorted(set(df["agreement"]) - {"", *AGREEMENTS})
+    if bad:
+        raise ValueError(f"unknown agreement(s) {bad}; allowed: {', '.join(AGREEMENTS)}")
     odd = df[(df["verdict"] == "not reproducible") != (df["basis"] == "unchecked")]
     if len(odd):
         r = odd.iloc[0]

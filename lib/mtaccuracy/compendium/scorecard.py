@@ -148,14 +148,30 @@ def summary(cards: pd.DataFrame) -> pd.DataFrame:
 
 
 def headline(cards: pd.DataFrame) -> str:
-    """One sentence: how many published numbers and claims were reproduced independently."""
-    rep = cards[cards["verdict"] == "reproduced"]["basis"].value_counts()
-    others = ", ".join(f"{rep[b]} {b}" for b in BASES if b != "independent" and rep.get(b))
-    n_unchecked = int((cards["verdict"] == "not reproducible").sum())
-    return (f"{int(rep.get('independent', 0))} of the {len(cards)} published numbers and "
-            f"claims scored were reproduced independently; {int(rep.sum())} agree in all"
-            + (f" (the others: {others})" if others else "")
-            + f"; {n_unchecked} cannot be checked from what the paper gives.")
+    """The headline: printed numbers reproduced independently at their printed precision.
+
+    Claims, counts, sets and statements are counted apart, and so are the rows that agree only
+    through the paper's stated agreement or our sampling error."""
+    rep = cards["verdict"] == "reproduced"
+    indep = rep & (cards["basis"] == "independent")
+    numbers = cards["kind"] == "number"
+    printed = cards["agreement"] == "printed"
+    n_num, n_other = int(numbers.sum()), int((~numbers).sum())
+    wide = rep & cards["agreement"].isin(["paper", "sampling"])
+    by = cards.loc[wide, "agreement"].value_counts()
+    others = cards.loc[rep & ~indep, "basis"].value_counts()
+    other_text = ", ".join(f"{others[b]} {b}" for b in BASES if others.get(b))
+    return (f"Of the {n_num} printed numbers scored, {int((indep & numbers & printed).sum())} "
+            f"were reproduced independently at their printed precision "
+            f"({int((indep & numbers).sum())} independently within their tolerance). "
+            f"Of the {n_other} claims, counts, sets and statements, "
+            f"{int((indep & ~numbers).sum())} were reproduced independently. "
+            f"{int(rep.sum())} rows agree in all"
+            + (f" (not independently: {other_text})" if other_text else "")
+            + f"; {int(wide.sum())} of them only through the paper's stated agreement "
+            f"({int(by.get('paper', 0))}) or our sampling error ({int(by.get('sampling', 0))}); "
+            f"{int((cards['verdict'] == 'not reproducible').sum())} cannot be checked from what "
+            f"the paper gives.")
 
 
 def bases_markdown() -> str:
