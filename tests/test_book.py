@@ -53,7 +53,8 @@ def _write_run(folder: Path, figures: dict, *, parameters=None, extra=()) -> Non
         files[f"{name}.svg"] = {"sha256": provenance.sha256(folder / f"{name}.svg")}
     card = pd.DataFrame([dict(item="Fig. 3", quantity="rho", published="0.5", reproduced="0.5",
                               unit="", tolerance="0", verdict="reproduced",
-                              basis="independent", note="")])
+                              basis="independent", kind="number", agreement="printed",
+                              note="")])
     card.to_csv(folder / "reproduction.csv", index=False, lineterminator="\n")
     for name in ("reproduction.csv", *extra):
         files[name] = {"sha256": provenance.sha256(folder / name)}

@@ -60,7 +60,7 @@ BUILD = ROOT / "build" / "book"
 MARKER = ".mtaccuracy-book"
 #: The scorecard columns shown, in order.
 CARD_COLUMNS = ["item", "quantity", "published", "reproduced", "tolerance", "verdict", "basis",
-                "note"]
+                "kind", "note"]
 #: Where ``make sweep`` writes a notebook's sweep, inside its output folder.
 SWEEP = "sweep"
 #: Library modules left out of the reference (paper code, the workflow, the apps: no API).
@@ -182,7 +182,7 @@ def scorecard_html(cards: pd.DataFrame, table_id: str, dt_url: str,
 
 #: Relative widths of the scorecard's columns on a wide screen.
 _WIDTHS = {"paper": 8, "item": 7, "quantity": 15, "published": 9, "reproduced": 10,
-           "tolerance": 9, "verdict": 12, "basis": 10, "note": 28}
+           "tolerance": 9, "verdict": 12, "basis": 10, "kind": 7, "note": 24}
 
 
 def _label_css() -> str:
