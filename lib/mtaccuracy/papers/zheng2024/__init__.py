@@ -128,6 +128,12 @@ class Parameters(NotebookParameters):
                                      doc="highest degree tried on the Ishigami benchmark")
     bench_n_g = param.Integer(1000, bounds=(100, 5000),
                               doc="samples of the 41-input G-function benchmark")
+    # the paper omits the tool length: Section 3.2's position claims are read at 0 and at this
+    tool_length_max_mm = param.Number(200.0, bounds=(0.0, 1000.0),
+                                      doc="longest tool read (paper: not stated)")
+    # more random designs under the model-run reading of "1e5 samples" (Section 3.3's rows)
+    extra_designs = param.Integer(3, bounds=(0, 50),
+                                  doc="more designs at 1e5 model runs (Section 3.3)")
     key_threshold = param.Number(0.05, bounds=(0.0, 1.0), inclusive_bounds=(False, False),
                                  doc="key error: normalised total index above this (paper: 0.05)")
     output_dir = OutputFolder("figures/01_zheng2024_pce_sobol_41_errors",
