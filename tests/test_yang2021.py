@@ -155,7 +155,8 @@ def test_the_noise_figure_draws_eq18_n_times_the_corrected_variance():
 def _table1_row(**kw):
     row = dict(H_weights_only_bound=0.31234, H_possible_for_the_weights=True, H_consistent=True,
                a1_consistent=True, abs_a1_consistent=True, a2_consistent=True,
-               H_min_within_rounding=0.2561, H_max_within_rounding=0.2583)
+               H_min_within_rounding=0.2561, H_max_within_rounding=0.2583, H_as_printed=0.8329,
+               eq15_a1_min=-0.97, eq15_a1_max=-0.946, eq15_a2_min=1.296, eq15_a2_max=1.308)
     return pd.Series({**row, **kw})
 
 
@@ -164,19 +165,28 @@ PRINTED = pd.Series(dict(H="0.257", phi1_rad="0.522", phi2_rad="3.45", phi3_rad=
 
 
 def test_table1_texts_say_why_a_printed_row_fails_or_holds():
-    printed, ours, ok, note = yang2021.table1_consistency_texts(
+    ours, conclusion, ok, note = yang2021.table1_consistency_texts(
         _table1_row(H_possible_for_the_weights=False), PRINTED)
-    assert printed == "H = 0.257 at phi = (0.522, 3.45, 5.47), a = (1, 1.2, 2.1, 1.39)"
-    assert not ok and ours == "impossible: the printed weights force H >= 0.312 at any angles"
-    assert note.startswith("weights-only bound") and "H >= 0.3123 for every" in note
-    _, ours, ok, note = yang2021.table1_consistency_texts(_table1_row(a1_consistent=False),
-                                                          PRINTED)
-    assert ok and ours == "H 0.256..0.258 within the rounding of the printed angles and a3"
-    assert note.startswith("consistent with Eqs. 15 and 20 within the printed rounding once the "
-                           "sign of a1 is restored; the weights alone allow it (weights-only")
-    _, _, ok, note = yang2021.table1_consistency_texts(
+    assert ours == 0.8329 and not ok
+    assert note.startswith("Eq. 20 with the printed phi = (0.522, 3.45, 5.47), a = (1, 1.2, 2.1, "
+                           "1.39); impossible: the printed weights force H >= 0.312; weights-only")
+    _, conclusion, ok, note = yang2021.table1_consistency_texts(_table1_row(a1_consistent=False),
+                                                                PRINTED)
+    assert ok and conclusion.endswith("which are the printed ones once the sign of a1 is restored")
+    assert "give H 0.256..0.258 within the rounding, a1 -0.970..-0.946" in note
+    _, conclusion, ok, _ = yang2021.table1_consistency_texts(
         _table1_row(a1_consistent=False, abs_a1_consistent=False), PRINTED)
-    assert not ok and note.startswith("not consistent") and "sign of a1" not in note
+    assert not ok and "sign of a1" not in conclusion
+
+
+def test_a_row_that_holds_only_after_a_correction_is_close_at_best():
+    # a made-up printed row whose H follows from Eq. 15's weights but whose a1 lost its sign
+    card = reproduction.Card()
+    ours, conclusion, ok, note = yang2021.table1_consistency_texts(
+        _table1_row(a1_consistent=False), PRINTED)
+    card.number("Table 1", "H at the printed parameters", "0.257", ours, conclusion=conclusion,
+                holds=ok, note=note)
+    assert card.rows[-1]["verdict"] == "close"
 
 
 def test_least_squares_is_never_noisier_than_the_weights():
@@ -206,22 +216,31 @@ def test_the_speed_figure_closes_and_offsets_the_first_measurement_of_each_speed
     plt.close(fig)
 
 
-def test_the_ranges_statement_counts_the_orders_above_the_band():
+def test_the_ranges_statement_tests_every_order_from_the_lowest():
     sweep = pd.DataFrame({"k": np.arange(2, 13),
                           "H_best_known": [0.3, 0.29, 0.26, 0.25, 0.26, 0.28, 0.26, 0.25, 0.27,
                                            0.26, 0.25]})
     ours, ok, note = yang2021.ranges_statement(sweep, np.array([20, 30]), np.array([0.26, 0.2745]),
-                                               k_tab=4, band_text="0.273")
-    # above 0.273 + 0.0005: k = 7 (0.28) and 30 (0.2745); 0.27 at k = 10 is inside
+                                               band_text="0.273", full_circle={2: 0.25})
+    # above 0.273 + 0.0005: k = 2, 3, 7 and 30; 0.27 at k = 10 is inside
     assert not ok
-    assert ours == ("best known H in the ranges within Fig. 10's band (<= 0.273) at 9 of 11 "
-                    "orders k = 4..12 and 20 30; above it at k = 7 30")
-    assert note.startswith("within 12.0 % of 1/4 there; below Table 1's smallest order the "
-                           "ranges give up to 0.300 (k = 2; above the band at k = 2 3); Table "
-                           "1's second part (k = 20..30) is lost")
-    ours, ok, _ = yang2021.ranges_statement(sweep[sweep.k != 7], np.array([20]), np.array([0.26]),
-                                            k_tab=4, band_text="0.273")
+    assert ours == ("best known H in the ranges within Fig. 10's band (<= 0.273) at 9 of 13 "
+                    "orders k = 2..12 and 20 30; above it at k = 2 3 7 30")
+    assert note.startswith("above the band: k = 2: 0.300 (full circle 0.250); k = 3: 0.290; "
+                           "k = 7: 0.280; k = 30: 0.275; elsewhere within 8.0 % of 1/4; orders "
+                           "13..19 not computed")
+    ours, ok, _ = yang2021.ranges_statement(sweep[~sweep.k.isin([2, 3, 7])], np.array([20]),
+                                            np.array([0.26]), band_text="0.273")
     assert ok and "above it" not in ours
+
+
+def test_fig10_readings_start_at_every_order_up_to_table1s_smallest():
+    sweep = pd.DataFrame({"k": np.arange(2, 9),
+                          "H_best_known": [0.33, 0.29, 0.27, 0.2501, 0.26, 0.2504, 0.2502]})
+    r = yang2021.fig10_readings(sweep, np.array([40]), np.array([0.2503]), k_tab=4)
+    assert r.k_from.tolist() == [2, 3, 4]
+    assert r.high.tolist() == [0.33, 0.29, 0.27] and r.k_high.tolist() == [2, 3, 4]
+    assert r.low.tolist() == [0.2501] * 3 and r.k_low.tolist() == [5] * 3
 
 
 def test_a_difference_is_stated_as_round_off_or_by_its_size():

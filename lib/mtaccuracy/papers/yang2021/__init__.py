@@ -27,6 +27,7 @@ from .analyses import (
     least_squares_vs_weighted,
     mappings_and_conventions,
     single_run_speedups,
+    speed_trend_sources,
     table1_consistency,
 )
 from .figures import (
@@ -47,6 +48,7 @@ from .scorecard import (
     difference_text,
     experiment_genes,
     experiment_inputs,
+    fig10_readings,
     layout_text,
     ranges_statement,
     table1_consistency_texts,
@@ -58,7 +60,7 @@ __all__ = ["difference_text", "eq17_sign_check", "experiment_genes", "experiment
            "single_run_speedups", "speed_curves_figure", "table1_consistency_texts",
            "convergence_figure", "FIG08", "FIG09", "table1_consistency", "fig21_figure",
            "FIG21", "MAPPING_TEXT", "NOISE_TRANSFER", "FIG19", "FIG20", "Parameters",
-           "FIGURES", "NOISE_DECIMALS"]
+           "FIGURES", "NOISE_DECIMALS", "fig10_readings", "speed_trend_sources"]
 
 
 class Parameters(NotebookParameters):

@@ -5,7 +5,8 @@ depends on settings the paper omits (:func:`ga_settings_study`, :func:`single_ru
 Section 1.3's simulation under every mapping and convention
 (:func:`mappings_and_conventions`); the printed Eq. 17 against its inverse
 (:func:`eq17_sign_check`); the weighted sum against least squares
-(:func:`least_squares_vs_weighted`).  The method itself is :mod:`mtaccuracy.spindle`.
+(:func:`least_squares_vs_weighted`); what sets the simulated experiment's trends with speed
+(:func:`speed_trend_sources`).  The method itself is :mod:`mtaccuracy.spindle`.
 """
 
 from __future__ import annotations
@@ -19,7 +20,8 @@ from ... import spindle as sp
 from ..printed import half_unit
 
 __all__ = ["table1_consistency", "ga_settings_study", "single_run_speedups",
-           "mappings_and_conventions", "eq17_sign_check", "least_squares_vs_weighted"]
+           "mappings_and_conventions", "eq17_sign_check", "least_squares_vs_weighted",
+           "speed_trend_sources"]
 
 
 def table1_consistency(t1, sweep):
@@ -28,7 +30,9 @@ def table1_consistency(t1, sweep):
     For every printed row, H and the weights of every parameter set that rounds to the printed
     one (a 21^4 grid over half a unit of the last printed digit), the weights-only bound of H,
     and our GA and best known optima at that k.  ``t1``: the published table (strings);
-    ``sweep``: the optimum per harmonic order.
+    ``sweep``: the optimum per harmonic order.  ``H_as_printed`` is Eq. 20 evaluated at the
+    printed angles with the printed weights, nothing corrected (they need not cancel the first
+    harmonic); ``H_of_printed_parameters`` uses Eq. 15's weights at the printed angles and a3.
     """
     rows = []
     g = np.linspace(-1, 1, 21)
@@ -45,6 +49,7 @@ def table1_consistency(t1, sweep):
         w_bound = float(sp.weights_bound_H(w_pr, [half_unit(r[c]) for c in ("a1", "a2", "a3")]))
         ours = sweep.set_index("k").loc[k]
         rows.append(dict(k=k, published_H=float(r.H),
+                         H_as_printed=float(sp.transfer(centre[:3], w_pr, [k])[0]),
                          H_of_printed_parameters=float(sp.objective_H(centre, k)),
                          H_min_within_rounding=h.min(), H_max_within_rounding=h.max(),
                          H_weights_only_bound=w_bound,
@@ -290,4 +295,47 @@ def least_squares_vs_weighted(layouts, harmonics):
         rows.append(dict(layout=name, worst_q2_weighted=q2w.max(),
                          worst_q2_least_squares=q2l.max(), mean_q2_weighted=q2w.mean(),
                          mean_q2_least_squares=q2l.mean()))
+    return pd.DataFrame(rows)
+
+
+def speed_trend_sources(profile, dx, dy, layout, *, speeds, variants, seed: int, **settings):
+    """What sets the simulated shape error's trends with speed: the campaign under other settings.
+
+    Every ``(variant, speed)`` is one :func:`~mtaccuracy.spindle.measure_separated` campaign
+    drawn from a fresh generator seeded ``seed`` (common random numbers: two variants differ by
+    their settings only), with ``settings`` overridden by the variant's.
+
+    Parameters
+    ----------
+    profile, dx, dy : arrays (N,)
+        The true profile and synchronous error motion (mm).
+    layout : tuple
+        ``(positions, phi, w)`` of :func:`~mtaccuracy.spindle.grid_layout`.
+    speeds : sequence of float
+        Spindle speeds (r/min).
+    variants : dict of str to dict
+        Name to the settings it overrides; a ``duration_s`` that is a callable of the speed
+        gives the acquisition time at each speed (e.g. a fixed number of revolutions).
+    seed : int
+        Seed of every campaign.
+    **settings
+        The keywords of ``measure_separated`` except ``rng`` and ``speed_rpm``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per variant and speed: ``variant``, ``speed_rpm``, ``revolutions``,
+        ``mz_mean_um``, ``mz_std_um`` (minimum-zone roundness of the separated profile).
+    """
+    rows = []
+    for name, change in variants.items():
+        for speed in speeds:
+            kw = {**settings, **change}
+            if callable(kw["duration_s"]):
+                kw["duration_s"] = kw["duration_s"](speed)
+            s, n_rev = sp.measure_separated(profile, dx, dy, *layout, speed_rpm=speed,
+                                            rng=np.random.default_rng(seed), **kw)
+            mz = sp.mz_roundness(s.profile)[0] * 1e3
+            rows.append(dict(variant=name, speed_rpm=speed, revolutions=n_rev,
+                             mz_mean_um=mz.mean(), mz_std_um=mz.std(ddof=1)))
     return pd.DataFrame(rows)

@@ -3,18 +3,19 @@
 The simulated experiment's layout and declared inputs (:func:`experiment_genes`,
 :func:`experiment_inputs`); how a caption states a layout, a mapping or a difference
 (:func:`layout_text`, :data:`MAPPING_TEXT`, :func:`difference_text`); the texts of Table 1's
-check and of Section 3's recommended ranges (:func:`table1_consistency_texts`,
-:func:`ranges_statement`).
+check, of Fig. 10's range under every reading of its orders and of Section 3's recommended
+ranges (:func:`table1_consistency_texts`, :func:`fig10_readings`, :func:`ranges_statement`).
 """
 
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from ..printed import half_unit
 
 __all__ = ["experiment_genes", "layout_text", "experiment_inputs", "MAPPING_TEXT",
-           "difference_text", "table1_consistency_texts", "ranges_statement"]
+           "difference_text", "table1_consistency_texts", "fig10_readings", "ranges_statement"]
 
 
 def experiment_genes(facts):
@@ -157,6 +158,11 @@ def difference_text(difference: float, scale: float, *, roundoff: float) -> str:
 def table1_consistency_texts(row, printed_row):
     """The scorecard texts of one Table 1 row's check: do the printed parameters give its H?
 
+    Scored as a number: the printed H against Eq. 20 at the printed parameters as printed
+    (``H_as_printed``), and ``close`` only where a conclusion holds once corrected: the printed
+    angles and a3 give the printed H with Eq. 15's weights, which are the printed ones (a1
+    perhaps up to its sign).
+
     Parameters
     ----------
     row : pandas.Series
@@ -167,45 +173,83 @@ def table1_consistency_texts(row, printed_row):
 
     Returns
     -------
-    printed : str
-        The printed H and parameters.
-    ours : str
-        What the printed parameters give: the weights-only bound where the printed H is below
-        it, else the range of H within the rounding of the printed angles and a3.
+    ours : float
+        Eq. 20 at the printed angles with the printed weights.
+    conclusion : str
+        The conclusion that may hold after a correction, in words.
     holds : bool
         The printed H is possible for the printed weights, and the printed H and weights lie in
         the ranges of Eqs. 15 and 20 within the printed rounding (a1 perhaps up to its sign).
     note : str
-        Why, with the weights-only bound.
+        The printed parameters, what Eq. 15's weights give, and the weights-only bound.
     """
     r, pr = row, printed_row
-    printed = (f"H = {pr.H} at phi = ({pr.phi1_rad}, {pr.phi2_rad}, {pr.phi3_rad}), "
+    printed = (f"printed phi = ({pr.phi1_rad}, {pr.phi2_rad}, {pr.phi3_rad}), "
                f"a = (1, {pr.a1}, {pr.a2}, {pr.a3})")
-    bound_note = ("weights-only bound (1 + sum a^2) / (1 + sum |a|)^2 over every weight that "
-                  f"rounds to the printed ones: H >= {r.H_weights_only_bound:.4f} for every "
-                  "probe-angle choice")
-    if not r.H_possible_for_the_weights:
-        return (printed, "impossible: the printed weights force H >= "
-                         f"{r.H_weights_only_bound:.3f} at any angles", False, bound_note)
-    ok = bool(r.H_consistent) and (bool(r.a1_consistent) or bool(r.abs_a1_consistent)) \
-        and bool(r.a2_consistent)
-    ours = (f"H {r.H_min_within_rounding:.3f}..{r.H_max_within_rounding:.3f} within the "
-            "rounding of the printed angles and a3")
-    note = (("consistent" if ok else "not consistent")
-            + " with Eqs. 15 and 20 within the printed rounding")
+    bound = (f"weights-only bound (1 + sum a^2) / (1 + sum |a|)^2 over every weight that "
+             f"rounds to the printed ones: H >= {r.H_weights_only_bound:.4f} for every "
+             "probe-angle choice")
+    conclusion = ("the printed angles and a3 give the printed H with Eq. 15's weights, which "
+                  "are the printed ones")
+    ok = bool(r.H_possible_for_the_weights) and bool(r.H_consistent) \
+        and (bool(r.a1_consistent) or bool(r.abs_a1_consistent)) and bool(r.a2_consistent)
     if ok and not r.a1_consistent:
-        note += " once the sign of a1 is restored"
-    note += f"; the weights alone allow it ({bound_note})"
-    return printed, ours, ok, note
+        conclusion += " once the sign of a1 is restored"
+    if not r.H_possible_for_the_weights:
+        said = f"impossible: the printed weights force H >= {r.H_weights_only_bound:.3f}"
+    else:
+        said = (f"Eq. 15's weights at the printed angles and a3 give H "
+                f"{r.H_min_within_rounding:.3f}..{r.H_max_within_rounding:.3f} within the "
+                f"rounding, a1 {r.eq15_a1_min:.3f}..{r.eq15_a1_max:.3f}, a2 "
+                f"{r.eq15_a2_min:.3f}..{r.eq15_a2_max:.3f}")
+    note = f"Eq. 20 with the {printed}; {said}; {bound}"
+    return float(r.H_as_printed), conclusion, ok, note
 
 
-def ranges_statement(sweep, k_lost, h_lost, *, k_tab: int, band_text: str):
-    """Section 3's recommended ranges against Fig. 10's band, at every order Table 1 covers.
+def fig10_readings(sweep, k_lost, h_lost, *, k_tab: int):
+    """The range of the optimum H over Fig. 10's orders, under every reading of those orders.
 
-    The best known H in the ranges at the orders of the sweep from Table 1's smallest on and at
-    the orders of its lost second part, against the printed upper edge of Fig. 10's band (plus
-    half a unit of its last digit); the lower orders, which the paper does not tabulate, are
-    named in the note.
+    The paper does not say which orders Fig. 10 covers: Table 1 ("some orders") takes k = 10 to
+    80 from it, and its lost second part k = 240 to 360.  Each reading starts at one order from
+    the sweep's smallest to ``k_tab`` (Table 1's smallest) and takes every order of the sweep from
+    there and the lost ones.
+
+    Parameters
+    ----------
+    sweep : pandas.DataFrame
+        The optimum per harmonic order: ``k``, ``H_best_known``.
+    k_lost : array of int
+        The orders of Table 1's second part.
+    h_lost : array, same length as ``k_lost``
+        The best known H at those orders.
+    k_tab : int
+        The smallest order Table 1 tabulates: the last reading starts there.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per reading: ``k_from``, ``low`` and ``high`` (the smallest and largest best
+        known H over the reading's orders) and ``k_low``, ``k_high`` (where they are).
+    """
+    k_all = np.r_[np.asarray(sweep.k, dtype=int), np.asarray(k_lost, dtype=int)]
+    h_all = np.r_[np.asarray(sweep.H_best_known, dtype=float), np.asarray(h_lost, dtype=float)]
+    rows = []
+    for k0 in sorted(int(k) for k in sweep.k if k <= k_tab):
+        sel = k_all >= k0
+        k, h = k_all[sel], h_all[sel]
+        rows.append(dict(k_from=k0, low=h.min(), high=h.max(), k_low=int(k[np.argmin(h)]),
+                         k_high=int(k[np.argmax(h)])))
+    return pd.DataFrame(rows)
+
+
+def ranges_statement(sweep, k_lost, h_lost, *, band_text: str, full_circle=None):
+    """Section 3's recommended ranges against Fig. 10's band, at every order the claim covers.
+
+    "Each probe has a suitable range for every harmonic order": the best known H in the ranges at
+    every order of the sweep (from k = 2, the lowest order the method separates) and at the orders
+    of Table 1's lost second part, against the printed upper edge of Fig. 10's band plus half a
+    unit of its last digit, the paper's own statement of what its optimisation reaches (any
+    stricter standard fails at more orders).
 
     Parameters
     ----------
@@ -215,33 +259,38 @@ def ranges_statement(sweep, k_lost, h_lost, *, k_tab: int, band_text: str):
         The orders of Table 1's second part, whose values are lost in the text.
     h_lost : array, same length as ``k_lost``
         The best known H at those orders.
-    k_tab : int
-        The smallest order Table 1 tabulates.
     band_text : str
         The upper edge of Fig. 10's band, as printed.
+    full_circle : mapping of int to float, optional
+        The best known H on the full circle at some orders: the note gives it at the orders
+        above the band.
 
     Returns
     -------
     ours : str
         At how many orders the best known H lies within the band, and where it does not.
     holds : bool
-        Within the band at every such order.
+        Within the band at every order.
     note : str
-        How close to 1/4, and the lower orders.
+        The orders above the band with their H (and the full circle's), how close to 1/4
+        elsewhere, and what is left untested.
     """
     top = float(band_text) + half_unit(band_text)
-    ranges_k = np.r_[sweep.k[sweep.k >= k_tab], k_lost]
-    ranges_h = np.r_[sweep.H_best_known[sweep.k >= k_tab], h_lost]
-    above = ranges_k[ranges_h > top]
-    low = sweep[sweep.k < k_tab].set_index("k").H_best_known
+    k_all = np.r_[np.asarray(sweep.k, dtype=int), np.asarray(k_lost, dtype=int)]
+    h_all = np.r_[np.asarray(sweep.H_best_known, dtype=float), np.asarray(h_lost, dtype=float)]
+    bad = h_all > top
+    full = dict(full_circle or {})
     ours = (f"best known H in the ranges within Fig. 10's band (<= {band_text}) at "
-            f"{len(ranges_k) - len(above)} of {len(ranges_k)} orders k = "
-            f"{k_tab}..{int(sweep.k.max())} and {' '.join(map(str, k_lost))}"
-            + (f"; above it at k = {' '.join(map(str, above))}" if len(above) else ""))
-    note = (f"within {100 * (ranges_h / 0.25 - 1).max():.1f} % of 1/4 there; below Table 1's "
-            f"smallest order the ranges give up to {low.max():.3f} (k = {int(low.idxmax())}; "
-            f"above the band at k = {' '.join(map(str, low.index[low > top])) or 'none'}); "
-            f"Table 1's second part (k = {min(k_lost)}..{max(k_lost)}) is lost in the text, so "
-            "its H are ours only; the ranges exclude the pair layouts that reach 1/4 at even k "
-            "on the full circle; every Table 1 layout lies inside them")
-    return ours, bool(above.size == 0), note
+            f"{int((~bad).sum())} of {len(k_all)} orders k = {int(sweep.k.min())}.."
+            f"{int(sweep.k.max())} and {' '.join(map(str, k_lost))}"
+            + (f"; above it at k = {' '.join(map(str, k_all[bad]))}" if bad.any() else ""))
+    above = "; ".join(f"k = {k}: {h:.3f}" + (f" (full circle {full[k]:.3f})" if k in full else "")
+                      for k, h in zip(k_all[bad], h_all[bad], strict=True))
+    note = ((f"above the band: {above}; " if bad.any() else "")
+            + (f"elsewhere within {100 * (h_all[~bad] / 0.25 - 1).max():.1f} % of 1/4; "
+               if (~bad).any() else "")
+            + f"orders {int(sweep.k.max()) + 1}..{min(k_lost) - 1} not computed; Table 1's "
+            f"second part (k = {min(k_lost)}..{max(k_lost)}) is lost in the text, so its H are "
+            "ours only; the ranges exclude the pair layouts that reach 1/4 at even k on the full "
+            "circle; every Table 1 layout lies inside them")
+    return ours, bool(not bad.any()), note
