@@ -1,4 +1,4 @@
-"""Table 3 under the per-position reading of Section 3.1: each position's error joins the clustering.
+"""Table 3 under Section 3.1's per-position reading: each position's error joins the clustering.
 
 Section 3.1 of Xu et al. 2022 (doi:10.19650/j.cnki.cjsi.J2209628) says "对各点的热误差数据分别聚类"
 (the thermal error data of each point clustered separately) and prints the result per position
