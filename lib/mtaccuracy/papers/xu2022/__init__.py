@@ -15,6 +15,8 @@ Its modules, each one concern (every name is also here, as ``xu2022.<name>``):
                     book's order; :func:`caption` fills one in
 ``table3``          Table 3 against the paper's own method: can one partition of the sensors
                     produce it?
+``per_position``    Table 3 under Section 3.1's per-position reading (each position's error
+                    joins the clustering), and data on which it gives any printed rows
 ``__main__``        the command below
 ==================  ========================================================================
 
@@ -76,6 +78,7 @@ from .figures import (
     kb_figure,
     prediction_figure,
 )
+from .per_position import per_position_clusters, per_position_selections, witness
 from .table3 import MAX_ASSIGNMENTS, partition_fits, rows_fitted_by, table3_consistency
 
 __all__ = [
@@ -85,7 +88,7 @@ __all__ = [
     "check_data", "reader_notes", "Progress", "sampling_se", "stated", "beats",
     "prediction_figure", "kb_figure", "data_fields", "model_fields", "loeo_fields",
     "pooled_fields", "caption", "FIGURES", "partition_fits", "table3_consistency",
-    "rows_fitted_by", "main",
+    "rows_fitted_by", "per_position_clusters", "per_position_selections", "witness", "main",
     "RECONSTRUCTED_LABEL", "ERROR", "METRIC_NAMES", "METHODS", "PLOT_DECIMALS", "FIG11",
     "FIG14", "FIG15", "FIG16", "FIG17", "ON_RECONSTRUCTION", "ON_OWN_DATA", "MAX_ASSIGNMENTS",
     "Parameters",
