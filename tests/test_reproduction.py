@@ -346,6 +346,9 @@ def test_each_row_says_its_kind_and_what_a_reproduced_number_agrees_within():
         ("number", "not reproducible", "1-9")
     outside = added(card.bracket, "T", "i", "50", 1.0, 9.0, why="tool length omitted")
     assert (outside["kind"], outside["verdict"]) == ("number", "differs")
+    # the nearer end's sampling error widens the tolerance as for any number
+    wide = added(card.bracket, "T", "j", "10", 1.0, 9.0, why="w", sampling_se=0.6)
+    assert (wide["verdict"], wide["agreement"]) == ("reproduced", "sampling")
     assert set(R.card_frame(card.rows)["kind"]) <= set(R.KINDS)
 
 

@@ -378,14 +378,16 @@ class Card:
                   kind="statement")
 
     def bracket(self, item, quantity, published, low, high, unit: str = "", *, why: str,
-                uses=(), digits: int | None = None) -> None:
+                uses=(), digits: int | None = None, paper_rel=None, paper_abs=None,
+                sampling_se=None) -> None:
         """A published number that rests on an input the paper omits.
 
         It is scored against ours at the two ends of the defensible values of that input (``low``,
         ``high``, either order).  Inside the bracket the missing input decides it: ``not
         reproducible``, ours shown as ``low-high``.  Outside, every defensible input disagrees: a
-        :meth:`number` against the nearer end (``differs`` unless within its tolerance).  ``why``
-        says what is missing and what the two ends are."""
+        :meth:`number` against the nearer end (``differs`` unless within its tolerance, which
+        ``paper_rel``, ``paper_abs`` and ``sampling_se``, the nearer end's standard error, widen
+        as in :meth:`number`).  ``why`` says what is missing and what the two ends are."""
         if not str(why).strip():
             raise ValueError(f"{item}: {quantity}: say what is missing (why=...)")
         lo, hi = sorted((_finite(low, f"{item}: {quantity}: low"),
@@ -399,6 +401,7 @@ class Card:
             return
         near = lo if abs(pub - lo) <= abs(pub - hi) else hi
         self.number(item, quantity, published, near, unit, uses=uses, digits=digits,
+                    paper_rel=paper_rel, paper_abs=paper_abs, sampling_se=sampling_se,
                     note=f"{why}; the published value lies outside {fmt(lo)}-{fmt(hi)}")
 
     def claim(self, item, quantity, published: str, why: str, ours="", unit: str = "") -> None:
