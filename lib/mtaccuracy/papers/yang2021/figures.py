@@ -93,50 +93,67 @@ FIG09 = Caption(
 
 
 def fig21_figure(theta, layouts, *, rotation_errors, profiles, true_profile, d600,
-                 true_mz_um: float, published: tuple, colours):
+                 true_mz_um: float, published: tuple, highlight: dict, colours: tuple):
     """Fig. 21 (simulated): each layout's separated curves and roundness beside the published.
 
     One run's separated rotation error and profile for every layout at 600 r/min (polar), and the
     separated roundness of each layout beside the published values.  ``rotation_errors``,
     ``profiles``: per layout, one run's curves (um, offsets added); ``true_profile`` (um, offset
     added); ``d600``: the 600 r/min rows by layout; ``published``: (optimised value, [random
-    values]); ``colours``: (colormap, published).
+    values]); ``highlight``: the layouts drawn in colour (name -> colour; two, the paper's and
+    the best, so that nine curves do not share one cycle of colours), every other layout in the
+    context colour; ``colours``: (context, published).  The polar panels print no radius on the
+    curves: their circles' spacing is written under each (the radii carry an arbitrary offset).
     """
-    cmap, published_colour = colours
+    context, published_colour = colours
     pub_opt, pub_rand = published
     closed = np.r_[theta, theta[:1]]
+    others = [n for n in layouts if n not in highlight]
     fig = plt.figure(figsize=(12, 4.2))
-    ax = fig.add_subplot(1, 3, 1, projection="polar")
-    for i, name in enumerate(layouts):
-        v = rotation_errors[name]
-        ax.plot(closed, np.r_[v, v[:1]], lw=1.2 if i == 0 else 0.7, color=cmap(i), label=name)
-    ax.set_title("separated rotation error, one run (µm, offset 2)", fontsize=9, pad=18)
-    ax.tick_params(labelsize=6)
-    ax2 = fig.add_subplot(1, 3, 2, projection="polar")
-    for i, name in enumerate(layouts):
-        v = profiles[name]
-        ax2.plot(closed, np.r_[v, v[:1]], lw=1.2 if i == 0 else 0.7, color=cmap(i))
-    ax2.plot(closed, np.r_[true_profile, true_profile[:1]], color="k", lw=2, alpha=0.3,
-             label="true")
-    ax2.set_title("separated profile, one run (µm, offset 5)", fontsize=9, pad=18)
-    ax2.tick_params(labelsize=6)
+    polar = []
+    for k, (curves, title) in enumerate(((rotation_errors, "separated rotation error, one run"),
+                                         (profiles, "separated profile, one run"))):
+        ax = fig.add_subplot(1, 3, k + 1, projection="polar")
+        for name in others:   # context first, beneath
+            v = curves[name]
+            ax.plot(closed, np.r_[v, v[:1]], lw=0.6, color=context,
+                    label=f"the other {len(others)} layouts" if name == others[0] else None)
+        if k == 1:
+            ax.plot(closed, np.r_[true_profile, true_profile[:1]], color="k", lw=2, alpha=0.3,
+                    label="true profile")
+        for name, colour in highlight.items():
+            v = curves[name]
+            ax.plot(closed, np.r_[v, v[:1]], lw=1.3, color=colour, label=name)
+        ax.set_title(f"{title} (µm)", fontsize=9, pad=18)
+        ax.tick_params(labelsize=7)
+        ax.set_yticklabels([])   # the radii sat on the curves; their spacing is written below
+        polar.append(ax)
     ax3 = fig.add_subplot(1, 3, 3)
-    ax3.bar(range(len(d600)), d600.mz_mean_um, yerr=d600.mz_std_um,
-            color=[cmap(i) for i in range(len(d600))], capsize=3)
+    ax3.bar(range(len(d600)), d600.mz_mean_um, yerr=d600.mz_std_um, capsize=3,
+            color=[highlight.get(n, context) for n in d600.index])
     ax3.axhline(true_mz_um, color="k", ls="--", lw=0.8, label="true (minimum zone)")
     ax3.scatter([0] + list(range(1, 1 + len(pub_rand))), [pub_opt] + list(pub_rand), marker="D",
                 color=published_colour, zorder=3, label="published (Fig. 21)")
     ax3.set_xticks(range(len(d600)), list(d600.index), rotation=30, ha="right", fontsize=7)
+    for tick, name in zip(ax3.get_xticklabels(), d600.index, strict=True):
+        if name in highlight:
+            tick.set_color(highlight[name])
+            tick.set_fontweight("bold")
     ax3.set_ylabel("separated roundness, mean ± sd (µm)")
     ax3.legend(fontsize=7)
     fig.suptitle("Fig. 21 (SIMULATION): optimised against random probe angles at 600 r/min",
                  y=1.04)
     fig.tight_layout()
+    for ax, offset in zip(polar, (2, 5), strict=True):
+        ticks = ax.get_yticks()
+        ax.text(0.5, -0.15, f"grid circles {ticks[1] - ticks[0]:g} µm apart (offset {offset} µm)",
+                transform=ax.transAxes, ha="center", va="top", fontsize=7)
     # one legend for both polar plots, below them (inside, it covered the 225° label)
-    handles, labels = ax.get_legend_handles_labels()
-    true_h, true_l = ax2.get_legend_handles_labels()
-    fig.legend(handles + true_h, labels + [f"{t} profile" for t in true_l], fontsize=7,
-               ncol=4, loc="upper center", bbox_to_anchor=(0.36, 0.02))
+    handles, labels = polar[0].get_legend_handles_labels()
+    true_h, true_l = polar[1].get_legend_handles_labels()
+    keep = [i for i, lab in enumerate(true_l) if lab == "true profile"]
+    fig.legend(handles + [true_h[i] for i in keep], labels + [true_l[i] for i in keep],
+               fontsize=7, ncol=2, loc="upper center", bbox_to_anchor=(0.36, -0.02))
     return fig
 
 
@@ -152,7 +169,9 @@ FIG21 = Caption(
     "filter), published values as diamonds. The random layouts read {random_low:.2f} to "
     "{random_high:.2f} µm against {experiment:.2f} µm for the experiment's layout; the largest "
     "reading, {largest:.2f} µm, is that of \"{largest_layout}\", whose closest probes are "
-    "{closest} samples apart.")
+    "{closest} samples apart. In colour: the experiment's layout and the other layout whose "
+    "reading is nearest the truth (root mean square of its error, bias and scatter: "
+    "\"{best_layout}\", {best_rms:.3f} µm, against {experiment_rms:.3f} µm); the rest in grey.")
 
 
 def noise_transfer_figure(harmonics, mc_var, q2, *, noise_um: float, n_samples: int, colours):
