@@ -190,8 +190,7 @@ def save(fig, path, *, stamp: str, formats=("png", "svg"), title: str | None = N
 
 
 def category_colours(categories, *, none=None) -> dict:
-    """A colour for each category, :data:`CATEGORICAL` in the order given, :data:`NO_CATEGORY`
-    for ``none``.
+    """A colour for each category: :data:`CATEGORICAL` in order, :data:`NO_CATEGORY` for ``none``.
 
     Parameters
     ----------
