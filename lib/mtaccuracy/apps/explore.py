@@ -17,6 +17,8 @@ against the measured error.
 
 The server listens on 127.0.0.1 only (:func:`check_address`), its websocket accepts pages from
 ``127.0.0.1:<port>`` and ``localhost:<port>`` only, and Panel serves its own JavaScript and CSS.
+Every value the page sends is checked on the server before Panel applies it (:func:`_guarded`,
+the bounds of :mod:`~mtaccuracy.apps.explore_model`): a refused one is shown as a message.
 """
 
 from __future__ import annotations
