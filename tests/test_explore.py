@@ -135,8 +135,8 @@ def test_indices_equal_an_analytic_case():
     assert {k: v for k, v in px.items() if v > 1e-15} == pytest.approx(want, abs=1e-12)
     # one error obviously dominates when its group's range is 1000 times the other's
     r = M.indices_at_pose(g, dict(x=0.0, y=0.0, z=400.0), position_um=0.1, angular_arcsec=100)
-    out, err, index = M.top_errors(r)[0]
-    assert out == "Px" and err.startswith("e") and index > 0.3, (err, index)
+    out, errs, index = M.top_errors(r)[0]   # two pitch errors with one arm: a tie, both shown
+    assert out == "Px" and errs == ("ey(x)", "ey(y)") and index > 0.3, errs
 
 
 def test_indices_equal_a_monte_carlo_regression_on_the_exact_chain(setups):
@@ -254,8 +254,9 @@ def app():
 
 
 def _shown_top(tab) -> dict:
-    """The top-error table of the Machine tab as shown: output -> (error, index)."""
-    rows = re.findall(r'data-output="(\w+)" data-error="([^"]*)" data-index="([^"]*)"',
+    """The top-error table of the Machine tab as shown: output -> (errors, index)."""
+    rows = re.findall(r'data-output="(\w+)" data-error="([^"]*)"(?: data-ties="\d+")? '
+                      r'data-index="([^"]*)"',
                       tab.top.object)
     return {o: (html.unescape(e), float(v) if v else None) for o, e, v in rows}
 
@@ -264,7 +265,7 @@ def _check_machine_tab_shows_the_model(tab):
     """What the Machine tab shows equals the model's numbers at its controls' values."""
     kw = dict(position_um=tab.position_um, angular_arcsec=tab.angular_arcsec)
     res = M.indices_at_pose(tab.setup, tab.pose_values(), **kw)
-    want = {o: (e, round(v, 6)) for o, e, v in M.top_errors(res)}
+    want = {o: (", ".join(e), round(v, 6)) for o, e, v in M.top_errors(res)}
     assert _shown_top(tab) == {o: want.get(o, ("", None)) for o in res.outputs}
     heat = tab.heat_src.data                              # error-major, NaN: no first-order term
     assert list(heat["error"][::len(res.outputs)]) == res.names
@@ -325,7 +326,8 @@ def test_the_spindle_tab_starts_from_notebook_05_and_shows_the_model(app):
     worst = t.q_least_squares[np.isfinite(t.q_least_squares)].max()
     summary = tab.plots()[0][0].object
     assert f"Worst q_k: least squares {worst:.3f}" in summary
-    assert "a_0..a_3: " + ", ".join(f"{v:.4f}" for v in np.round(t.weights, 4) + 0.0) in summary
+    shown = ", ".join(f"{v:.4f}" for v in np.round(t.weights, 4) + 0.0)
+    assert "(a_0..a_3 in Yang et al.): " + shown in summary
     tab.probe2 = 180.0                                    # two probes at one angle
     with pytest.raises(ValueError) as lib:
         M.probe_transfer([0, 180, 180, 270])
@@ -507,3 +509,181 @@ def test_the_server_listens_on_loopback_with_restricted_websocket_origins():
         server.unlisten()
         server.stop()
         signal.signal(signal.SIGINT, previous)
+
+
+# ------------------------------------------------------------------------------------------
+# Issue 35: bounds on the server, every tie, typed poses, CSV export
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("value, why", [
+    (None, "is empty"), ("", "is empty"), ("12", "must be a number"), (True, "must be a number"),
+    (float("nan"), "NaN"), (float("1e999"), "infinite"), (-float("inf"), "infinite"),
+    (101.0, "out of bounds"), (2.5, "whole number")])
+def test_a_refused_value_names_the_control_and_its_bounds(value, why):
+    with pytest.raises(ValueError, match=why) as err:
+        M.checked_number(value, "the highest harmonic", low=3, high=100, integer=True)
+    assert "the highest harmonic" in str(err.value) and "3 to 100" in str(err.value)
+    assert M.checked_number(np.int64(7), "k", low=3, high=100, integer=True) == 7
+    assert M.checked_number(359.99, "a", low=0, high=360, high_open=True) == 359.99
+    with pytest.raises(ValueError, match="out of bounds"):
+        M.checked_number(360, "a", low=0, high=360, high_open=True)
+
+
+def test_the_model_refuses_every_out_of_bounds_input_before_any_work(setups, monkeypatch):
+    from mtaccuracy import spindle as SP
+
+    def forbidden(*a, **k):
+        raise AssertionError("work done on a refused input")
+    monkeypatch.setattr(SP, "noise_amplification", forbidden)
+    with pytest.raises(ValueError, match="the highest harmonic = 20000 is out of bounds"):
+        M.probe_transfer([0, 90, 180, 270], max_harmonic=20000)
+    with pytest.raises(ValueError, match="probe 2 angle = 1e\\+09 is out of bounds"):
+        M.probe_transfer([0, 1e9, 180, 270])
+    for bad in (None, float("nan"), float("1e999")):
+        with pytest.raises(ValueError, match="probe 3 angle"):
+            M.probe_transfer([0, 90, bad, 270])
+    with pytest.raises(ValueError, match="a3"):
+        M.probe_transfer([0, 90, 180, 270], weights="eq5", a3=float("nan"))
+    z = setups["ac_double_turntable"]
+    monkeypatch.setattr(type(z.machine), "jacobian", forbidden)
+    for values, kw, what in (({"x": 1e9}, {}, "axis x"), ({"A": float("nan")}, {}, "axis A"),
+                             ({"y": None}, {}, "axis y is empty"),
+                             ({}, {"position_um": float("1e999")}, "position-error"),
+                             ({}, {"angular_arcsec": 0.0}, "angular-error")):
+        with pytest.raises(ValueError, match=what):
+            M.slider_update(z, values, **kw)
+    with pytest.raises(ValueError, match="grid steps"):
+        M.dominant_map(z, steps=10_000)
+    with pytest.raises(ValueError, match="at most 80 characters"):
+        M.topology_setup("w " + "X " * 10_000 + "t")
+
+
+def test_probes_are_numbered_from_1_as_in_the_controls():
+    with pytest.raises(ValueError, match="probes 2 and 3 are at the same angle"):
+        M.probe_transfer([0, 90, 90, 200])
+    with pytest.raises(ValueError, match="probes 1 and 4 are at the same angle"):
+        M.probe_transfer([0, 90, 200, 0.0])
+    with pytest.raises(ValueError, match="probes 2 and 3 are coincident or opposite.*probe 3"):
+        M.probe_transfer([0, 30, 210, 300], weights="eq5")
+
+
+def _planar_indices(arms, sd) -> M.PoseIndices:
+    """A tip Px = sum_i arm_i * e_i (pitch errors e_i on Abbe arms arm_i, mm): closed form."""
+    jac = np.array(arms, dtype=float)[None, None, :]                       # (1, 1, d)
+    idx = S.linear_indices(jac, sd=np.asarray(sd, dtype=float))[0]        # (d, 1)
+    return M.PoseIndices(idx, np.array([True]), [f"e{i + 1}" for i in range(len(arms))], ["Px"])
+
+
+def test_every_tied_error_is_shown_and_only_ties():
+    """Arms 0.1 + 0.2 and 0.3 mm are equal but for rounding (5.6e-17): a tie; an arm
+    1e-7 longer is a real difference (2e-7 of the index), not a tie; catalogue order."""
+    arm = 0.1 + 0.2
+    assert arm != 0.3                                       # rounding makes them differ
+    r = _planar_indices([0.3, 0.1, arm, 0.3 * (1 - 1e-7), 0.3], sd=[1.0] * 5)
+    (out, errs, index), = M.top_errors(r)
+    assert (out, errs) == ("Px", ("e1", "e3", "e5"))
+    assert index == pytest.approx(0.09 / (4 * 0.09 + 0.01 - 0.18e-7), rel=1e-12)
+    # the same model with e3's range 1e-6 larger: it alone is the top
+    r = _planar_indices([0.3, 0.1, arm, 0.3 * (1 - 1e-7), 0.3], sd=[1, 1, 1 + 1e-6, 1, 1])
+    assert M.top_errors(r)[0][1] == ("e3",)
+
+
+#: The eight errors tied at 0.125 for Vx at test point 2 (issue 35), in catalogue order.
+VX_TIES = ("e_xx", "e_xy", "e_xz", "e_xa", "e_yc", "S_yz", "a_AM", "b_CA")
+
+
+def test_vx_at_test_point_2_shows_its_eight_ties(setups):
+    """The issue's case: notebook 01's test point 2, Vx: eight errors at 0.125."""
+    z = setups["ac_double_turntable"]
+    r = M.indices_at_pose(z, dict(x=-200.0, y=-212.5, z=-137.5, A=-65.0, C=90.0))
+    top = {o: (e, v) for o, e, v in M.top_errors(r)}
+    assert top["Vx"][0] == VX_TIES == tuple(sorted(VX_TIES, key=z.names.index))  # catalogue
+    assert top["Vx"][1] == pytest.approx(0.125, abs=1e-12)
+    table = M.top_errors_table(r)
+    assert (table.output == "Vx").sum() == 8 and len(table) == sum(len(e) for e, _ in top.values())
+
+
+def test_the_csv_exports_round_trip_at_full_precision(setups):
+    import io
+
+    r = M.indices_at_pose(setups["vertical_xyfz"], dict(x=10.0, y=20.0, z=300.0))
+    for frame in (M.top_errors_table(r), M.indices_table(r)):
+        back = pd.read_csv(io.StringIO(M.to_csv(frame)))
+        pd.testing.assert_frame_equal(back, frame, check_exact=True, check_dtype=False)
+    assert list(M.indices_table(r).columns) == ["error", *r.outputs]
+    t = M.probe_transfer(np.arange(4) * 90.0, max_harmonic=12)
+    back = pd.read_csv(io.StringIO(M.to_csv(M.probe_table(t))))
+    assert np.array_equal(back.q_weighted, t.q_weighted)                  # inf: cancelled
+    assert back.k.tolist() == list(range(2, 13)) and back.cancelled_by_layout.dtype == bool
+
+
+def test_the_thermal_csv_is_the_prediction_shown(thermal_data):
+    r = M.thermal_prediction(thermal_data, train=[1, 2, 3], test=4)
+    table = M.thermal_table(r)
+    n, p = r.measured.shape
+    assert len(table) == n * p
+    assert np.array_equal(table.residual_um.to_numpy().reshape(n, p), r.measured - r.predicted)
+    assert np.array_equal(table.position_mm.to_numpy()[:p], r.positions_mm)
+
+
+def _widgets(view, cls, name=None):
+    import panel as pn
+
+    return [w for w in view.select(getattr(pn.widgets, cls)) if name is None or w.name == name]
+
+
+def test_crafted_messages_are_refused_by_the_server_with_a_message(caplog):
+    """What the page sends goes through Panel's _process_events, as a websocket message."""
+    from mtaccuracy.apps import explore
+
+    app = explore.create_app()
+    spindle, machine = app.tabs["spindle"], app.tabs["machine"]
+    sv, mv = spindle.view(), machine.view()
+    k = _widgets(sv, "IntSlider", "highest harmonic")[0]
+    angle = _widgets(sv, "FloatInput")[0]                                 # probe 2's box
+    before = (spindle.max_harmonic, spindle.probe2)
+    with caplog.at_level("ERROR"):
+        k._process_events({"value": 20000})
+        assert "highest harmonic = 20000 is out of bounds" in spindle.refused
+        for bad, why in ((None, "empty"), (float("1e999"), "infinite"), (float("nan"), "NaN"),
+                         (1e9, "out of bounds")):
+            angle._process_events({"value": bad})
+            assert "probe 2 angle" in spindle.refused and why in spindle.refused
+        assert (spindle.max_harmonic, spindle.probe2) == before
+        angle._process_events({"value": 123.4})                            # a good one
+        assert spindle.probe2 == 123.4 and spindle.refused == ""
+        y = _widgets(mv, "FloatInput")[1]                                  # axis y's box
+        y._process_events({"value": -1e9})
+        assert "axis y" in machine.refused and machine.pose.y != -1e9
+        _widgets(mv, "Select", "output")[0]._process_events({"value": "<script>"})
+        assert "is not one of" in machine.refused and machine.output in machine.setup.outputs
+        _widgets(mv, "TextInput")[0]._process_events({"value": "X" * 100_000})
+        assert "at most 80 characters" in machine.refused
+        radio = _widgets(sv, "RadioButtonGroup")[0]
+        radio._process_events({"active": 7})
+        assert "is not a choice" in spindle.refused
+    assert not [r for r in caplog.records if r.levelname == "ERROR"], caplog.text
+
+
+def test_a_typed_pose_reaches_what_a_slider_cannot():
+    """Test point 2's y = -212.5 mm is off the 1 mm steps of the slider: typed, it is shown."""
+    from mtaccuracy.apps import explore
+
+    app = explore.create_app()
+    tab = app.tabs["machine"]
+    mv = tab.view()
+    boxes = {w.css_classes[0]: w for w in _widgets(mv, "FloatInput")}
+    sliders = {w.css_classes[0]: w for w in _widgets(mv, "FloatSlider") if w.css_classes}
+    for a in tab.setup.axes:                                # the same bounds as the slider
+        box, slider = boxes[f"pose-{a.name}-input"], sliders[f"pose-{a.name}"]
+        assert (box.start, box.end) == (slider.start, slider.end) == (a.low, a.high)
+    for name, value in dict(x=-200.0, y=-212.5, z=-137.5, A=-65.0, C=90.0).items():
+        boxes[f"pose-{name}-input"]._process_events({"value": value})
+    assert tab.pose_values()["y"] == -212.5 and sliders["pose-y"].value == -212.5
+    shown = _shown_top(tab)
+    assert shown["Vx"][0] == ", ".join(VX_TIES)
+    assert "(8 tied)" in tab.top.object
+    _check_machine_tab_shows_the_model(tab)
+    csv = [w for w in _widgets(mv, "FileDownload") if w.filename == "top_errors.csv"][0]
+    back = pd.read_csv(csv.callback())
+    assert back[back.output == "Vx"].error.tolist() == shown["Vx"][0].split(", ")

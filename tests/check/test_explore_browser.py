@@ -61,6 +61,18 @@ def server(tmp_path):
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait(timeout=10)
+    text = log.read_text()           # what the page sent, crafted values included: no traceback
+    assert "Traceback" not in text and "ERROR" not in text, text[-3000:]
+
+
+#: Sets the value of the Bokeh model with CSS class %s to %s in the page, as a crafted
+#: websocket message would (Bokeh sends the change to the server).
+_CRAFT = """() => {
+    for (const m of Bokeh.documents[0].all_models) {
+        if (m.css_classes && m.css_classes.includes("%s")) { m.value = %s; return true; }
+    }
+    return false;
+}"""
 
 
 def _tooltip_values(page) -> list[str]:
@@ -125,17 +137,44 @@ def test_the_explorer_in_a_browser(server, browser):
         page.mouse.move(5, 5)
         page.screenshot(path=str(shot), full_page=True)
 
+        # a pose typed in (test point 2: y = -212.5 mm is off the slider's 1 mm steps): Vx
+        # shows its eight tied errors; the slider follows the box
+        for axis, value in dict(x="-200", y="-212.5", z="-137.5", A="-65", C="90").items():
+            box = page.locator(f".pose-{axis}-input input")
+            box.fill(value)
+            box.press("Enter")
+        vx = page.locator('tr[data-role="top-error"][data-output="Vx"]')
+        expect(vx).to_have_attribute("data-ties", "8", timeout=10_000)
+        expect(vx).to_contain_text("(8 tied)")
+        expect(page.locator(".pose-y")).to_contain_text("-212.5")
+        # the top-error table downloads as CSV: one row per tied error
+        with page.expect_download() as download:
+            page.get_by_role("button", name="top errors (CSV)").click()
+        rows = download.value.path().read_text().splitlines()
+        assert rows[0] == "output,error,index" and sum(r.startswith("Vx,") for r in rows) == 8
+        # a cleared box, and values the page would not send (a crafted message: the model's
+        # value set in BokehJS): refused by the server with a message, never applied
+        box = page.locator(".pose-y-input input")
+        box.fill("")
+        box.press("Enter")
+        refused = page.locator('[data-role="error"]').filter(has_text="axis y")
+        expect(refused).to_contain_text("axis y is empty", timeout=10_000)
+        for value, why in (("Infinity", "infinite"), ("NaN", "NaN"), ("1e9", "out of bounds")):
+            assert page.evaluate(_CRAFT % ("pose-y-input", value)), value
+            expect(refused).to_contain_text(why, timeout=10_000)
+        expect(vx).to_have_attribute("data-ties", "8")
+
         # a topology typed in: a bad one shows the library's message, a good one its machine
         topology = page.locator("input[placeholder='w C b X Y Z B t']")
         topology.fill("w C A b Y X Q t")
         topology.press("Enter")
-        error = page.locator('[data-role="error"]')
+        error = page.locator('[data-role="error"]').filter(has_text="topology")
         expect(error).to_contain_text("unknown axis letter(s) ['Q'] in topology", timeout=10_000)
         assert "Traceback" not in error.text_content()
         topology.fill("w C b X Y Z B t")
         topology.press("Enter")
         expect(page.locator('tr[data-role="top-error"][data-output="Px"]')).to_have_attribute(
-            "data-error", "EXC", timeout=10_000)
+            "data-error", "EXC, EXX, EXY, EXZ, EXB", timeout=10_000)
         expect(page.locator('tr[data-role="top-error"][data-output="Vz"]')).to_contain_text(
             "no first-order term")
         expect(error).to_be_hidden()

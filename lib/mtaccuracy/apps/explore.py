@@ -17,6 +17,8 @@ against the measured error.
 
 The server listens on 127.0.0.1 only (:func:`check_address`), its websocket accepts pages from
 ``127.0.0.1:<port>`` and ``localhost:<port>`` only, and Panel serves its own JavaScript and CSS.
+Every value the page sends is checked on the server before Panel applies it (:func:`_guarded`,
+the bounds of :mod:`~mtaccuracy.apps.explore_model`): a refused one is shown as a message.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import html
+import io
 import os
 import shlex
 import socket
@@ -71,6 +74,66 @@ def _prompt(widget):
     return widget
 
 
+def _guarded(widget, check, refuse):
+    """``widget`` whose browser values pass ``check`` on the server before Panel applies them.
+
+    A message from the page (or a crafted one) setting ``value`` goes through ``check`` first
+    (:func:`mtaccuracy.apps.explore_model.checked_number` and the like): a refused value is never
+    applied, ``refuse`` gets the message to show in the app (no traceback on the server) and the
+    page gets the server's value back; an accepted one calls ``refuse("")`` (clears it).
+    """
+    process = widget._process_events
+
+    def guarded(events):
+        events = dict(events)
+        try:
+            for key in ("value", "value_throttled"):
+                if key in events:
+                    events[key] = check(events[key])
+            if "active" in events:             # a button or check box group: option indices
+                n, active = len(widget.options), events["active"]
+                many = isinstance(active, list | tuple)
+                if not all(isinstance(i, int) and not isinstance(i, bool) and 0 <= i < n
+                           for i in (active if many else [active])):
+                    raise ValueError(f"{widget.name or 'a choice'}: {active!r} is not a "
+                                     f"choice of 0..{n - 1}")
+        except ValueError as exc:
+            refuse(str(exc))
+            widget.param.trigger("value")           # the page shows the server's value again
+            return
+        refuse("")
+        process(events)
+
+    widget._process_events = guarded
+    return widget
+
+
+def _number_check(name: str, low: float, high: float, *, unit: str = "",
+                  integer: bool = False):
+    def check(value):
+        return M.checked_number(value, name, low=low, high=high, unit=unit, integer=integer)
+    return check
+
+
+def _option_check(widget):
+    """Accept only one of ``widget``'s labels (a list of them for a multiple choice)."""
+    def check(value):
+        labels = [str(v) for v in (widget.labels if hasattr(widget, "labels")
+                                   else widget.options)]
+        many = isinstance(value, list | tuple)
+        if not all(isinstance(v, str) and v in labels for v in (value if many else [value])):
+            raise ValueError(f"{widget.name or 'a choice'}: {value!r} is not one of "
+                             f"{', '.join(labels)}")
+        return value
+    return check
+
+
+def _csv_button(label: str, filename: str, frame, **kw):
+    """A download of ``frame()`` (a DataFrame, computed at the click) as ``filename``."""
+    return pn.widgets.FileDownload(callback=lambda: io.StringIO(M.to_csv(frame())),
+                                   filename=filename, label=label, embed=False, **kw)
+
+
 def _figure(title: str, **kw):
     return figure(title=title, tools="hover,save", toolbar_location="above", **kw)
 
@@ -84,9 +147,9 @@ class MachineTab(param.Parameterized):
                                       "a topology typed below": M.TOPOLOGY},
                              default="ac_double_turntable", label="Machine")
     topology = param.String("", label="Topology (workpiece to tool, then Enter)")
-    position_um = param.Number(1.0, bounds=(0.1, 100.0), step=0.1,
+    position_um = param.Number(1.0, bounds=M.RANGE_BOUNDS, step=0.1,
                                label="position-error half range (µm)")
-    angular_arcsec = param.Number(1.0, bounds=(0.1, 100.0), step=0.1,
+    angular_arcsec = param.Number(1.0, bounds=M.RANGE_BOUNDS, step=0.1,
                                   label="angular-error half range (arcsec)")
     across = param.Selector(objects=[], label="map: axis across")
     up = param.Selector(objects=[], label="axis up")
@@ -94,10 +157,12 @@ class MachineTab(param.Parameterized):
     setup = param.Parameter(doc="the machine shown (explore_model.MachineSetup)")
     pose = param.Parameter(doc="the pose sliders: a Parameterized with one number per axis")
     error = param.String("", doc="the library's message on the last topology typed")
+    refused = param.String("", doc="why the last value sent by the page was refused")
 
     def __init__(self, **params):
         super().__init__(**params)
         self.top, self.status = pn.pane.HTML("", width=460), pn.pane.HTML("", width=290)
+        self.result = None                     # the last PoseIndices shown (the CSV exports)
         # heat map: errors (rows) x outputs (columns)
         self.heat_src = bm.ColumnDataSource(dict(error=[], output=[], index=[], label=[],
                                                  text_color=[], note=[]))
@@ -151,8 +216,10 @@ class MachineTab(param.Parameterized):
         across, up = M.default_map_axes(setup)
         self.param.update(setup=setup, pose=pose, error="", across=across, up=up,
                           output=setup.outputs[0],
-                          position_um=min(max(setup.position_um, 0.1), 100.0),
-                          angular_arcsec=min(max(setup.angular_arcsec, 0.1), 100.0))
+                          position_um=min(max(setup.position_um, M.RANGE_BOUNDS[0]),
+                                          M.RANGE_BOUNDS[1]),
+                          angular_arcsec=min(max(setup.angular_arcsec, M.RANGE_BOUNDS[0]),
+                                             M.RANGE_BOUNDS[1]))
 
     @param.depends("machine", watch=True)
     def _chosen(self) -> None:
@@ -173,6 +240,10 @@ class MachineTab(param.Parameterized):
         self._load(setup)
         self.machine = M.TOPOLOGY
 
+    def refuse(self, message: str) -> None:
+        """Show why a value from the page was refused ("": clear the message)."""
+        self.refused = message
+
     def pose_values(self) -> dict:
         """The pose sliders' values (mm, deg) by axis."""
         return {a.name: float(getattr(self.pose, a.name)) for a in self.setup.axes}
@@ -183,19 +254,27 @@ class MachineTab(param.Parameterized):
         """Recompute the indices and the map at the sliders' values and redraw both in place."""
         t0 = time.perf_counter()
         pose, setup = self.pose_values(), self.setup
-        res, dmap = M.slider_update(setup, pose, axes=(self.across, self.up),
-                                    position_um=self.position_um,
-                                    angular_arcsec=self.angular_arcsec)
+        try:                                   # every bound checked again before the work
+            res, dmap = M.slider_update(setup, pose, axes=(self.across, self.up),
+                                        position_um=self.position_um,
+                                        angular_arcsec=self.angular_arcsec)
+        except ValueError as exc:
+            self.refused = str(exc)
+            return
         ms = (time.perf_counter() - t0) * 1e3
+        self.result = res
         with pn.io.unlocked():  # some callbacks (a text input's Enter) lack the doc's lock
             self._draw_heat(res)
             self._draw_map(dmap, pose)
         top = {o: (e, v) for o, e, v in M.top_errors(res)}
-        self.top.object = '<table class="mt-top"><tr><th>output</th><th>top error</th>' \
-            '<th>index</th></tr>' + "".join(
-                f'<tr data-role="top-error" data-output="{o}" data-error="{html.escape(top[o][0])}"'
-                f' data-index="{top[o][1]:.6f}"><td>{o}</td><td><b>{html.escape(top[o][0])}</b>'
-                f'</td><td>{top[o][1]:.4f}</td></tr>' if o in top else
+        self.top.object = '<table class="mt-top"><tr><th>output</th><th>top error (every ' \
+            'tie)</th><th>index</th></tr>' + "".join(
+                f'<tr data-role="top-error" data-output="{o}" '
+                f'data-error="{html.escape(", ".join(top[o][0]))}" '
+                f'data-ties="{len(top[o][0])}" data-index="{top[o][1]:.6f}"><td>{o}</td><td>'
+                + ", ".join(f"<b>{html.escape(e)}</b>" for e in top[o][0])
+                + (f" ({len(top[o][0])} tied)" if len(top[o][0]) > 1 else "")
+                + f'</td><td>{top[o][1]:.4f}</td></tr>' if o in top else
                 f'<tr data-role="top-error" data-output="{o}" data-error="" data-index="">'
                 f'<td>{o}</td><td colspan="2">no first-order term at this pose</td></tr>'
                 for o in res.outputs) + "</table>"
@@ -247,26 +326,58 @@ class MachineTab(param.Parameterized):
 
     @param.depends("pose")
     def _sliders(self):
-        return pn.Column(*(_prompt(pn.widgets.FloatSlider.from_param(
-            self.pose.param[a.name], width=280, css_classes=[f"pose-{a.name}"]))
-            for a in self.setup.axes))
+        """A slider and a number box per axis, the same parameter and bounds."""
+        rows = []
+        for a in self.setup.axes:
+            check = _number_check(f"axis {a.name}", a.low, a.high, unit=f" {a.unit}")
+            rows.append(pn.Row(
+                _guarded(_prompt(pn.widgets.FloatSlider.from_param(
+                    self.pose.param[a.name], width=195, css_classes=[f"pose-{a.name}"])),
+                    check, self.refuse),
+                _guarded(pn.widgets.FloatInput.from_param(
+                    self.pose.param[a.name], name="", width=85, start=a.low, end=a.high,
+                    format="0[.]00000", css_classes=[f"pose-{a.name}-input"]),
+                    check, self.refuse)))
+        return pn.Column(*rows)
+
+    def _csv(self, kind: str):
+        r = self.result
+        return M.top_errors_table(r) if kind == "top" else M.indices_table(r)
 
     def view(self):
         """The tab: controls, the top errors and the heat map, the dominant-error map."""
         p, w = self.param, pn.widgets
+
+        def choice(widget):
+            return _guarded(widget, _option_check(widget), self.refuse)
+
+        def text(value):
+            if not isinstance(value, str) or len(value) > M.MAX_TOPOLOGY_CHARS:
+                raise ValueError(f"a topology is a text of at most {M.MAX_TOPOLOGY_CHARS} "
+                                 "characters, such as 'w C b X Y Z B t'")
+            return value
+
+        ranges = [_guarded(_prompt(w.FloatSlider.from_param(p[n], width=280)), _number_check(
+            p[n].label, *M.RANGE_BOUNDS, unit=unit), self.refuse)
+            for n, unit in (("position_um", " µm"), ("angular_arcsec", " arcsec"))]
         controls = pn.Column(
-            w.Select.from_param(p.machine, width=290),
-            w.TextInput.from_param(p.topology, placeholder="w C b X Y Z B t", width=290),
-            pn.pane.HTML(p.error.rx.pipe(_error_html), width=290), self._notes,
+            choice(w.Select.from_param(p.machine, width=290)),
+            _guarded(w.TextInput.from_param(p.topology, placeholder="w C b X Y Z B t",
+                                            width=290), text, self.refuse),
+            pn.pane.HTML(p.error.rx.pipe(_error_html), width=290),
+            pn.pane.HTML(p.refused.rx.pipe(_error_html), width=290), self._notes,
             pn.pane.HTML("<b>Pose</b>"), self._sliders,
             pn.pane.HTML("<b>Error ranges</b> (uniform)"),
-            _prompt(w.FloatSlider.from_param(p.position_um, width=280)),
-            _prompt(w.FloatSlider.from_param(p.angular_arcsec, width=280)),
+            *ranges,
             _note("Each slider sets the largest half range of its group; the errors the "
                   "notebook gives smaller ranges keep their ratio to it."),
-            pn.Row(*(_prompt(w.Select.from_param(p[n], width=90))
+            pn.Row(*(choice(_prompt(w.Select.from_param(p[n], width=90)))
                      for n in ("across", "up", "output"))),
-            self.status, width=310)
+            self.status, pn.Row(
+                _csv_button("top errors (CSV)", "top_errors.csv", lambda: self._csv("top"),
+                            width=140),
+                _csv_button("indices (CSV)", "indices.csv", lambda: self._csv("indices"),
+                            width=140)), width=310)
         return pn.Row(controls, pn.Column(self.top, self.heat), pn.Column(_note(
             "Dominant error: the error with the largest closed-form index at each pose of a "
             "25 x 25 grid over the two axes chosen, the other axes at their slider values; "
@@ -283,8 +394,8 @@ _YANG, _YOURS = yang2021.Parameters, your_spindle.Parameters
 
 
 def _angle(i: int):
-    return param.Number(M.YANG_DEG[i - 1], bounds=(0.0, 359.9), step=0.1,
-                        label=f"probe {i} angle (°)")
+    return param.Number(M.YANG_DEG[i - 1], bounds=(M.ANGLE_BOUNDS[0], M.ANGLE_BOUNDS[1] - 0.1),
+                        step=0.1, label=f"probe {i} angle (°)")
 
 
 class SpindleTab(param.Parameterized):
@@ -292,13 +403,24 @@ class SpindleTab(param.Parameterized):
 
     layout = param.Selector(objects=[*_PRESETS, "custom"], label="Layout")
     probe2, probe3, probe4 = _angle(2), _angle(3), _angle(4)
-    max_harmonic = param.Integer(_YANG.param["worst_k"].default, bounds=(3, 100),
+    max_harmonic = param.Integer(_YANG.param["worst_k"].default, bounds=M.HARMONIC_BOUNDS,
                                  label="highest harmonic")
     weights = param.Selector(objects={"optimal (layout_weights)": "optimal",
                                       "Eq. 5 with a3": "eq5"}, default="optimal")
     a3 = param.Number(M.YANG_A3, bounds=_YANG.param["a3"].bounds, step=0.001, label="a3 (Eq. 5)")
-    amplified_above = param.Number(_YOURS.param["amplified_above"].default, bounds=(1.5, 20.0),
-                                   step=0.5, label="amplified when q_k above")
+    amplified_above = param.Number(_YOURS.param["amplified_above"].default,
+                                   bounds=M.AMPLIFIED_BOUNDS, step=0.5,
+                                   label="amplified when q_k above")
+    refused = param.String("", doc="why the last value sent by the page was refused")
+
+    def refuse(self, message: str) -> None:
+        """Show why a value from the page was refused ("": clear the message)."""
+        self.refused = message
+
+    def transfer(self) -> M.ProbeTransfer:
+        """The model at the controls' values (probe 1 at 0 deg); a ValueError if refused."""
+        return M.probe_transfer([0.0, self.probe2, self.probe3, self.probe4],
+                                self.max_harmonic, self.weights, self.a3, self.amplified_above)
 
     @param.depends("layout", watch=True)
     def _preset(self) -> None:
@@ -317,8 +439,7 @@ class SpindleTab(param.Parameterized):
     def plots(self):
         """The summary, ``q_k`` per harmonic and the probe directions; a bad layout: its message."""
         try:
-            t = M.probe_transfer([0.0, self.probe2, self.probe3, self.probe4],
-                                 self.max_harmonic, self.weights, self.a3, self.amplified_above)
+            t = self.transfer()
         except ValueError as exc:
             return pn.pane.HTML(_error_html(str(exc)), width=560)
         ks = t.harmonics
@@ -401,8 +522,8 @@ class SpindleTab(param.Parameterized):
             f"{listed(t.cancelled_by_weights)}.<br>Amplified (q_k &gt; {t.amplified_above:g}): "
             f"least squares {listed(t.amplified_least_squares)}; weighted "
             f"{listed(t.amplified_weighted)}.<br>Worst q_k: least squares "
-            f"{worst(t.q_least_squares)}; weighted {worst(t.q_weighted)}. Weights "
-            f"a_0..a_{phi.size - 1}: {weights}.</div>")
+            f"{worst(t.q_least_squares)}; weighted {worst(t.q_weighted)}. Weights of "
+            f"probes 1..{phi.size} (a_0..a_{phi.size - 1} in Yang et al.): {weights}.</div>")
         return pn.Row(pn.Column(pn.pane.HTML(summary, width=560), fig), pn.Column(dirs, _note(
             "q_k: how much the separation multiplies white probe noise at harmonic k (the "
             "weighted method's error transfer function, Eqs. 14, 19; least squares: the "
@@ -412,17 +533,38 @@ class SpindleTab(param.Parameterized):
     def view(self):
         """The tab: controls and the plots."""
         p, w = self.param, pn.widgets
+
+        def guard(widget, name, *, integer=False, unit=""):
+            par = p[name]
+            return _guarded(widget, _number_check(par.label, *par.bounds, unit=unit,
+                                                  integer=integer), self.refuse)
+
+        def probe(i):          # a slider and a number box, the same parameter and bounds
+            return pn.Row(
+                guard(w.FloatSlider.from_param(p[f"probe{i}"], width=195,
+                                               css_classes=[f"probe-{i}"]), f"probe{i}",
+                      unit=" deg"),
+                guard(w.FloatInput.from_param(p[f"probe{i}"], name="", width=85,
+                                              css_classes=[f"probe-{i}-input"]),
+                      f"probe{i}", unit=" deg"))
+
+        layout = w.Select.from_param(p.layout, width=290)
         return pn.Row(pn.Column(
-            w.Select.from_param(p.layout, width=290),
+            _guarded(layout, _option_check(layout), self.refuse),
+            pn.pane.HTML(p.refused.rx.pipe(_error_html), width=290),
             _note("Probe 1 sits at 0 deg: it defines the x axis."),
-            *(w.EditableFloatSlider.from_param(p[f"probe{i}"], width=280,
-                                               css_classes=[f"probe-{i}"]) for i in (2, 3, 4)),
-            w.IntSlider.from_param(p.max_harmonic, width=280),
+            *(probe(i) for i in (2, 3, 4)),
+            guard(w.IntSlider.from_param(p.max_harmonic, width=280), "max_harmonic",
+                  integer=True),
             pn.pane.HTML("<b>Weighted method</b>"),
-            w.RadioButtonGroup.from_param(p.weights, width=280),
-            w.FloatSlider.from_param(p.a3, width=280, format="0.000",
-                                     visible=p.weights.rx() == "eq5"),
-            w.FloatSlider.from_param(p.amplified_above, width=280), width=310), self.plots)
+            _guarded(w.RadioButtonGroup.from_param(p.weights, width=280), lambda v: v,
+                     self.refuse),
+            guard(w.FloatSlider.from_param(p.a3, width=280, format="0.000",
+                                           visible=p.weights.rx() == "eq5"), "a3"),
+            guard(w.FloatSlider.from_param(p.amplified_above, width=280), "amplified_above"),
+            _csv_button("harmonics (CSV)", "spindle_harmonics.csv",
+                        lambda: M.probe_table(self.transfer()), width=140),
+            width=310), self.plots)
 
 
 # -- Thermal tab -----------------------------------------------------------------------------------
@@ -438,6 +580,16 @@ class ThermalTab(param.Parameterized):
     status = param.String("", doc="what the fit is doing")
     busy = param.Boolean(False, doc="a fit runs")
     result = param.Parameter(doc="the last prediction, or the library's message")
+    refused = param.String("", doc="why the last value sent by the page was refused")
+
+    def refuse(self, message: str) -> None:
+        """Show why a value from the page was refused ("": clear the message)."""
+        self.refused = message
+
+    def _csv(self):
+        if not isinstance(self.result, M.ThermalPrediction):
+            raise ValueError("no prediction to export")
+        return M.thermal_table(self.result)
 
     def __init__(self, **params):
         super().__init__(**params)
@@ -520,14 +672,20 @@ class ThermalTab(param.Parameterized):
         """The tab: controls, status, and the prediction against the measurement."""
         p, w = self.param, pn.widgets
         source = html.escape(provenance.shown(self.data.source))
+        test = w.Select.from_param(p.test, width=140)
+
+        def accept(value):
+            return value
         return pn.Row(pn.Column(
             pn.pane.HTML("<b>Training experiments</b>"),
-            w.CheckBoxGroup.from_param(p.train, inline=True),
-            w.Select.from_param(p.test, width=140),
+            _guarded(w.CheckBoxGroup.from_param(p.train, inline=True), accept, self.refuse),
+            _guarded(test, _option_check(test), self.refuse),
+            pn.pane.HTML(p.refused.rx.pipe(_error_html), width=290),
             pn.pane.HTML("<b>Model inputs</b> (Eq. 9: k from temperatures, b from rises)"),
-            w.RadioButtonGroup.from_param(p.inputs, width=290),
+            _guarded(w.RadioButtonGroup.from_param(p.inputs, width=290), accept, self.refuse),
             pn.pane.HTML("<b>Decoupled model</b> (Xu et al. 2022, Eq. 9)"),
-            w.RadioButtonGroup.from_param(p.kind, width=290),
+            _guarded(w.RadioButtonGroup.from_param(p.kind, width=290), accept, self.refuse),
+            _csv_button("prediction (CSV)", "thermal_prediction.csv", self._csv, width=140),
             pn.Row(pn.indicators.LoadingSpinner(value=p.busy, visible=p.busy, size=22),
                    pn.pane.HTML(p.status.rx.pipe(lambda s: f'<div class="mt-note">'
                                                  f'{html.escape(s)}</div>'), width=260)),

@@ -15,10 +15,14 @@ the linear model depend only on the ratios of the variances, so the distribution
 
 from __future__ import annotations
 
+import io
+import math
+import numbers
 from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+import pandas as pd
 
 from .. import errors as _errors
 from .. import sensitivity as S
@@ -43,6 +47,55 @@ TOPOLOGY = "topology"
 GRID_STEPS = 25
 #: One arc second in rad.
 ARCSEC = _errors.UNIT_SCALE["arcsec"]
+
+# -- What a reader may set: every bound, checked on the server before any work ---------------------
+
+#: The range sliders' bounds: the largest half range of a group (um, arcsec).
+RANGE_BOUNDS = (0.1, 100.0)
+#: The highest harmonic the Spindle tab analyses (its cost grows with it: 100 takes ~10 ms).
+HARMONIC_BOUNDS = (3, 100)
+#: A probe's angle (deg), 0 included, 360 excluded (the same direction as 0).
+ANGLE_BOUNDS = (0.0, 360.0)
+#: Probes in a layout (the library needs at least 3; more is not a layout a reader types).
+MAX_PROBES = 12
+#: "amplified when q_k above".
+AMPLIFIED_BOUNDS = (1.5, 20.0)
+#: Grid points per axis of the dominant-error map.
+STEPS_BOUNDS = (2, 101)
+#: The longest topology accepted (an ISO 230-1 chain of six axes is 15 characters with spaces).
+MAX_TOPOLOGY_CHARS = 80
+#: Ties in the top-error table: closed-form indices ``J_i**2 var_i / sum_j J_j**2 var_j`` carry
+#: a relative rounding error of a few ``d`` ulp (d <= 41 errors: below 1e-14); errors entering
+#: the model identically tie exactly in exact arithmetic.  1e-9 is 1e5 times that rounding and
+#: 1e5 times below the 4 decimals shown; the absolute 1e-12 only acts near 0.
+TOP_TIE_REL, TOP_TIE_ABS = 1e-9, 1e-12
+
+
+def checked_number(value, name: str, *, low: float, high: float, unit: str = "",
+                   integer: bool = False, high_open: bool = False):
+    """``value`` as a float (int if ``integer``) in ``low..high``, else a ValueError saying why.
+
+    What every input of the explorer passes before any work: an empty box (None), text, a
+    boolean, NaN, an infinity (``1e999``), a fraction where a whole number is due, or a value
+    outside the bounds are refused with a message naming the control (``name``) and its bounds.
+    ``high_open`` excludes ``high`` itself (an angle of 360 deg).
+    """
+    span = f"{low:g} to {high:g}{unit}" + (" (excluded)" if high_open else "")
+    if value is None or (isinstance(value, str) and not value.strip()):
+        raise ValueError(f"{name} is empty: type a number from {span}")
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name} must be a number from {span}, got {value!r}")
+    v = float(value)
+    if math.isnan(v):
+        raise ValueError(f"{name} is not a number (NaN): type a number from {span}")
+    if math.isinf(v):
+        raise ValueError(f"{name} is infinite (a number too large, such as 1e999): type a "
+                         f"number from {span}")
+    if integer and v != round(v):
+        raise ValueError(f"{name} must be a whole number from {span}, got {v:g}")
+    if not low <= v <= high or (high_open and v == high):
+        raise ValueError(f"{name} = {v:g} is out of bounds: type a number from {span}")
+    return int(round(v)) if integer else v
 
 
 # -- Machines --------------------------------------------------------------------------------------
@@ -185,6 +238,9 @@ def machine_setup(key: str) -> MachineSetup:
 
 def topology_setup(topology: str) -> MachineSetup:
     """A machine typed in as a topology; one the library refuses raises its own ValueError."""
+    if not isinstance(topology, str) or len(topology) > MAX_TOPOLOGY_CHARS:
+        raise ValueError(f"a topology is a text of at most {MAX_TOPOLOGY_CHARS} characters, "
+                         f"such as 'w C b X Y Z B t'")
     m = iso_machine(topology, name="typed topology")
     half = np.array([5e-3 if e.translational else 3.0 * ARCSEC for e in m.catalogue])
     removed = f"; {len(m.removed)} redundant location errors removed" if m.removed else ""
@@ -199,16 +255,26 @@ def topology_setup(topology: str) -> MachineSetup:
 
 def error_half_ranges(setup: MachineSetup, position_um: float | None = None,
                       angular_arcsec: float | None = None) -> np.ndarray:
-    """Every error's half range (mm, rad) for the two range sliders (None: the notebook's)."""
-    pos = setup.position_um if position_um is None else float(position_um)
-    ang = setup.angular_arcsec if angular_arcsec is None else float(angular_arcsec)
+    """Every error's half range (mm, rad) for the two range sliders (None: the notebook's).
+
+    A slider value outside :data:`RANGE_BOUNDS` (or not a finite number) raises a ValueError.
+    """
+    pos, ang = (default if v is None else checked_number(v, name, low=RANGE_BOUNDS[0],
+                                                         high=RANGE_BOUNDS[1], unit=unit)
+                for v, default, name, unit in (
+                    (position_um, setup.position_um, "the position-error half range", " µm"),
+                    (angular_arcsec, setup.angular_arcsec, "the angular-error half range",
+                     " arcsec")))
     scale = np.where(setup.translational, pos / setup.position_um if setup.position_um else 0.0,
                      ang / setup.angular_arcsec if setup.angular_arcsec else 0.0)
     return setup.half_range * scale
 
 
 def pose_of(setup: MachineSetup, values: dict | None = None) -> dict:
-    """The library's pose (mm, rad, tool offsets) from slider values (missing: the start)."""
+    """The library's pose (mm, rad, tool offsets) from slider values (missing: the start).
+
+    Every value must be a finite number within its axis's range (a ValueError names the axis).
+    """
     values = dict(values or {})
     unknown = sorted(set(values) - {a.name for a in setup.axes})
     if unknown:
@@ -216,7 +282,14 @@ def pose_of(setup: MachineSetup, values: dict | None = None) -> dict:
                          f"{', '.join(a.name for a in setup.axes)}")
     pose = {}
     for a in setup.axes:
-        v = np.asarray(values.get(a.name, a.default), dtype=float)
+        v = values.get(a.name, a.default)
+        if np.ndim(v) == 0:
+            v = checked_number(v, f"axis {a.name}", low=a.low, high=a.high,
+                               unit=f" {a.unit}")
+        v = np.asarray(v, dtype=float)
+        if not np.all((v >= a.low) & (v <= a.high)):     # NaN fails too
+            raise ValueError(f"axis {a.name}: every value must lie in {a.low:g} to "
+                             f"{a.high:g} {a.unit}")
         pose[a.name] = np.deg2rad(v) if a.rotary else v
     return {**pose, **setup.tool}
 
@@ -243,10 +316,17 @@ def indices_at_pose(setup: MachineSetup, values: dict | None = None,
     return PoseIndices(idx, first, setup.names, setup.outputs)
 
 
-def top_errors(result: PoseIndices) -> list[tuple[str, str, float]]:
-    """``(output, error, index)`` of the largest index per output with a first-order term."""
-    top = np.argmax(S.merge_ties(result.indices), axis=0)  # ties: the first in the catalogue
-    return [(o, result.names[top[k]], float(result.indices[top[k], k]))
+def top_errors(result: PoseIndices) -> list[tuple[str, tuple[str, ...], float]]:
+    """``(output, errors, index)``: every error tied for the largest index, per output.
+
+    Only outputs with a first-order term.  ``errors`` holds every error whose index ties
+    (:func:`mtaccuracy.sensitivity.ties`, :data:`TOP_TIE_REL`, :data:`TOP_TIE_ABS`) with the
+    largest, in catalogue order; ``index`` is the largest (the ties' values differ by rounding).
+    """
+    idx = result.indices                                                  # (d, q)
+    best = idx.max(axis=0, initial=0.0)                                   # (q,)
+    tied = S.ties(idx, best[None, :], rtol=TOP_TIE_REL, atol=TOP_TIE_ABS)  # (d, q)
+    return [(o, tuple(result.names[i] for i in np.flatnonzero(tied[:, k])), float(best[k]))
             for k, o in enumerate(result.outputs) if result.first_order[k]]
 
 
@@ -276,6 +356,9 @@ def dominant_map(setup: MachineSetup, values: dict | None = None, axes=None,
                  steps: int = GRID_STEPS, position_um: float | None = None,
                  angular_arcsec: float | None = None) -> DominantMap:
     """The dominant error over a ``steps`` x ``steps`` grid of two axes, in one Jacobian call."""
+    steps = checked_number(steps, "the map's grid steps", low=STEPS_BOUNDS[0],
+                           high=STEPS_BOUNDS[1], integer=True)
+    pose_of(setup, values)                      # the pose's refusals, before the grid is built
     a1, a2 = axes if axes is not None else default_map_axes(setup)
     r1, r2 = setup.axis(a1), setup.axis(a2)
     u, v = np.linspace(r1.low, r1.high, steps), np.linspace(r2.low, r2.high, steps)
@@ -313,6 +396,21 @@ YANG_SAMPLES, YANG_A3 = int(_YANG["n_samples"]), float(_YANG["a3"])
 YANG_DEG = tuple(np.rad2deg(SP.probe_angles(list(YANG_POSITIONS), YANG_SAMPLES)).tolist())
 
 
+def _check_layout(deg: np.ndarray, weights: str) -> None:
+    """The library's refusals of a layout, with probes numbered from 1 as in the controls."""
+    d = np.abs((deg[:, None] - deg[None, :] + 180.0) % 360.0 - 180.0)       # (n, n) deg
+    same = np.triu(d < np.rad2deg(1e-9), k=1)                    # the library's 1e-9 rad
+    if same.any():
+        i, j = np.argwhere(same)[0]
+        raise ValueError(f"probes {i + 1} and {j + 1} are at the same angle ({deg[i]:g} and "
+                         f"{deg[j]:g} deg): move one of them")
+    if weights == "eq5" and deg.size == 4 and \
+            abs(np.sin(np.deg2rad(deg[2] - deg[1]))) < 1e-12:
+        raise ValueError("probes 2 and 3 are coincident or opposite (sin(phi_2 - phi_1) = 0 in "
+                         "Yang et al.'s Eq. 15, which numbers from 0): Eq. 5 cannot give their "
+                         "weights; move probe 3")
+
+
 @dataclass(frozen=True)
 class ProbeTransfer:
     """Per harmonic 2..K: each estimator's noise amplification ``q_k`` (inf: cancelled)."""
@@ -337,9 +435,25 @@ def probe_transfer(angles_deg, max_harmonic: int = 20, weights: str = "optimal",
     Least squares and the weighted multi-point method (Yang et al. 2021, Eqs. 14, 19) through
     :func:`mtaccuracy.spindle.probes.noise_amplification`; the weights ``"optimal"``
     (:func:`~mtaccuracy.spindle.probes.layout_weights` over the harmonics the layout keeps) or
-    ``"eq5"`` (Eq. 5 with ``a3``, four probes).  A bad layout raises the library's ValueError.
+    ``"eq5"`` (Eq. 5 with ``a3``, four probes).  Every input is checked first (angles in
+    ``[0, 360)`` deg, at most :data:`MAX_PROBES`; ``max_harmonic`` in :data:`HARMONIC_BOUNDS`;
+    ``a3``, ``amplified_above`` in their bounds); probes are numbered from 1, as in the
+    explorer's controls (probe 1 is the first angle).  A bad layout raises a ValueError.
     """
-    phi = np.deg2rad(np.asarray(angles_deg, dtype=float))
+    angles = list(np.ravel(np.asarray(angles_deg, dtype=object)))
+    if not 1 <= len(angles) <= MAX_PROBES:
+        raise ValueError(f"a layout has 3 to {MAX_PROBES} probes, got {len(angles)}")
+    deg = np.array([checked_number(a, f"probe {i + 1} angle", low=ANGLE_BOUNDS[0],
+                                   high=ANGLE_BOUNDS[1], unit=" deg", high_open=True)
+                    for i, a in enumerate(angles)])
+    max_harmonic = checked_number(max_harmonic, "the highest harmonic", low=HARMONIC_BOUNDS[0],
+                                  high=HARMONIC_BOUNDS[1], integer=True)
+    a3 = checked_number(a3, "a3 (Eq. 5)", low=yang2021.Parameters.param["a3"].bounds[0],
+                        high=yang2021.Parameters.param["a3"].bounds[1])
+    amplified_above = checked_number(amplified_above, "amplified when q_k above",
+                                     low=AMPLIFIED_BOUNDS[0], high=AMPLIFIED_BOUNDS[1])
+    _check_layout(deg, weights)
+    phi = np.deg2rad(deg)
     ks = np.arange(2, int(max_harmonic) + 1)
     cancelled = np.isin(ks, SP.layout_cancelled(phi, int(max_harmonic)))
     q_ls = SP.noise_amplification(phi, ks)
@@ -407,6 +521,12 @@ def thermal_prediction(data, *, train, test: int, inputs: str = "published", kin
     the training experiments, notebook 04's ``n_clusters`` and ``rho``); ``kind``: ``"mlr"`` or
     ``"svr"``; ``progress`` is passed to :func:`mtaccuracy.thermal.evaluate_split`.
     """
+    bad = [e for e in [*train, test] if isinstance(e, bool) or not isinstance(e, numbers.Integral)]
+    if bad:                                     # the library refuses unknown experiments
+        raise ValueError(f"an experiment is a whole number, got {bad[0]!r}")
+    if inputs not in ("published", "selected") or kind not in ("mlr", "svr"):
+        raise ValueError(f"inputs must be 'published' or 'selected' and kind 'mlr' or 'svr', "
+                         f"got {inputs!r}, {kind!r}")
     train, test = sorted({int(e) for e in train}), int(test)
     if not train or test in train:
         raise ValueError(f"the test experiment {test} is also a training experiment" if train
@@ -424,3 +544,44 @@ def thermal_prediction(data, *, train, test: int, inputs: str = "published", kin
         np.asarray(data.positions_mm, dtype=float), te.index.time_min.to_numpy(float),
         te.index.measurement.to_numpy(int), measured, predicted, float(m["rmse"]),
         float(m["max_residual"]), float(thermal.metrics(measured)["rmse"]))
+
+
+# -- The tables the explorer shows, as CSV ---------------------------------------------------------
+
+def top_errors_table(result: PoseIndices) -> pd.DataFrame:
+    """The top-error table: one row per output and tied error (``index`` repeated), as shown."""
+    rows = [(o, e, v) for o, errs, v in top_errors(result) for e in errs]
+    return pd.DataFrame(rows, columns=["output", "error", "index"])
+
+
+def indices_table(result: PoseIndices) -> pd.DataFrame:
+    """The heat map: one row per error, one column per output (empty: no first-order term)."""
+    idx = np.where(result.first_order[None, :], result.indices, np.nan)
+    return pd.DataFrame({"error": result.names,
+                         **{o: idx[:, k] for k, o in enumerate(result.outputs)}})
+
+
+def probe_table(t: ProbeTransfer) -> pd.DataFrame:
+    """The Spindle tab per harmonic: ``q_k`` of both estimators (inf: cancelled) and flags."""
+    return pd.DataFrame({
+        "k": t.harmonics, "q_least_squares": t.q_least_squares, "q_weighted": t.q_weighted,
+        "weighted_gain": t.gain_weighted, "cancelled_by_layout": t.cancelled,
+        "cancelled_by_weights": t.cancelled_by_weights,
+        "amplified_least_squares": t.amplified_least_squares,
+        "amplified_weighted": t.amplified_weighted})
+
+
+def thermal_table(r: ThermalPrediction) -> pd.DataFrame:
+    """The Thermal tab's test experiment: one row per measurement and position (um)."""
+    n, p = r.measured.shape
+    return pd.DataFrame({
+        "measurement": np.repeat(r.measurement, p), "time_min": np.repeat(r.time_min, p),
+        "position_mm": np.tile(r.positions_mm, n), "measured_um": r.measured.ravel(),
+        "predicted_um": r.predicted.ravel(), "residual_um": (r.measured - r.predicted).ravel()})
+
+
+def to_csv(frame: pd.DataFrame) -> str:
+    """``frame`` as CSV text: no index, full precision (``repr`` of each float), ``\\n`` lines."""
+    out = io.StringIO()
+    frame.to_csv(out, index=False, lineterminator="\n")
+    return out.getvalue()
