@@ -37,11 +37,11 @@ import numpy as np
 import panel as pn
 import param
 from bokeh import models as bm
-from bokeh.palettes import Category20, Plasma256, Viridis256
+from bokeh.palettes import Plasma256, Viridis256
 from bokeh.plotting import figure
 
 from ..compendium import provenance
-from ..compendium.plotting import unit_symbol
+from ..compendium.plotting import category_colours, unit_symbol
 from ..papers import xu2022, yang2021, your_spindle
 from . import explore_model as M
 
@@ -303,9 +303,10 @@ class MachineTab(param.Parameterized):
         err = dmap.error[:, :, k].ravel()
         present = np.unique(err)                               # sorted: catalogue order
         label = np.array([dmap.names[j] if j >= 0 else "no first-order term" for j in present])
-        base = Category20[20][0::2] + Category20[20][1::2]     # ten distinct hues first
-        self.map_colours.update(factors=label.tolist(), palette=([GREY] if present[0] < 0 else [])
-                                + [base[i % 20] for i in range(int((present >= 0).sum()))])
+        # the notebooks' palette (Tol's, distinguishable under deuteranopia), one place
+        colours = category_colours(present.tolist(), none=-1)
+        self.map_colours.update(factors=label.tolist(),
+                                palette=[colours[j] for j in present.tolist()])
         uu, vv = np.meshgrid(dmap.u, dmap.v, indexing="xy")
         du = (dmap.u[-1] - dmap.u[0]) / (len(dmap.u) - 1)
         dv = du if dmap.axes[0] == dmap.axes[1] else (dmap.v[-1] - dmap.v[0]) / (len(dmap.v) - 1)
