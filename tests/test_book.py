@@ -20,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from mtaccuracy.apps import book  # noqa: E402
 from mtaccuracy.compendium import provenance, scorecard, workflow  # noqa: E402
-from mtaccuracy.compendium.notebook import ROOT  # noqa: E402
+from mtaccuracy.compendium.notebook import NOTEBOOKS, ROOT  # noqa: E402
 from mtaccuracy.papers import guo2016, rong  # noqa: E402
 
 TIMEOUT_MS = 30_000
@@ -58,7 +58,9 @@ def _write_run(folder: Path, figures: dict, *, parameters=None, extra=()) -> Non
     card.to_csv(folder / "reproduction.csv", index=False, lineterminator="\n")
     for name in ("reproduction.csv", *extra):
         files[name] = {"sha256": provenance.sha256(folder / name)}
+    source = provenance.notebook_source_hash(NOTEBOOKS / f"{folder.name}.ipynb")
     provenance.write_sidecar(folder, {"run": {"notebook": folder.name,
+                                              "notebook_sha256": source,
                                               "parameters": parameters or {}},
                                       "files": files})
 
@@ -100,6 +102,7 @@ def test_figures_come_in_the_paper_modules_order_with_the_runs_captions(tmp_path
     for name, cap in guo2016.FIGURES.items():
         assert f"**{cap.label}.** Run caption of {name}: n = 500." in text
         assert f'<a href="../figures/{GUO}/{name}.svg">SVG</a>' in text
+        assert f":target: ../figures/{GUO}/{name}.png" in text     # a click enlarges it
 
 
 def test_a_figure_without_a_caption_or_a_caption_without_its_figure_is_named(tmp_path):
@@ -211,7 +214,7 @@ def test_each_chapter_lists_its_notebooks_declared_parameters():
                                      'z/xy\\|x/zy\\|zx/y\\|xz/y |')
     text = "\n".join(book.parameter_lines(rong.Parameters.stem,
                                           {"parameters": {"n_base": 4096, "seed": 2022}}))
-    assert "The run shown used `n_base=4096`, the others at their defaults." in text
+    assert "The run shown used <code>n_base=4096</code>, the others at their defaults." in text
     assert "used the defaults." in "\n".join(
         book.parameter_lines(GUO, {"parameters": guo2016.Parameters.defaults()}))
 
