@@ -428,10 +428,12 @@ def findings(index: dict, readme: Path | None = None) -> dict[str, str]:
 
 
 def key_figure(stem: str, folder: Path, bad: set[str]) -> dict | None:
-    """A chapter's key figure: the first of the paper's order that is shown (None if none)."""
-    return next((f for f in chapter_figures(stem, folder)[0]
-                 if f"{f['figure']}.png" not in bad and (folder / f"{f['figure']}.png").is_file()),
-                None)
+    """A chapter's key figure: the one its ``FIGURES`` marks ``key`` (a caption with a true
+    ``key`` attribute), else the first of the paper's order that is shown (None if none)."""
+    shown = [f for f in chapter_figures(stem, folder)[0]
+             if f"{f['figure']}.png" not in bad and (folder / f"{f['figure']}.png").is_file()]
+    keys = [n for n, c in captions(stem).items() if getattr(c, "key", False)]
+    return next((f for f in shown if f["figure"] in keys), shown[0] if shown else None)
 
 
 def findings_lines(index: dict, stems: list[str], figures: Path, broken: dict) -> list[str]:
