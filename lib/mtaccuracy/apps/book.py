@@ -23,6 +23,16 @@ broken, changed or missing output, a figure whose record has no caption, a capti
 and the command exits with status 1 (the book is still written, so the problem can be seen).
 A file the record does not list (the user's) is neither judged nor shown.
 
+Nothing shown can run script (:mod:`mtaccuracy.apps.book_safety`): every name, caption and
+card cell is escaped; an entry of a record that is not a plain file name is named, never
+opened; an executed notebook is shown only when its source is the one its run recorded, and
+its outputs (which no record covers) without any HTML but a table's.  A record that cannot be
+read (a merge conflict, ``[]``), a dangling link under ``data/`` or a place that cannot be
+written end ``make book`` in one line naming the file.  The home leads with each paper's
+finding (README.md's "What we found" lines, read, not re-typed), its key figure and its
+chapter; a figure enlarges to its PNG (its SVG beside it, both shipped in the site) and loads
+lazily.
+
 The site goes to ``build/book/html``, its source to ``build/book/src``: each built beside
 (``.html-<pid>``) and then moved in place, and only over a folder carrying this module's marker
 file.
@@ -428,8 +438,10 @@ def findings(index: dict, readme: Path | None = None) -> dict[str, str]:
 
 
 def key_figure(stem: str, folder: Path, bad: set[str]) -> dict | None:
-    """A chapter's key figure: the one its ``FIGURES`` marks ``key`` (a caption with a true
-    ``key`` attribute), else the first of the paper's order that is shown (None if none)."""
+    """A chapter's key figure (None if it shows none).
+
+    The one its ``FIGURES`` marks ``key`` (a caption with a true ``key`` attribute), else the
+    first of the paper's order that is shown."""
     shown = [f for f in chapter_figures(stem, folder)[0]
              if f"{f['figure']}.png" not in bad and (folder / f"{f['figure']}.png").is_file()]
     keys = [n for n, c in captions(stem).items() if getattr(c, "key", False)]
@@ -457,8 +469,10 @@ def findings_lines(index: dict, stems: list[str], figures: Path, broken: dict) -
 
 def home(cards: pd.DataFrame, index: dict, stems: list[str], figures: Path | None = None,
          broken: dict | None = None) -> str:
-    """The home page: the findings (README's lines, key figures), the headline, verdicts by
-    basis, the papers and the other chapters."""
+    """The home page: the findings first, then the scorecard, the papers, the other chapters.
+
+    The findings are README.md's lines (:func:`findings`) with each paper's key figure and a
+    link to its chapter; ``figures`` and ``broken`` as :func:`chapter` takes them."""
     own = [s for s in stems if s not in index]
     cards = cards.map(lambda v: html.escape(str(v), quote=False))
     papers = [f"- [{index[s]['paper']}](chapters/{s}.md): "
@@ -600,9 +614,10 @@ def write_source(src: Path, figures: Path, stems: list[str], broken: dict) -> No
 
 
 def finish_site(src: Path, site: Path) -> None:
-    """What Sphinx does not do: the figures (PNG, SVG) and tables the chapters link, copied
-    into the site under ``figures/`` (the "full size" and "SVG" links), and every image of a
-    page loaded lazily."""
+    """What Sphinx does not do: ship the files the pages link and load images lazily.
+
+    The figures (PNG, SVG) and tables the chapters link are copied into the site under
+    ``figures/`` (the "full size" and "SVG" links); every ``<img>`` gets ``loading="lazy"``."""
     if (src / "figures").is_dir():
         shutil.copytree(src / "figures", site / "figures", dirs_exist_ok=True)
     for page in site.rglob("*.html"):

@@ -20,8 +20,10 @@ from ..compendium.notebook import NOTEBOOKS
 
 
 class BookError(RuntimeError):
-    """The book cannot be built: one line naming the file (a record that cannot be read, a
-    folder that is not the build's own, a dangling link, Sphinx failed)."""
+    """The book cannot be built: one line naming the file.
+
+    A record that cannot be read, a folder that is not the build's own, a dangling link,
+    Sphinx failed."""
 
 
 def _conflict_line(text: str) -> int | None:
@@ -159,8 +161,10 @@ class _Sanitizer(HTMLParser):
 
 
 def safe_html(text: str) -> str:
-    """``text`` (HTML) with only the tags of a table, no attribute that can run script, and
-    no script or style: what the book shows of a notebook's ``text/html`` output."""
+    """What the book shows of a notebook's ``text/html`` output: a table, nothing that runs.
+
+    ``text`` rebuilt with only the tags of a table (``_TAGS``), their harmless attributes
+    (``_ATTRS``) and every text escaped; scripts, styles and any other tag dropped."""
     parser = _Sanitizer()
     parser.feed(text)
     parser.close()
@@ -200,7 +204,8 @@ _CODE_SPAN = re.compile(r"(?<![\\`])(`+)(?!`)(.+?)(?<!`)\1(?!`)")
 
 
 def md_text(text) -> str:
-    """Text from a record or a file (a caption, a finding) as Markdown that cannot carry HTML:
+    """Text from a record or a file (a caption, a finding) as Markdown that carries no HTML.
+
     ``&``, ``<`` and ``>`` escaped, its code spans written as ``<code>`` here (emphasis and
     links stay Markdown)."""
     text, out, at = str(text), [], 0
