@@ -18,9 +18,9 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from mtaccuracy.apps import book  # noqa: E402
+from mtaccuracy.apps import book, book_safety  # noqa: E402
 from mtaccuracy.compendium import provenance, scorecard, workflow  # noqa: E402
-from mtaccuracy.compendium.notebook import ROOT  # noqa: E402
+from mtaccuracy.compendium.notebook import NOTEBOOKS, ROOT  # noqa: E402
 from mtaccuracy.papers import guo2016, rong  # noqa: E402
 
 TIMEOUT_MS = 30_000
@@ -58,7 +58,9 @@ def _write_run(folder: Path, figures: dict, *, parameters=None, extra=()) -> Non
     card.to_csv(folder / "reproduction.csv", index=False, lineterminator="\n")
     for name in ("reproduction.csv", *extra):
         files[name] = {"sha256": provenance.sha256(folder / name)}
+    source = provenance.notebook_source_hash(NOTEBOOKS / f"{folder.name}.ipynb")
     provenance.write_sidecar(folder, {"run": {"notebook": folder.name,
+                                              "notebook_sha256": source,
                                               "parameters": parameters or {}},
                                       "files": files})
 
@@ -85,7 +87,7 @@ def _chapter(figures: Path, stem: str = GUO) -> tuple[str, dict]:
 
 def _why(broken: dict, figures: Path, stem: str = GUO) -> list[tuple[str, str]]:
     """The problems of a chapter: (path in its folder, why)."""
-    return [(p.relative_to(figures / stem).as_posix(), why) for p, why in broken.get(stem, [])]
+    return [(book._rel(p, figures / stem), why) for p, why in broken.get(stem, [])]
 
 
 def test_figures_come_in_the_paper_modules_order_with_the_runs_captions(tmp_path):
@@ -100,6 +102,7 @@ def test_figures_come_in_the_paper_modules_order_with_the_runs_captions(tmp_path
     for name, cap in guo2016.FIGURES.items():
         assert f"**{cap.label}.** Run caption of {name}: n = 500." in text
         assert f'<a href="../figures/{GUO}/{name}.svg">SVG</a>' in text
+        assert f":target: ../figures/{GUO}/{name}.png" in text     # a click enlarges it
 
 
 def test_a_figure_without_a_caption_or_a_caption_without_its_figure_is_named(tmp_path):
@@ -211,7 +214,7 @@ def test_each_chapter_lists_its_notebooks_declared_parameters():
                                      'z/xy\\|x/zy\\|zx/y\\|xz/y |')
     text = "\n".join(book.parameter_lines(rong.Parameters.stem,
                                           {"parameters": {"n_base": 4096, "seed": 2022}}))
-    assert "The run shown used `n_base=4096`, the others at their defaults." in text
+    assert "The run shown used <code>n_base=4096</code>, the others at their defaults." in text
     assert "used the defaults." in "\n".join(
         book.parameter_lines(GUO, {"parameters": guo2016.Parameters.defaults()}))
 
@@ -231,3 +234,194 @@ def test_units_are_written_with_their_symbols():
 
 
 # ---------------------------------------------------------------------- the whole book, once
+
+
+# ------------------------------------------------------- nothing shown can run script (issue 35)
+
+#: Names and texts a crafted record could carry: each would run script if written as HTML.
+XSS = "<img src=x onerror=alert(1)>"
+
+
+def _record_text(folder: Path) -> dict:
+    import json
+    return json.loads((folder / provenance.SIDECAR).read_text())
+
+
+def _rewrite(folder: Path, edit) -> None:
+    data = _record_text(folder)
+    edit(data)
+    provenance.write_sidecar(folder, data)
+
+
+def test_crafted_names_and_captions_are_escaped_and_never_opened(guo_folder, tmp_path):
+    folder = guo_folder / GUO
+    first = list(guo2016.FIGURES)[0]
+    secret = tmp_path / "secret.csv"
+    secret.write_text("password\n")
+    _png(folder / f"{XSS}.png")                 # a file name no page can carry
+    (folder / f"{XSS}.csv").write_text("a\n1\n")
+
+    def edit(d):
+        d["files"][first]["label"] = "Fig. <b onmouseover=alert(2)>"
+        d["files"][first]["caption"] = "See <script>alert(3)</script> and `a<b` & $x$."
+        d["files"][f"{XSS}.png"] = {"sha256": provenance.sha256(folder / f"{XSS}.png"),
+                                    "caption": "c", "label": "l"}
+        d["files"][f"{XSS}.csv"] = {"sha256": provenance.sha256(folder / f"{XSS}.csv")}
+        d["files"]["<script>alert(4)</script>.csv"] = {"sha256": "0"}   # a path: has a '/'
+        d["files"]["../../secret.csv"] = {"sha256": provenance.sha256(secret)}
+    _rewrite(folder, lambda d: d["files"].update({first: d["files"].pop(f"{first}.png")}))
+    _rewrite(folder, edit)
+    _rewrite(folder, lambda d: d["files"].update({f"{first}.png": d["files"].pop(first)}))
+    text, broken = _chapter(guo_folder)
+    page = "\n".join(li for li in text.splitlines() if not li.startswith(":alt: "))
+    page = re.sub(r"```\{raw\} html\n.*?```", "", page, flags=re.S)  # the scorecard's own
+    for raw in ("<script", "<img", "<b ", "onerror=alert(1)>"):   # the writer escapes :alt:
+        assert raw not in page, raw
+    assert "&lt;script&gt;alert(3)&lt;/script&gt;" in text and "<code>a&lt;b</code>" in text
+    assert "**Fig. &lt;b onmouseover=alert(2)&gt;.**" in text
+    whys = [why for _, why in _why(broken, guo_folder)]
+    assert any("'../../secret.csv', which is not a file name" in w for w in whys)
+    assert any("'<script>alert(4)</script>.csv', which is not a file name" in w for w in whys)
+    assert any(f"the figure '{XSS}.png', whose name a page cannot show" in w for w in whys)
+    assert "secret" not in text.split("## Tables")[-1]
+    # the escaped table link of the crafted (but plain-file) CSV
+    assert "&lt;img src=x onerror=alert(1)&gt;.csv</a>" in text
+    assert "%3Cimg%20src%3Dx%20onerror%3Dalert%281%29%3E.csv" in text
+
+
+def test_a_conflicted_or_malformed_record_ends_make_book_in_one_line(tmp_path, capsys):
+    figures = tmp_path / "figures"
+    _write_run(figures / GUO, _guo_figures())
+    side = figures / GUO / provenance.SIDECAR
+    good = side.read_text()
+    lines = good.splitlines()
+    side.write_text("\n".join([*lines[:3], "<<<<<<< HEAD", *lines[3:5], "=======",
+                               *lines[3:5], ">>>>>>> other", *lines[5:]]) + "\n")
+    out = tmp_path / "out"
+    for text, says in [(None, "line 4 is a merge-conflict marker"),
+                       ("[]", "not a run's record"), ('{"files": []}', "not a run's record"),
+                       ('{"files": {"a.png": 3}}', "not a run's record"),
+                       ("{", "not JSON")]:
+        if text is not None:
+            side.write_text(text)
+        assert book.main(["--figures", str(figures), "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith(f"error: {side}: {says}"), err
+        assert "resolve it, or run make reproduce again" in err
+    assert not out.exists() or not any(out.iterdir())     # nothing built
+
+
+def test_a_dangling_link_and_an_unwritable_place_are_one_line(tmp_path, monkeypatch, capsys):
+    data = tmp_path / "data"
+    (data / "ranges").mkdir(parents=True)
+    (data / "ranges" / "gone.csv").symlink_to(tmp_path / "nowhere.csv")
+    with pytest.raises(book.BookError, match=r"gone\.csv is a link to .*nowhere\.csv, which "
+                                             r"does not exist"):
+        book.dangling_links(data)
+    (tmp_path / "nowhere.csv").write_text("x\n")
+    book.dangling_links(data)                                        # now sound
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    assert book.main(["--figures", str(tmp_path), "--out", str(blocker / "book")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"error: {blocker}"), err
+
+    def read_only(*a, **k):
+        raise OSError(30, "Read-only file system", str(tmp_path / "build"))
+    monkeypatch.setattr(book, "build", read_only)
+    assert book.main([]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"error: {tmp_path / 'build'}: Read-only file system; build elsewhere with "
+                   "--out DIR\n")
+
+
+def test_notebook_outputs_are_sanitised_and_an_edited_notebook_is_not_shown(tmp_path):
+    import json
+
+    frame = pd.DataFrame({"error": ["EXX", "<b>EYY</b>"], "S_T": [0.5, 0.25]})
+    clean = book_safety.safe_html(frame._repr_html_())
+    for cell in ("EXX", "&lt;b&gt;EYY&lt;/b&gt;", "0.50", "0.25", "<table", "<td>", "<th>"):
+        assert cell in clean, cell
+    crafted = ('<table onmouseover="alert(1)"><tr><td>1<script>alert(2)</script></td>'
+               '<td><img src=x onerror=alert(3)><a href="javascript:alert(4)">x</a></td></tr>'
+               '</table><style>body{display:none}</style><svg onload=alert(5)><text>t</text>'
+               '</svg>')
+    assert book_safety.safe_html(crafted) == "<table><tr><td>1</td><td>x</td></tr></table>"
+    nb_path = NOTEBOOKS / f"{GUO}.ipynb"
+    nb = json.loads(nb_path.read_text())
+    code_cell = next(c for c in nb["cells"] if c["cell_type"] == "code")
+    code_cell["outputs"] = [{"output_type": "display_data", "metadata": {}, "data": {
+        "text/html": crafted, "text/plain": "t", "application/javascript": "alert(6)",
+        "image/svg+xml": "<svg onload=alert(7)/>", "text/markdown": "<script>8</script>"}}]
+    edited = tmp_path / nb_path.name
+    edited.write_text(json.dumps(nb))
+    side = {"run": {"notebook_sha256": provenance.notebook_source_hash(nb_path)}}
+    assert book.notebook_problems(GUO, side, notebook=edited) == []   # outputs are not hashed
+    shown = book.safe_notebook(edited, [])
+    out = next(c for c in shown["cells"] if c["cell_type"] == "code")["outputs"][0]["data"]
+    assert out == {"text/plain": "t", "text/html": book_safety.safe_html(crafted)}
+    # a markdown cell edited after the run: the notebook is not shown at all
+    md = next(c for c in nb["cells"] if c["cell_type"] == "markdown")
+    md["source"] = "# Title\n<script>alert(9)</script>"
+    edited.write_text(json.dumps(nb))
+    problems = book.notebook_problems(GUO, side, notebook=edited)
+    assert [w for _, w in problems] == ["does not match the notebook_sha256 in provenance.json "
+                                        "(edited after its run)"]
+    page = json.dumps(book.safe_notebook(edited, problems))
+    assert "alert" not in page and "Not shown" in page
+    assert [w for _, w in book.notebook_problems(GUO, {}, notebook=edited)] == [
+        "has no run recorded in provenance.json"]
+
+
+def test_the_chapter_of_an_edited_notebook_shows_no_conclusion(tmp_path):
+    figures = tmp_path / "figures"
+    _write_run(figures / GUO, _guo_figures())
+    _rewrite(figures / GUO, lambda d: d["run"].update(notebook_sha256="0" * 64))
+    text, broken = _chapter(figures)
+    assert [n for n, _ in _why(broken, figures)] == [f"notebooks/{GUO}.ipynb"]
+    assert "## What we conclude" not in text and f"<code>notebooks/{GUO}.ipynb</code>" in text
+
+
+# ---------------------------------------------------------------------- findings first
+
+def test_the_findings_are_read_from_the_readme_not_retyped(tmp_path):
+    index = scorecard.papers_index()
+    found = book.findings(index)
+    readme = (ROOT / "README.md").read_text().splitlines()
+    assert sorted(found) == sorted(PAPERS)
+    for stem, line in found.items():
+        assert f"- {line}" in readme and line.startswith(index[stem]["paper"])
+    own = tmp_path / "README.md"
+    own.write_text("# x\n\n**What we found**, lines:\n\n- Guo et al. 2016: A <b>.\n"
+                   "- Nobody: nothing.\n\n- Rong et al.: after the blank line.\n")
+    assert book.findings(index, own) == {GUO: "Guo et al. 2016: A <b>."}
+    own.write_text("# no findings here\n")
+    assert book.findings(index, own) == {}
+
+
+def test_the_home_leads_with_each_papers_finding_figure_and_chapter(guo_folder, monkeypatch):
+    monkeypatch.setattr(book, "findings", lambda index: {GUO: "Guo: `x<y` is <b>false</b>."})
+    cards = scorecard.collect(guo_folder)
+    text = book.home(cards, scorecard.papers_index(), STEMS, guo_folder, {})
+    found, card = text.index("## What we found"), text.index("## The scorecard")
+    assert found < card and text.index("## Verdicts by basis") > card
+    guo = text[text.index(f"### [Guo et al. 2016](chapters/{GUO}.md)"):card]
+    assert "Guo: <code>x&lt;y</code> is &lt;b&gt;false&lt;/b&gt;." in guo
+    first = list(guo2016.FIGURES)[0]
+    assert f"```{{figure}} figures/{GUO}/{first}.png\n" in guo
+    assert f":target: figures/{GUO}/{first}.png" in guo
+    assert f"(chapters/{GUO}.md)" in guo.split("```")[-1]
+    for stem in PAPERS:                      # every paper, with or without its outputs
+        assert f"(chapters/{stem}.md)" in text[found:card]
+
+
+def test_the_site_gets_the_linked_files_and_lazy_images(tmp_path):
+    src, site = tmp_path / "src", tmp_path / "site"
+    (src / "figures" / GUO).mkdir(parents=True)
+    (src / "figures" / GUO / "a.svg").write_text("<svg/>")
+    (site / "chapters").mkdir(parents=True)
+    page = site / "chapters" / "x.html"
+    page.write_text('<img src="a.png"><img loading="eager" src="b.png">')
+    book.finish_site(src, site)
+    assert (site / "figures" / GUO / "a.svg").read_text() == "<svg/>"
+    assert page.read_text() == '<img loading="lazy" src="a.png"><img loading="eager" src="b.png">'

@@ -237,3 +237,56 @@ def test_math_is_typeset_offline(built, browser):
         assert _no_sideways_scroll(page) <= 0
     assert not problems, problems
 
+
+
+# ------------------------------------------------------------ links, figures, findings (issue 35)
+
+def _local_links(page: Path) -> list[str]:
+    """The links and sources of a page that stay in the site (no scheme, no bare fragment)."""
+    return [u for u in re.findall(r'(?:href|src)="([^"]+)"', _text(page))
+            if not re.match(r"[a-z][a-z0-9+.-]*:|#|//", u)]
+
+
+def test_no_link_of_any_page_is_a_404(built):
+    from urllib.parse import unquote
+
+    site, missing = built[0], []
+    pages = [p for p in site.rglob("*.html") if "_static" not in p.parts]
+    for page in pages:
+        for u in _local_links(page):
+            target = unquote(u.split("#")[0].split("?")[0])
+            if target and not (page.parent / target).exists():
+                missing.append(f"{page.relative_to(site)} -> {u}")
+    assert not missing, "\n".join(missing[:20])
+    svgs = [u for p in pages for u in _local_links(p) if u.endswith(".svg")]
+    assert len(svgs) >= 40                       # the SVG links are there, and resolve
+
+
+def test_every_figure_loads_lazily_and_enlarges_to_its_file(built):
+    site = built[0]
+    for stem in STEMS:
+        page = _text(site / "chapters" / f"{stem}.html")
+        imgs = re.findall(r"<img [^>]*>", page)
+        assert imgs and all('loading="lazy"' in i for i in imgs), stem
+        for name in book.captions(stem):
+            link = f'href="../figures/{stem}/{name}.png"><img '
+            assert link in page, (stem, name)
+            assert (site / "figures" / stem / f"{name}.png").is_file()
+
+
+def test_the_home_leads_with_the_five_findings_their_figures_and_chapters(built):
+    site = built[0]
+    page = _text(site / "index.html")
+    article = page[page.index('<article class="bd-article">'):]
+    found = article[article.index('id="what-we-found"'):article.index('id="the-scorecard"')]
+    sections = found.split("<h3>")[1:]
+    assert len(sections) == len(PAPERS) == 5
+    lines = book.findings(scorecard.papers_index())
+    for stem, part in zip(PAPERS, sections, strict=True):
+        assert f'href="chapters/{stem}.html"' in part
+        said = re.sub(r"\s", "", _visible(re.sub(r"\[([^\]]*)\]\([^)]*\)", r"\1",
+                                                  lines[stem])))
+        shown = re.sub(r"\s", "", _visible(part))
+        assert said in shown, stem
+        img = re.search(r'<a [^>]*href="(figures/[^"]+\.png)"><img [^>]*class="key-figure"', part)
+        assert img and (site / img.group(1)).is_file(), stem

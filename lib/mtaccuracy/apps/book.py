@@ -23,6 +23,16 @@ broken, changed or missing output, a figure whose record has no caption, a capti
 and the command exits with status 1 (the book is still written, so the problem can be seen).
 A file the record does not list (the user's) is neither judged nor shown.
 
+Nothing shown can run script (:mod:`mtaccuracy.apps.book_safety`): every name, caption and
+card cell is escaped; an entry of a record that is not a plain file name is named, never
+opened; an executed notebook is shown only when its source is the one its run recorded, and
+its outputs (which no record covers) without any HTML but a table's.  A record that cannot be
+read (a merge conflict, ``[]``), a dangling link under ``data/`` or a place that cannot be
+written end ``make book`` in one line naming the file.  The home leads with each paper's
+finding (README.md's "What we found" lines, read, not re-typed), its key figure and its
+chapter; a figure enlarges to its PNG (its SVG beside it, both shipped in the site) and loads
+lazily.
+
 The site goes to ``build/book/html``, its source to ``build/book/src``: each built beside
 (``.html-<pid>``) and then moved in place, and only over a folder carrying this module's marker
 file.
@@ -34,6 +44,7 @@ checks of the outputs against their provenance run without them.
 from __future__ import annotations
 
 import argparse
+import errno
 import html
 import json
 import math
@@ -44,6 +55,7 @@ import shutil
 import sys
 import time
 from pathlib import Path
+from urllib.parse import quote
 
 import pandas as pd
 
@@ -53,6 +65,16 @@ from ..compendium import provenance, reproduction, scorecard, workflow
 from ..compendium.notebook import FIGURES, NOTEBOOKS, ROOT
 from ..compendium.plotting import unit_symbol
 from ..papers.parameters import literal, type_name
+from .book_safety import (
+    BookError,
+    code,
+    dangling_links,
+    md_text,
+    notebook_problems,
+    plain_name,
+    record,
+    safe_notebook,
+)
 
 BOOK = ROOT / "book"
 BUILD = ROOT / "build" / "book"
@@ -65,10 +87,6 @@ CARD_COLUMNS = ["item", "quantity", "published", "reproduced", "tolerance", "ver
 SWEEP = "sweep"
 #: Library modules left out of the reference (paper code, the workflow, the apps: no API).
 _NOT_API = ("mtaccuracy.compendium", "mtaccuracy.papers", "mtaccuracy.apps")
-
-
-class BookError(RuntimeError):
-    """The book cannot be built (a folder that is not the build's own, Sphinx failed)."""
 
 
 def stems() -> list[str]:
@@ -91,7 +109,7 @@ def chapter_figures(stem: str, folder: Path, side: dict | None = None
     of the paper module's ``FIGURES``, then any other in the run's order; the problems, a PNG
     whose record has no caption and a caption in ``FIGURES`` whose figure the run did not write
     (``side``: the folder's record, read when not given)."""
-    side = provenance.read(folder) if side is None else side
+    side = record(folder)[0] if side is None else side
     pngs = {n[:-4]: e for n, e in side.get("files", {}).items() if n.endswith(".png")}
     order = list(captions(stem))
     where = f"{workflow.declaration(stem).__module__}.FIGURES"
@@ -102,6 +120,11 @@ def chapter_figures(stem: str, folder: Path, side: dict | None = None
     shown = []
     for name in [*(n for n in order if n in pngs), *others]:
         entry = pngs[name]
+        if not plain_name(f"{name}.png"):
+            problems.append((folder / provenance.SIDECAR,
+                             f"lists the figure {name + '.png'!r}, whose name a page cannot "
+                             "show (letters, digits, '.', '_' and '-' only)"))
+            continue
         if not str(entry.get("caption") or "").strip():
             problems.append((folder / f"{name}.png",
                              f"has no caption in {provenance.SIDECAR} (its run recorded none)"))
@@ -113,7 +136,7 @@ def chapter_figures(stem: str, folder: Path, side: dict | None = None
 
 def sweep_record(folder: Path, stem: str) -> dict:
     """The ``provenance.json`` of ``make sweep``'s tables in ``folder/sweep`` ({} if none)."""
-    side = provenance.read(folder / SWEEP)
+    side = record(folder / SWEEP)[0]
     ok = (side.get("run", {}).get("notebook") == f"{stem} (sweep)"
           and "verdict_stability.csv" in side.get("files", {}))
     return side if ok else {}
@@ -124,10 +147,12 @@ def check(figures: Path, stems: list[str]) -> dict[str, list[tuple[Path, str]]]:
     out: dict[str, list] = {}
     for stem in stems:
         folder = figures / stem
-        found = provenance.folder_problems(folder) + chapter_figures(stem, folder)[1]
+        side, found = record(folder)
+        found += provenance.folder_problems(folder, side) + chapter_figures(stem, folder, side)[1]
+        found += notebook_problems(stem, side)
         sweep = sweep_record(folder, stem)
         if sweep:
-            found += provenance.folder_problems(folder / SWEEP, sweep)
+            found += record(folder / SWEEP)[1] + provenance.folder_problems(folder / SWEEP, sweep)
         if found:
             out[stem] = found
     return out
@@ -203,19 +228,39 @@ def _label_css() -> str:
 
 
 def _fig_alt(label: str, caption: str) -> str:
+    """A figure's alternative text (the writer escapes it as an attribute)."""
     first = re.split(r"(?<=\.)\s+(?=[A-Z])", caption.strip(), maxsplit=1)[0]
-    return f"{label}: {first}".replace('"', "'").replace("\n", " ")
+    return " ".join(f"{label}: {first}".replace('"', "'").replace("`", "").split())
+
+
+def _rel(path: Path, folder: Path) -> str:
+    """``path`` as the book names it: in ``folder``, else in the repository."""
+    for base in (folder, ROOT):
+        try:
+            return Path(path).relative_to(base).as_posix()
+        except ValueError:
+            pass
+    return Path(path).name
+
+
+def _bad(stem: str, folder: Path, broken: dict) -> set[str]:
+    """The names (in ``folder``) of the outputs of ``stem`` with a problem."""
+    return {_rel(p, folder) for p, _ in broken.get(stem, [])}
 
 
 def _provenance_details(png: Path) -> str:
-    rec = provenance.from_png(png) or {}
-    if not rec:
+    try:
+        rec = provenance.from_png(png) or {}
+    except (OSError, ValueError):
+        rec = {}
+    if not isinstance(rec, dict) or not rec:
         return ""
-    params = ", ".join(f"{k}={v}" for k, v in rec.get("parameters", {}).items())
-    inputs = "".join(f"<li><code>{html.escape(k)}</code> sha256 {html.escape(v[:16])}…</li>"
-                     for k, v in rec.get("inputs", {}).items())
+    params = ", ".join(f"{k}={v}" for k, v in dict(rec.get("parameters") or {}).items())
+    inputs = "".join(f"<li><code>{html.escape(str(k))}</code> sha256 "
+                     f"{html.escape(str(v)[:16])}…</li>"
+                     for k, v in dict(rec.get("inputs") or {}).items())
     return ("<details class=\"provenance\"><summary>provenance</summary><ul>"
-            f"<li>notebook <code>{html.escape(rec.get('notebook', ''))}</code>, source sha256 "
+            f"<li>notebook <code>{html.escape(str(rec.get('notebook', '')))}</code>, source sha256 "
             f"<code>{html.escape(str(rec.get('notebook_sha256', ''))[:16])}…</code></li>"
             f"<li>library sha256 "
             f"<code>{html.escape(str(rec.get('library_sha256', ''))[:16])}…</code></li>"
@@ -223,8 +268,11 @@ def _provenance_details(png: Path) -> str:
             "</ul></details>")
 
 
-def _cell(text) -> str:
-    return str(text).replace("|", "\\|").replace("\n", " ")
+def _cell(text, *, escape: bool = True) -> str:
+    """A Markdown table cell's text: escaped (no HTML of its own; ``escape=False`` for a
+    literal of the declarations, shown as code), ``|`` and newlines kept from ending it."""
+    text = html.escape(str(text), quote=False) if escape else str(text)
+    return text.replace("|", "\\|").replace("\n", " ")
 
 
 def parameter_lines(stem: str, run: dict | None = None) -> list[str]:
@@ -238,13 +286,14 @@ def parameter_lines(stem: str, run: dict | None = None) -> list[str]:
             "| --- | --- | --- | --- | --- |"]
     for n in decl.names():
         p = decl.param[n]
-        rows.append(f"| `{n}` | `{_cell(literal(p.default))}` | {type_name(p)} | "
+        rows.append(f"| `{n}` | `{_cell(literal(p.default), escape=False)}` | {type_name(p)} | "
                     f"{_cell(decl.allowed(n))} | {_cell(p.doc)} |")
     given = (run or {}).get("parameters", {})
+    given = given if isinstance(given, dict) else {}
     changed = {k: v for k, v in given.items() if k in decl.names() and v != decl.param[k].default}
     used = "" if not given else ("The run shown used the defaults." if not changed else
                                  "The run shown used " + ", ".join(
-                                     f"`{k}={literal(v)}`" for k, v in changed.items())
+                                     code(f"{k}={literal(v)}") for k, v in changed.items())
                                  + ", the others at their defaults.")
     module = decl.__module__
     return ["## Parameters", "",
@@ -263,7 +312,9 @@ def sweep_lines(stem: str, folder: Path, bad: set[str]) -> list[str]:
             or not (folder / SWEEP / "verdict_stability.csv").is_file():
         return []
     runs = side["run"].get("runs", {})
-    seeds = sorted({g.get("seed") for g in runs.values()} - {None})
+    runs = {k: g for k, g in runs.items() if isinstance(g, dict)} if isinstance(runs, dict) \
+        else {}
+    seeds = sorted({g.get("seed") for g in runs.values()} - {None}, key=str)
     settings = sorted({json.dumps({k: v for k, v in g.items() if k != "seed"}, sort_keys=True)
                        for g in runs.values()})
     table = pd.read_csv(folder / SWEEP / "verdict_stability.csv", dtype=str,
@@ -276,6 +327,7 @@ def sweep_lines(stem: str, folder: Path, bad: set[str]) -> list[str]:
     links = ", ".join(f"[{n}](../figures/{stem}/{SWEEP}/{n})"
                       for n in ("verdict_stability.csv", "values.csv")
                       if (folder / SWEEP / n).is_file() and f"{SWEEP}/{n}" not in bad)
+    span = html.escape(span, quote=False)
     lines = ["### Over seeds", "",
              f"`make sweep NB={stem[:2]}` re-ran the notebook over {len(seeds)} seed"
              f"{'s' if len(seeds) != 1 else ''}{span}{where} and scored every run "
@@ -284,7 +336,7 @@ def sweep_lines(stem: str, folder: Path, bad: set[str]) -> list[str]:
                 if len(moving) else f"no row's verdict changes with the seed ({len(table)} "
                 f"rows).") + (f" Tables: {links}." if links else ""), ""]
     if len(moving):
-        lines += ["| " + " | ".join([*keys, *reproduction.VERDICTS]) + " |",
+        lines += ["| " + " | ".join(_cell(k) for k in [*keys, *reproduction.VERDICTS]) + " |",
                   "| " + " | ".join(["---"] * len(keys) + ["---:"] * len(counts)) + " |"]
         lines += ["| " + " | ".join(_cell(r[c]) for c in [*keys, *counts]) + " |"
                   for _, r in moving.iterrows()]
@@ -294,10 +346,12 @@ def sweep_lines(stem: str, folder: Path, bad: set[str]) -> list[str]:
 
 def chapter(stem: str, figures: Path, index: dict, broken: dict) -> str:
     """One notebook's chapter (MyST Markdown), written into ``<src>/chapters/``."""
-    parts = notebook_parts(NOTEBOOKS / f"{stem}.ipynb")
     paper = index.get(stem, {})
     folder = figures / stem
-    side = provenance.read(folder)
+    side = record(folder)[0]
+    bad = _bad(stem, folder, broken)
+    parts = ({"title": stem, "conclusion": ""} if f"notebooks/{stem}.ipynb" in bad
+             else notebook_parts(NOTEBOOKS / f"{stem}.ipynb"))
     lines = [f"# {parts['title']}", ""]
     if paper:
         doi = paper.get("doi", "")
@@ -306,11 +360,10 @@ def chapter(stem: str, figures: Path, index: dict, broken: dict) -> str:
                   + (f"DOI: [{doi}](https://doi.org/{doi})" if doi else "It has no DOI."), ""]
     lines += [f"**Notebook.** [the executed notebook](../notebooks/{stem}.ipynb), "
               f"`notebooks/{stem}.ipynb`; its tables are in `figures/{stem}/`.", ""]
-    bad = {p.relative_to(folder).as_posix() for p, _ in broken.get(stem, [])}
     for path, why in broken.get(stem, []):
-        name = path.relative_to(folder).as_posix()
-        again = "sweep" if name.startswith(f"{SWEEP}/") else "reproduce"
-        lines += [f'<p class="broken"><strong>Not shown:</strong> <code>{stem}/{name}</code> '
+        name = _rel(path, figures)
+        again = "sweep" if name.startswith(f"{stem}/{SWEEP}/") else "reproduce"
+        lines += [f'<p class="broken"><strong>Not shown:</strong> {code(name)} '
                   f"{html.escape(why)}; run <code>make {again} NB={stem[:2]}</code> again.</p>",
                   ""]
     if parts["conclusion"]:
@@ -322,15 +375,17 @@ def chapter(stem: str, figures: Path, index: dict, broken: dict) -> str:
         lines += ["## Figures", ""]
     for f in figs:
         png = folder / f"{f['figure']}.png"
-        lines += [f"```{{figure}} ../figures/{stem}/{png.name}",
-                  f":alt: {_fig_alt(f['label'], f['caption'])}",
-                  f":name: {stem[:2]}-{f['figure']}", "",
-                  f"**{f['label']}.** {f['caption']}", "```", ""]
+        url = f"../figures/{stem}/{quote(png.name)}"
+        lines += [f"```{{figure}} {url}", f":alt: {_fig_alt(f['label'], f['caption'])}",
+                  f":name: {stem[:2]}-{re.sub(r'[^A-Za-z0-9_-]', '-', f['figure'])}",
+                  f":target: {url}", "",
+                  f"**{md_text(f['label'])}.** {md_text(f['caption'])}", "```", ""]
         svg = png.with_suffix(".svg")
-        link = (f'<a href="../figures/{stem}/{svg.name}">SVG</a>'
-                if svg.is_file() and svg.name in side.get("files", {}) and svg.name not in bad
-                else "")
-        lines += [f"{link} {_provenance_details(png)}", ""]
+        links = [f'<a href="{html.escape(url)}">full size</a>']
+        if svg.is_file() and svg.name in side.get("files", {}) and svg.name not in bad:
+            links.append(f'<a href="../figures/{stem}/{html.escape(quote(svg.name))}">SVG</a>')
+        lines += [f'<span class="figure-links">{" · ".join(links)}</span> '
+                  f"{_provenance_details(png)}", ""]
     if (folder / "reproduction.csv").is_file() and "reproduction.csv" not in bad:
         cards = pd.read_csv(folder / "reproduction.csv", dtype=str, keep_default_na=False)
         counts = cards["verdict"].value_counts()
@@ -347,13 +402,79 @@ def chapter(stem: str, figures: Path, index: dict, broken: dict) -> str:
                     and (folder / n).is_file())
     if tables:
         lines += ["## Tables", "", "Every table the notebook wrote (CSV): "
-                  + ", ".join(f"[{t}](../figures/{stem}/{t})" for t in tables) + ".", ""]
+                  + ", ".join(f'<a href="../figures/{stem}/{html.escape(quote(t))}">'
+                              f"{html.escape(t)}</a>" for t in tables) + ".", ""]
     return "\n".join(lines)
 
 
-def home(cards: pd.DataFrame, index: dict, stems: list[str]) -> str:
-    """The home page: the headline, verdicts by basis, the papers and the other chapters."""
+#: The line of README.md under which the papers' one-line findings follow.
+FINDINGS = "**What we found**"
+
+
+def findings(index: dict, readme: Path | None = None) -> dict[str, str]:
+    """Each paper's one-line finding, as README.md gives it: notebook stem -> the line.
+
+    The lines are the list that follows the line starting with :data:`FINDINGS`, up to the
+    next blank line; a line belongs to the paper whose name (``index``'s ``paper``) starts it.
+    A paper without a line is left out (the home then shows its chapter without one)."""
+    readme = Path(readme or ROOT / "README.md")
+    try:
+        lines = readme.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):
+        return {}
+    start = next((k for k, li in enumerate(lines) if li.startswith(FINDINGS)), None)
+    if start is None:
+        return {}
+    rest = lines[start + 1:]
+    while rest and not rest[0].strip():
+        rest = rest[1:]
+    block = rest[:next((k for k, li in enumerate(rest) if not li.strip()), len(rest))]
+    out = {}
+    for stem, row in index.items():
+        line = next((li for li in block if li.lstrip("-* ").startswith(row["paper"])), None)
+        if line:
+            out[stem] = line.lstrip("-* ").strip()
+    return out
+
+
+def key_figure(stem: str, folder: Path, bad: set[str]) -> dict | None:
+    """A chapter's key figure (None if it shows none).
+
+    The one its ``FIGURES`` marks ``key`` (a caption with a true ``key`` attribute), else the
+    first of the paper's order that is shown."""
+    shown = [f for f in chapter_figures(stem, folder)[0]
+             if f"{f['figure']}.png" not in bad and (folder / f"{f['figure']}.png").is_file()]
+    keys = [n for n, c in captions(stem).items() if getattr(c, "key", False)]
+    return next((f for f in shown if f["figure"] in keys), shown[0] if shown else None)
+
+
+def findings_lines(index: dict, stems: list[str], figures: Path, broken: dict) -> list[str]:
+    """The home's "What we found": per paper its README line, its key figure and a link."""
+    found = findings(index)
+    lines = ["## What we found", ""]
+    for stem in (s for s in stems if s in index):
+        folder = figures / stem
+        lines += [f"### [{md_text(index[stem]['paper'])}](chapters/{stem}.md)", "",
+                  md_text(found.get(stem, "")), ""]
+        fig = key_figure(stem, folder, _bad(stem, folder, broken))
+        if fig:
+            url = f"figures/{stem}/{quote(fig['figure'])}.png"
+            lines += [f"```{{figure}} {url}", f":alt: {_fig_alt(fig['label'], fig['caption'])}",
+                      f":target: {url}", ":class: key-figure", "",
+                      f"**{md_text(fig['label'])}.** {md_text(fig['caption'])}", "```", ""]
+        lines += [f"[Read the chapter: the figures, the conclusion and every scored row]"
+                  f"(chapters/{stem}.md)", ""]
+    return lines
+
+
+def home(cards: pd.DataFrame, index: dict, stems: list[str], figures: Path | None = None,
+         broken: dict | None = None) -> str:
+    """The home page: the findings first, then the scorecard, the papers, the other chapters.
+
+    The findings are README.md's lines (:func:`findings`) with each paper's key figure and a
+    link to its chapter; ``figures`` and ``broken`` as :func:`chapter` takes them."""
     own = [s for s in stems if s not in index]
+    cards = cards.map(lambda v: html.escape(str(v), quote=False))
     papers = [f"- [{index[s]['paper']}](chapters/{s}.md): "
               + notebook_parts(NOTEBOOKS / f"{s}.ipynb")["title"].split(": ", 1)[-1]
               + (f" ([doi:{d}](https://doi.org/{d}))" if (d := index[s].get("doi")) else
@@ -365,6 +486,8 @@ def home(cards: pd.DataFrame, index: dict, stems: list[str]) -> str:
         "re-computed by one notebook from its equations, every printed number scored against "
         "what the code gives, with a verdict and the basis of that verdict. Everything here is "
         "regenerated by `make reproduce`; this book shows what is committed.", "",
+        *findings_lines(index, stems, Path(figures or FIGURES), broken or {}),
+        "## The scorecard", "",
         scorecard.headline(cards), "",
         "## Verdicts by basis", "",
         scorecard.crosstab_markdown(reproduction.crosstab(cards)),
@@ -465,25 +588,43 @@ def write_source(src: Path, figures: Path, stems: list[str], broken: dict) -> No
         shutil.copy(Path(itables.__file__).parent / "html" / name, static / "itables" / name)
     index = scorecard.papers_index()
     cards = scorecard.collect(figures)
-    (src / "index.md").write_text(home(cards, index, stems), encoding="utf-8")
+    (src / "index.md").write_text(home(cards, index, stems, figures, broken), encoding="utf-8")
     (src / "scorecard.md").write_text(scorecard_page(cards), encoding="utf-8")
     for kind in ("chapters", "notebooks", "api"):
         (src / kind).mkdir()
     for stem in stems:
         (src / "chapters" / f"{stem}.md").write_text(chapter(stem, figures, index, broken),
                                                      encoding="utf-8")
-        shutil.copy(NOTEBOOKS / f"{stem}.ipynb", src / "notebooks" / f"{stem}.ipynb")
+        nb = safe_notebook(NOTEBOOKS / f"{stem}.ipynb", [
+            (p, w) for p, w in broken.get(stem, []) if p == NOTEBOOKS / f"{stem}.ipynb"])
+        (src / "notebooks" / f"{stem}.ipynb").write_text(json.dumps(nb, indent=1),
+                                                         encoding="utf-8")
     for name, text in api_pages().items():
         (src / "api" / f"{name}.md").write_text(text, encoding="utf-8")
     # the outputs the pages show or link (a broken one neither), and the data the notebooks link
     for stem in stems:
         folder = figures / stem
-        bad = {p.relative_to(folder).as_posix() for p, _ in broken.get(stem, [])}
-        _copy_outputs(folder, provenance.read(folder), src / "figures" / stem, bad)
+        bad = _bad(stem, folder, broken)
+        _copy_outputs(folder, record(folder)[0], src / "figures" / stem, bad)
         sweep = sweep_record(folder, stem)
         if sweep:
             _copy_outputs(folder / SWEEP, sweep, src / "figures" / stem / SWEEP, bad, f"{SWEEP}/")
+    dangling_links(ROOT / "data")
     shutil.copytree(ROOT / "data", src / "data")
+
+
+def finish_site(src: Path, site: Path) -> None:
+    """What Sphinx does not do: ship the files the pages link and load images lazily.
+
+    The figures (PNG, SVG) and tables the chapters link are copied into the site under
+    ``figures/`` (the "full size" and "SVG" links); every ``<img>`` gets ``loading="lazy"``."""
+    if (src / "figures").is_dir():
+        shutil.copytree(src / "figures", site / "figures", dirs_exist_ok=True)
+    for page in site.rglob("*.html"):
+        text = page.read_text(encoding="utf-8")
+        lazy = re.sub(r"<img (?![^>]*\bloading=)", '<img loading="lazy" ', text)
+        if lazy != text:
+            page.write_text(lazy, encoding="utf-8")
 
 
 def build(out: Path = BUILD, figures: Path | None = None, *, quiet: bool = True
@@ -516,6 +657,7 @@ def build(out: Path = BUILD, figures: Path | None = None, *, quiet: bool = True
         if code:
             raise BookError(f"sphinx-build failed (exit status {code}); run "
                             f"{sys.executable} -m sphinx {' '.join(args)} to see why")
+        finish_site(src, site)
         _replace(src, src_final)
         _replace(site, html_final)
     finally:
@@ -540,6 +682,12 @@ def main(argv=None) -> int:
         site, broken, warnings = build(args.out, args.figures, quiet=not args.verbose)
     except (BookError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a read-only checkout, a full disk: the file, not a traceback
+        where = exc.filename or args.out
+        fix = ("; build elsewhere with --out DIR" if exc.errno in (errno.EACCES, errno.EPERM,
+                                                                   errno.EROFS) else "")
+        print(f"error: {where}: {exc.strerror or exc}{fix}", file=sys.stderr)
         return 2
     for found in broken.values():
         for path, why in found:
