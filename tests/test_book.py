@@ -425,3 +425,16 @@ def test_the_site_gets_the_linked_files_and_lazy_images(tmp_path):
     book.finish_site(src, site)
     assert (site / "figures" / GUO / "a.svg").read_text() == "<svg/>"
     assert page.read_text() == '<img loading="lazy" src="a.png"><img loading="eager" src="b.png">'
+
+
+@pytest.mark.parametrize("stem", ["01_zheng2024_pce_sobol_41_errors", "02_rong_sobol_21_errors",
+                                  "03_guo2016_spearman_21_errors", "04_xu2022_thermal_mlr_svr",
+                                  "05_yang2021_spindle_four_point_ga"])
+def test_each_paper_marks_one_key_figure_that_its_run_writes(stem):
+    """The home shows each paper's finding beside its key figure: one caption says so, and the
+    committed run wrote that figure."""
+    keys = [name for name, c in book.captions(stem).items() if c.key]
+    assert len(keys) == 1, keys
+    assert (ROOT / "figures" / stem / f"{keys[0]}.png").is_file()
+    fig = book.key_figure(stem, ROOT / "figures" / stem, set())
+    assert fig is not None and fig["figure"] == keys[0]

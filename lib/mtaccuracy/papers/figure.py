@@ -22,16 +22,19 @@ class Caption:
     rows : tuple of str
         Patterns (:mod:`fnmatch`, on a scorecard row's ``item`` or ``"item: quantity"``) of the
         rows that score what the figure shows, where its name is not their item.
+    key : bool
+        The chapter's key figure: the one the book's home shows beside the paper's finding.
     """
 
     name: str
     label: str
     text: str
     rows: tuple[str, ...] = ()
+    key: bool = False
 
     def format(self, **values) -> Caption:
         """The caption with its ``{fields}`` filled."""
-        return Caption(self.name, self.label, self.text.format(**values), self.rows)
+        return Caption(self.name, self.label, self.text.format(**values), self.rows, self.key)
 
 
 def figures(*captions: Caption) -> dict[str, Caption]:

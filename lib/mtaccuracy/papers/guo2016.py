@@ -572,7 +572,7 @@ FIG3 = Caption(
     "at {pose}: a pose the paper does not state, the best fit of the pose search of this "
     "chapter. Rows naming errors with no first-order effect are scored against 0 (any pose), "
     "and unreachable values against the closest value over the searched poses, not at this "
-    "pose.")
+    "pose.", key=True)
 
 
 def spearman_bars_figure(fig3: pd.DataFrame, pub: pd.DataFrame, *, outputs, n_samples: int,

@@ -282,7 +282,7 @@ RANGE_BRACKET = Caption(
     "{n_key_pub} dashed and the {n_kept_by_rate} implied by the published {rate_pub:g} % dotted. "
     "Right: max |residual| / max |full model| (%), with the paper's {residual_pub:g} / "
     "{full_pub:g} mm dashed and its text's {residual_pct} % dotted. Only the two ends are "
-    "sourced.")
+    "sourced.", key=True)
 
 
 def range_bracket_figure(path, *, outputs, n_key_pub: int, n_kept_by_rate: int, rate_pub: float,

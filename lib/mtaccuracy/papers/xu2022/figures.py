@@ -93,7 +93,7 @@ FIG17 = Caption(
     "and predicted (dashed), and the residual, {svr_lo} to {svr_hi} µm, against position. RMSE "
     "{svr_rmse} µm{svr_paper}, against {mlr_rmse} µm{mlr_paper} for the decoupled MLR of "
     "Fig. 15. {data}",
-    rows=("Table 8", "Section 3.2: decoupled_svr*", "Section 5"))
+    rows=("Table 8", "Section 3.2: decoupled_svr*", "Section 5"), key=True)
 
 
 def kb_figure(measurement, measured_kb, predicted_kb, *, title: str, colour):

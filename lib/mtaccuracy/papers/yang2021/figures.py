@@ -350,7 +350,7 @@ FIGURES = figures(
             "printed H at k = {table1_k} (diamonds) and the paper's Fig. 10 range {low} to "
             "{high} (shaded). The best known H exceeds 1/4 by more than 4 % only at k = {above}; "
             "the printed H furthest above ours is at k = {k_gap}: {printed_gap} against "
-            "{ours_gap:.3f}."),
+            "{ours_gap:.3f}.", key=True),
     Caption("fig11_angles_vs_harmonic", "Fig. 11",
             "The probe angles φ1, φ2, φ3 (rad) of the best improved-GA run at each k = 2 to "
             "{k_max}, reported as the canonical member of the layouts with equal H, beside Table "

@@ -174,7 +174,7 @@ FIGURES = figures(
             "(dashed, from 10 base samples); dotted: the exact index. Bottom: fluctuation R "
             "(Eq. 24) given to the larger size, with the paper's 3 % criterion dashed. R at 1e3 "
             "(the step that ends there) is {r_base} read as base samples and {r_runs} read as "
-            "model runs; the paper reports above 10 %."),
+            "model runs; the paper reports above 10 %.", key=True),
     Caption("pce_benchmarks", "Beyond the paper",
             "Sparse PCE on benchmark functions with exact Sobol indices, not the machine model. "
             "(a) Ishigami, n = {n_ishigami}: exact total indices, recovered by a Legendre PCE "
