@@ -27,6 +27,8 @@ suppress_warnings = ["myst.header", "mystnb.unknown_mime_type", "misc.highlighti
 # the library's reference
 autodoc_member_order = "bysource"
 autodoc_typehints = "none"
+# long signatures one parameter per line, so that API pages do not scroll sideways on a phone
+maximum_signature_line_length = 60
 numpydoc_show_class_members = False
 numpydoc_validation_checks = set()
 
