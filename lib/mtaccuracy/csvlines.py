@@ -21,6 +21,11 @@ import re
 from collections.abc import Iterator
 from typing import NamedTuple
 
+#: The longest field the csv module reads (characters, ``csv.field_size_limit()``: 131072):
+#: past it :func:`records` raises a :class:`CSVLineError` at the field's line.  The readers
+#: quote this one value in their messages.
+FIELD_LIMIT = csv.field_size_limit()
+
 
 class Record(NamedTuple):
     """One CSV record and where it stands.

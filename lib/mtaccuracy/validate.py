@@ -119,8 +119,16 @@ def rng(seed) -> np.random.Generator:
 
 
 class FileRefused(ValueError):
-    """A path that is not a readable regular file within its reader's size (:func:`file_bytes`);
-    ``str()`` is the problem alone, for the reader to put after its file's name."""
+    """A path that is not a readable regular file within its reader's size (:func:`file_bytes`).
+
+    ``str()`` is the problem alone, for the reader to put after its file's name; ``reason``
+    says which (``"missing"``, ``"not a file"``, ``"too large"``, ``"unreadable"``) and
+    ``size`` the file's size in bytes when it is known to be too large, so that a reader adds
+    its own hint by the reason, never by the wording."""
+
+    def __init__(self, problem: str, *, reason: str, size: int | None = None):
+        super().__init__(problem)
+        self.reason, self.size = reason, size
 
 
 _KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
@@ -166,24 +174,26 @@ def file_bytes(path, *, max_bytes: int) -> bytes:
     try:
         st = os.stat(path)
     except FileNotFoundError:
-        raise FileRefused("file not found") from None
+        raise FileRefused("file not found", reason="missing") from None
     except (OSError, ValueError) as exc:          # a dangling link loop, a NUL in the path
-        raise FileRefused(f"cannot be read ({exc.strerror if isinstance(exc, OSError) else exc})"
-                          ) from None
+        raise FileRefused(f"cannot be read ({exc.strerror if isinstance(exc, OSError) else exc})",
+                          reason="unreadable") from None
     kind = _kind(st.st_mode)
     if kind is not None:
-        raise FileRefused(f"is {kind}, not a regular file")
+        raise FileRefused(f"is {kind}, not a regular file", reason="not a file")
     if st.st_size > max_bytes:
-        raise FileRefused(f"{st.st_size} bytes; files up to {max_bytes} bytes are read")
+        raise FileRefused(f"{st.st_size} bytes; files up to {max_bytes} bytes are read",
+                          reason="too large", size=st.st_size)
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     except OSError as exc:
-        raise FileRefused(f"cannot be read ({exc.strerror})") from None
+        raise FileRefused(f"cannot be read ({exc.strerror})", reason="unreadable") from None
     with os.fdopen(fd, "rb") as handle:
         kind = _kind(os.fstat(fd).st_mode)
         if kind is not None:
-            raise FileRefused(f"is {kind}, not a regular file")
+            raise FileRefused(f"is {kind}, not a regular file", reason="not a file")
         raw = handle.read(max_bytes + 1)
     if len(raw) > max_bytes:
-        raise FileRefused(f"more than {max_bytes} bytes; files up to {max_bytes} bytes are read")
+        raise FileRefused(f"more than {max_bytes} bytes; files up to {max_bytes} bytes are read",
+                          reason="too large")
     return raw

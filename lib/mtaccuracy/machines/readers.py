@@ -10,9 +10,7 @@ with their ranges in the units a reader writes (notebook 06).
 
 from __future__ import annotations
 
-import os
 import re
-import stat
 import warnings
 from dataclasses import dataclass
 
@@ -102,19 +100,15 @@ def _read_csv(path, columns, what, max_rows=None, optional=()) -> _Table:
     (their values are then empty strings)."""
     path = str(path)
     max_rows = MAX_TABLE_ROWS if max_rows is None else max_rows
-    try:
-        st = os.stat(path)
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{what} {path!r} not found") from None
-    except (OSError, ValueError):
-        st = None                                   # validate.file_bytes names the reason
-    if st is not None and stat.S_ISREG(st.st_mode) and st.st_size > MAX_TABLE_BYTES:
-        raise ValueError(f"{what} {path!r} is {st.st_size} bytes, more than the "
-                         f"{MAX_TABLE_BYTES} bytes allowed; it should hold a few dozen rows (is "
-                         f"it the right file?)")
     try:        # a directory, FIFO, device or a link to one: refused before a byte is read
         raw = validate.file_bytes(path, max_bytes=MAX_TABLE_BYTES)
     except validate.FileRefused as exc:
+        if exc.reason == "missing":
+            raise FileNotFoundError(f"{what} {path!r} not found") from None
+        if exc.size is not None:
+            raise ValueError(f"{what} {path!r} is {exc.size} bytes, more than the "
+                             f"{MAX_TABLE_BYTES} bytes allowed; it should hold a few dozen rows "
+                             f"(is it the right file?)") from None
         raise ValueError(f"{what} {path!r}: {exc}") from None
     try:
         text = raw.decode("utf-8-sig")

@@ -33,8 +33,10 @@ from .probedata import (
     _check_layout,
     _check_values,
     _probe_columns,
-    _show_number,
     probe_column,
+)
+from .probedata import (
+    _show_number as _show,
 )
 from .probes import MIN_SAMPLES
 from .separation import TWO_PI
@@ -75,11 +77,6 @@ def _text(raw: bytes) -> str:
     return raw.decode("utf-8-sig")
 
 
-def _show(v) -> str:
-    """A number as parsed, shortest round-trip: never rounded into another value."""
-    return _show_number(v)
-
-
 def _records(text: str, sep: str):
     """The records of a file's text with their lines (:func:`mtaccuracy.csvlines.records`,
     ``#`` comments dropped), the header first, the fields as the file has them (swapped back in
@@ -94,13 +91,10 @@ def _csv_refusal(path, exc: csvlines.CSVLineError) -> ProbeFileError:
     """A record the csv module cannot read, named at its line."""
     if "field limit" in exc.reason:
         return ProbeFileError(path, exc.line, (
-            f"a field of more than {_FIELD_LIMIT} characters (the csv module's limit): no "
+            f"a field of more than {csvlines.FIELD_LIMIT} characters (the csv module's limit): no "
             f"value of a probe file is that long; a line without its line ends, or not a CSV "
             f"file?"))
     return ProbeFileError(path, exc.line, exc.reason)
-
-
-_FIELD_LIMIT = 131072
 
 
 class _Lines:
@@ -473,8 +467,8 @@ def read_probe_file(path, *, max_harmonic: int | None = None, allow_cancelled: b
     except validate.FileRefused as exc:
         hint = (" (the probe file: revolution, angle_deg, probe_<angle>_um columns, or time_s, "
                 "index or encoder_deg, probe_<angle>_um; see data/spindle/README.md)"
-                if str(exc) == "file not found" else
-                f" ({MAX_ROWS} rows of 16 probes take less)" if "bytes" in str(exc) else "")
+                if exc.reason == "missing" else
+                f" ({MAX_ROWS} rows of 16 probes take less)" if exc.reason == "too large" else "")
         raise ProbeFileError(path, None, f"{exc}{hint}") from None
     try:
         head = raw.decode("utf-8-sig")[:_HEAD_CHARS]

@@ -30,7 +30,6 @@ Every function here is private to the thermal readers (:mod:`~mtaccuracy.thermal
 
 from __future__ import annotations
 
-import csv
 import io
 import re
 import warnings
@@ -47,7 +46,7 @@ __all__: list[str] = []
 #: The longest physical line read (characters): the csv module's field limit
 #: (``csv.field_size_limit()``, 131072), beyond which its scanner cannot name a line.  A line of
 #: the schema at its limits (100 sensors of long names, numbers) holds a few thousand.
-MAX_LINE_CHARS = csv.field_size_limit()
+MAX_LINE_CHARS = csvlines.FIELD_LIMIT
 #: The largest whole number read as an experiment or measurement number (as written; beyond
 #: it a number is refused, never wrapped round): 9 digits.
 MAX_WHOLE = 999_999_999
@@ -84,8 +83,9 @@ def _file_bytes(path: Path) -> bytes:
         return validate.file_bytes(path, max_bytes=MAX_FILE_BYTES)
     except validate.FileRefused as exc:
         fix = (" (the schema needs temperatures.csv and errors.csv, or a lab export; see "
-               "data/thermal/README.md)" if str(exc) == "file not found" else
-               " (the size limits of the schema need far less)" if "bytes" in str(exc) else "")
+               "data/thermal/README.md)" if exc.reason == "missing" else
+               " (the size limits of the schema need far less)" if exc.reason == "too large"
+               else "")
         raise _problem(path, f"{exc}{fix}") from None
 
 
