@@ -11,7 +11,7 @@ LIB = Path(mtaccuracy.__file__).parent
 MACHINERY = {"papers", "compendium", "apps"}   # paper code, the workflow, the apps
 SCIENCE = ["validate.py", "kinematics.py", "errors.py", "roundness.py", "csvlines.py",
            "machines",
-           "sensitivity", "spindle", "optimise", "thermal"]
+           "sensitivity", "spindle", "optimise", "thermal", "measure"]
 
 
 def _imports(path: Path) -> set[str]:
@@ -150,11 +150,12 @@ def test_no_import_cycles():
 #: package.  validate (the argument checks) imports nothing of mtaccuracy; csvlines,
 #: roundness and optimise import nothing but validate (leaf tools:
 #: spindle builds on roundness and optimise, machines, spindle and thermal on csvlines);
-#: sensitivity, thermal and spindle do not import one another.  Then the paper code, the
+#: sensitivity, thermal and spindle do not import one another; measure (the tests as models)
+#: builds on machines and them.  Then the paper code, the
 #: workflow (compendium) and the apps, each of which may import anything below it.
 LAYERS = [{"validate"}, {"csvlines", "roundness", "optimise"}, {"kinematics"}, {"errors"},
           {"machines"},
-          {"sensitivity", "thermal", "spindle"}, {"papers"}, {"compendium"}, {"apps"}]
+          {"sensitivity", "thermal", "spindle"}, {"measure"}, {"papers"}, {"compendium"}, {"apps"}]
 LAYER = {pkg: k for k, layer in enumerate(LAYERS) for pkg in layer}
 
 #: Imports against the direction that exist today, ``(importer, imported): statements``.
