@@ -7,6 +7,8 @@ the library's reference comes from its numpydoc docstrings, and every script the
 the book itself, so it reads offline.
 """
 
+from mtaccuracy.apps import book
+
 project = "mtaccuracy"
 author = "The mtaccuracy team"
 copyright = "the mtaccuracy team; text and figures CC-BY-4.0, code MIT"
@@ -48,12 +50,19 @@ mathjax2_config = {
 html_theme = "sphinx_book_theme"
 html_title = "mtaccuracy"
 html_static_path = ["_static"]
-html_css_files = ["mtaccuracy.css", "scorecard.css"]
+html_css_files = ["mtaccuracy.css"]
 html_last_updated_fmt = None
 html_context = {"default_mode": "light"}
 html_copy_source = False
 html_show_sourcelink = False
+# the repository is named once, in CITATION.cff (the Binder launch button of the notebook
+# pages follows it; the repository links are in the pages' text: the header's button would load
+# a 110 kB icon font for one icon)
 html_theme_options = {
+    "repository_url": book.repository(),
+    "repository_branch": "HEAD",
+    "path_to_docs": "",
+    "launch_buttons": {"binderhub_url": "https://mybinder.org", "notebook_interface": "jupyterlab"},
     "show_toc_level": 2,
     "home_page_in_toc": True,
     "use_download_button": False,

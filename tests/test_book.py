@@ -408,8 +408,8 @@ def test_the_home_leads_with_each_papers_finding_figure_and_chapter(guo_folder, 
     guo = text[text.index(f"### [Guo et al. 2016](chapters/{GUO}.md)"):card]
     assert "Guo: <code>x&lt;y</code> is &lt;b&gt;false&lt;/b&gt;." in guo
     first = list(guo2016.FIGURES)[0]
-    assert f"```{{figure}} figures/{GUO}/{first}.png\n" in guo
-    assert f":target: figures/{GUO}/{first}.png" in guo
+    assert f"```{{figure}} {book.preview_name(GUO, first)}\n" in guo   # a light preview ...
+    assert f":target: figures/{GUO}/{first}.png" in guo           # ... that enlarges
     assert f"(chapters/{GUO}.md)" in guo.split("```")[-1]
     for stem in PAPERS:                      # every paper, with or without its outputs
         assert f"(chapters/{stem}.md)" in text[found:card]
@@ -422,9 +422,66 @@ def test_the_site_gets_the_linked_files_and_lazy_images(tmp_path):
     (site / "chapters").mkdir(parents=True)
     page = site / "chapters" / "x.html"
     page.write_text('<img src="a.png"><img loading="eager" src="b.png">')
+    (src / "notebooks").mkdir()
+    (src / "notebooks" / "n.ipynb").write_text("{}")
+    (site / "notebooks").mkdir()
+    heavy = ('<script src="../searchindex.js"></script>\n<script defer src="../_static/scripts/'
+             'fontawesome.js?digest=9"></script>\n')
+    (site / "search.html").write_text('<script src="searchindex.js"></script>')
+    (site / "_static" / "scripts").mkdir(parents=True)
+    for name in ("fontawesome.js", "fontawesome.js.map", "bootstrap.js.map", "bootstrap.js"):
+        (site / "_static" / "scripts" / name).write_text("x")
+    page.write_text(heavy + '<img src="a.png"><img loading="eager" src="b.png">')
     book.finish_site(src, site)
     assert (site / "figures" / GUO / "a.svg").read_text() == "<svg/>"
+    assert (site / "notebooks" / "n.ipynb").read_text() == "{}"        # the download links'
     assert page.read_text() == '<img loading="lazy" src="a.png"><img loading="eager" src="b.png">'
+    assert (site / "search.html").read_text() == '<script src="searchindex.js"></script>'
+    assert sorted(f.name for f in (site / "_static" / "scripts").iterdir()) == ["bootstrap.js"]
+
+
+def _cards(rows):
+    cols = ["paper", "item", "quantity", "published", "reproduced", "unit", "tolerance",
+            "verdict", "basis", "kind", "agreement", "note"]
+    return pd.DataFrame([dict(zip(cols, r, strict=True)) for r in rows], dtype=str)
+
+
+def _row(verdict, kind="number", basis="internal"):
+    return ["P", "T1", "q", "1", "1", "um", "0.5", verdict, basis, kind, "printed", ""]
+
+
+@pytest.mark.parametrize("verdicts, label", [
+    (["reproduced", "close", "not reproducible"], "[Re]"),
+    (["reproduced", "differs"], "[~Re]"),
+    (["differs", "not reproducible"], "[¬Re]"),
+    (["not reproducible"], "[¬Re]"),
+])
+def test_a_papers_outcome_counts_its_printed_numbers_only(verdicts, label):
+    claims = [_row("differs", kind="claim")] * 3           # a claim never moves the label
+    got, said = scorecard.outcome(_cards([_row(v) for v in verdicts] + claims))
+    assert got == label
+    assert said.startswith(f"{len(verdicts)} printed numbers scored: "
+                           f"{verdicts.count('reproduced')} reproduced (0 independently)")
+
+
+def test_the_scorecard_is_a_static_table_every_row_escaped_and_labelled():
+    cards = _cards([_row("differs"), ["P<script>", "T<2>", "a & b", "", "3", "um", "x",
+                                      "reproduced", "independent", "number", "printed", "n"]])
+    out = book.scorecard_html(cards, "card-x", "../_static/itables/dt_bundle.js")
+    assert out.count("<tr>") == 3 and "data_json" not in out         # header + the two rows
+    assert "<td data-label=\"item\">T&lt;2&gt;</td>" in out and "<script>\"" not in out
+    assert '<td data-label="reproduced">3 µm</td>' in out and 'data-label="paper"' not in out
+    assert 'import DataTable from "../_static/itables/dt_bundle.js"' in out
+    assert '<link rel="stylesheet" href="../_static/itables/dt_bundle.css">' in out
+
+
+def test_a_key_figures_preview_is_light_and_at_most_the_preview_width(guo_folder, tmp_path):
+    from PIL import Image
+
+    book.write_previews(tmp_path, guo_folder, [GUO], {})
+    first = list(guo2016.FIGURES)[0]
+    with Image.open(tmp_path / book.preview_name(GUO, first)) as im:
+        assert im.mode == "P" and im.width <= book.PREVIEW_WIDTH
 
 
 @pytest.mark.parametrize("stem", ["01_zheng2024_pce_sobol_41_errors", "02_rong_sobol_21_errors",

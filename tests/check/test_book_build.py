@@ -11,7 +11,6 @@ request elsewhere fails the test).  Screenshots go to ``.test-output/book/``.
 import contextlib
 import functools
 import html
-import json
 import os
 import re
 import threading
@@ -93,7 +92,8 @@ def test_each_chapter_opens_with_its_paper_and_conclusion_and_shows_its_figures(
     first_words = re.sub(r"[*`$]", "", conclusion.split("\n")[0])[2:40].strip()
     assert first_words and first_words in _visible(article)
     shown = [re.sub(r"\d*$", "", s) if s not in book.captions(stem) else s
-             for s in re.findall(r'src="\.\./_images/([^"]+)\.png"', page)]
+             for s in re.findall(r'src="\.\./_images/([^"]+)\.png"', page)
+             if not s.endswith("-preview")]                 # the opening's key figure
     assert shown == list(book.captions(stem))
     recorded = book.chapter_figures(stem, figures / stem)[0]
     for f in recorded:
@@ -101,8 +101,10 @@ def test_each_chapter_opens_with_its_paper_and_conclusion_and_shows_its_figures(
 
 
 def _rows(page: str) -> list[list[str]]:
-    """The rows a DataTables table of the page is given (itables' ``data_json``)."""
-    return json.loads(json.loads(re.search(r'"data_json": ("(?:[^"\\]|\\.)*")', page).group(1)))
+    """The rows of the page's scorecard (a static table: every row is in the HTML)."""
+    body = re.search(r'<table id="card-[^"]+"[^>]*>.*?<tbody>(.*?)</tbody>', page, re.S).group(1)
+    return [re.findall(r"<td[^>]*>(.*?)</td>", tr, re.S)
+            for tr in re.findall(r"<tr>(.*?)</tr>", body, re.S)]
 
 
 def test_every_scorecard_row_is_in_the_book(built):
@@ -290,3 +292,69 @@ def test_the_home_leads_with_the_five_findings_their_figures_and_chapters(built)
         assert said in shown, stem
         img = re.search(r'<a [^>]*href="(figures/[^"]+\.png)"><img [^>]*class="key-figure"', part)
         assert img and (site / img.group(1)).is_file(), stem
+
+
+# ------------------------------------------------ the scorecard from disk, page weight, 400 px
+
+def test_the_scorecard_reads_from_disk_without_a_server(built, browser):
+    site, problems = built[0], []
+    with _page(browser, WIDTHS["phone"], problems) as page:
+        page.route("**/*", lambda r: r.continue_())          # file:// only here
+        page.goto((site / "scorecard.html").as_uri())
+        rows = page.locator("#card-all tbody tr")
+        assert rows.count() == len(scorecard.collect(built[3]))
+        card = rows.first.bounding_box()
+        assert card["width"] > 300                         # a card as wide as the phone
+        assert "verdict:" in rows.first.inner_text()        # each line labelled
+        assert _no_sideways_scroll(page) <= 0
+
+
+def _first_load_bytes(page, url: str) -> int:
+    sizes = {}
+
+    def got(r):
+        with contextlib.suppress(Exception):
+            sizes[r.url] = len(r.body())
+
+    page.on("response", got)
+    page.goto(url, wait_until="networkidle")
+    page.remove_listener("response", got)
+    return sum(sizes.values())
+
+
+def test_pages_are_light_and_none_scrolls_sideways_at_400_px(built, browser):
+    """The home under 1 MB and no page over 3 MB on first load (uncompressed, as served from
+    disk); no page wider than a 400 px phone, the API pages included."""
+    site, problems = built[0], []
+    pages = ["index.html", "scorecard.html", *(f"chapters/{s}.html" for s in STEMS),
+             *(f"notebooks/{s}.html" for s in STEMS),
+             *sorted(p.relative_to(site).as_posix() for p in (site / "api").glob("*.html"))]
+    heavy, wide = [], []
+    with _serve(site) as url:
+        with _page(browser, WIDTHS["desktop"], problems) as page:
+            for name in pages[:2 + 2 * len(STEMS)]:
+                size = _first_load_bytes(page, url + name)
+                if size > (1e6 if name == "index.html" else 3e6):
+                    heavy.append(f"{name}: {size / 1e6:.2f} MB")
+        with _page(browser, WIDTHS["phone"], problems) as page:
+            for name in pages:
+                page.goto(url + name, wait_until="domcontentloaded")
+                if (over := _no_sideways_scroll(page)) > 0:
+                    wide.append(f"{name}: {over} px")
+    assert not heavy and not wide, (heavy, wide)
+    assert not problems, problems[:5]
+
+
+def test_a_figure_enlarges_to_its_full_png(built, browser):
+    site, problems = built[0], []
+    stem = PAPERS[0]
+    with _serve(site) as url, _page(browser, WIDTHS["phone"], problems) as page:
+        page.goto(url + f"chapters/{stem}.html")
+        first = page.locator("figure a.image-reference").first
+        shown = first.locator("img").evaluate("i => i.getBoundingClientRect().width")
+        first.click()
+        page.wait_for_load_state()
+        assert page.url.endswith(".png") and f"/figures/{stem}/" in page.url
+        full = page.evaluate("document.images[0].naturalWidth")
+        assert full > 2 * shown                      # the file is larger than what was shown
+    assert not problems, problems

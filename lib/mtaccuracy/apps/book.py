@@ -89,6 +89,27 @@ SWEEP = "sweep"
 _NOT_API = ("mtaccuracy.compendium", "mtaccuracy.papers", "mtaccuracy.apps")
 
 
+def repository() -> str:
+    """The repository's URL: ``CITATION.cff``'s ``repository-code``, the one place it is set.
+
+    The book's repository, source and Binder links follow it (they work once the repository is
+    published there, as the README says)."""
+    import yaml
+
+    cff = yaml.safe_load((ROOT / "CITATION.cff").read_text(encoding="utf-8"))
+    url = str(cff.get("repository-code", "")).rstrip("/")
+    if not re.fullmatch(r"https://github\.com/[\w.-]+/[\w.-]+", url):
+        raise BookError(f"{ROOT / 'CITATION.cff'}: repository-code {url!r} is not a GitHub "
+                        "repository URL (https://github.com/<owner>/<name>)")
+    return url
+
+
+def binder_url(path: str) -> str:
+    """Binder's launch link of a file of the repository (JupyterLab at that file)."""
+    owner_name = repository().removeprefix("https://github.com/")
+    return f"https://mybinder.org/v2/gh/{owner_name}/HEAD?urlpath=lab/tree/{quote(path)}"
+
+
 def stems() -> list[str]:
     """Every notebook, in notebook order (the workflow's declarations)."""
     return [c.stem for c in workflow.DECLARATIONS]
@@ -181,50 +202,46 @@ def _verdict_html(v: str) -> str:
 
 
 def scorecard_html(cards: pd.DataFrame, table_id: str, dt_url: str,
-                   columns: list[str] | None = None) -> str:
-    """A scorecard as a DataTables table (sorts by any column, filters by the search box).
+                   columns: list[str] | None = None, *, wide: str = "full-width") -> str:
+    """A scorecard as a static HTML table that DataTables enhances where it can load.
 
-    Its script is loaded from ``dt_url`` (inside the book)."""
-    import itables
-
+    Every row is in the page's HTML, so the table reads from a file (``file://``, where a
+    browser refuses the module script) and without script; served, DataTables (``dt_url``,
+    itables' bundle inside the book, its default export) adds sorting, the search box and
+    pages.  Each cell carries its column's name (``data-label``): on a phone a row is a card
+    of labelled lines (``mtaccuracy.css``).  On a wide screen it takes the right margin too:
+    ``wide="full-width"``, the theme's class, which hides a page's contents sidebar while the
+    table is in view; ``"wide"`` on a page without that sidebar (the theme's script fails on
+    ``full-width`` there)."""
     cols = columns or CARD_COLUMNS
-    df = cards.copy()
-    for c in ("published", "reproduced"):  # the unit with the number it belongs to
-        df[c] = [f"{v} {unit_symbol(u)}".strip() if v else ""
-                 for v, u in zip(df[c], df["unit"], strict=True)]
-    df = df[cols]
-    df["verdict"] = df["verdict"].map(_verdict_html)
-    for c in cols:
-        if c != "verdict":
-            df[c] = df[c].astype(str).map(html.escape)
-    table = itables.to_html_datatable(
-        df, connected=True, dt_url=dt_url, table_id=table_id, allow_html=True,
-        showIndex=False, autoWidth=False, pageLength=25, lengthMenu=[10, 25, 100, -1],
-        classes="display compact", display_logo_when_loading=False,
-        style="table-layout:fixed;width:100%;margin:auto;caption-side:bottom")
-    return f'<div class="scorecard cols-{len(cols)}">\n{table}\n</div>'
+    total = sum(_WIDTHS[c] for c in cols)
+    head = "".join(f'<th style="width:{100 * _WIDTHS[c] / total:.1f}%">{html.escape(c)}</th>'
+                   for c in cols)
+    body = []
+    for _, r in cards.iterrows():
+        cells = []
+        for c in cols:
+            v = str(r[c])
+            if c in ("published", "reproduced") and v:   # the unit with its number
+                v = f"{v} {unit_symbol(r['unit'])}".strip()
+            shown = _verdict_html(v) if c == "verdict" else html.escape(v)
+            cells.append(f'<td data-label="{html.escape(c)}">{shown}</td>')
+        body.append(f"<tr>{''.join(cells)}</tr>")
+    script = ('<script type="module">\n'
+              f'import DataTable from "{html.escape(dt_url)}";\n'
+              f'new DataTable("#{table_id}", {{autoWidth: false, pageLength: 25, '
+              "lengthMenu: [10, 25, 100, -1], order: []});\n</script>")
+    css = html.escape(dt_url.removesuffix(".js") + ".css")
+    return (f'<link rel="stylesheet" href="{css}">\n'
+            f'<div class="scorecard {wide} cols-{len(cols)}">\n'
+            f'<table id="{table_id}" class="display compact">'
+            f"<thead><tr>{head}</tr></thead>\n<tbody>\n" + "\n".join(body)
+            + "\n</tbody></table>\n</div>\n" + script)
 
 
 #: Relative widths of the scorecard's columns on a wide screen.
 _WIDTHS = {"paper": 8, "item": 7, "quantity": 15, "published": 9, "reproduced": 10,
            "tolerance": 9, "verdict": 12, "basis": 10, "kind": 7, "note": 24}
-
-
-def _label_css() -> str:
-    """On a phone each scorecard cell is shown with its column's name (one rule per column of
-    the two column sets the book shows)."""
-    rules, widths = [], []
-    for cols in (CARD_COLUMNS, ["paper", *CARD_COLUMNS]):
-        total = sum(_WIDTHS[c] for c in cols)
-        rules += [f".scorecard.cols-{len(cols)} table.dataTable td:nth-child({k + 1})::before "
-                  f'{{ content: "{c}: "; }}' for k, c in enumerate(cols)]
-        # DataTables sizes its <col> elements: those are what a fixed layout follows
-        widths += [f".scorecard.cols-{len(cols)} table.dataTable col:nth-child({k + 1}), "
-                   f".scorecard.cols-{len(cols)} table.dataTable th:nth-child({k + 1}) "
-                   f"{{ width: {100 * _WIDTHS[c] / total:.1f}% !important; }}"
-                   for k, c in enumerate(cols)]
-    return ("@media (max-width: 700px) {\n  " + "\n  ".join(rules) + "\n}\n"
-            "@media (min-width: 701px) {\n  " + "\n  ".join(widths) + "\n}\n")
 
 
 def _fig_alt(label: str, caption: str) -> str:
@@ -358,14 +375,19 @@ def chapter(stem: str, figures: Path, index: dict, broken: dict) -> str:
         cite = re.sub(r"\.?\s*doi:\s*\S+$", "", paper.get("citation", "")).rstrip(". ") + "."
         lines += [f"**Paper.** {cite} "
                   + (f"DOI: [{doi}](https://doi.org/{doi})" if doi else "It has no DOI."), ""]
-    lines += [f"**Notebook.** [the executed notebook](../notebooks/{stem}.ipynb), "
-              f"`notebooks/{stem}.ipynb`; its tables are in `figures/{stem}/`.", ""]
+    repo = repository()
+    lines += [f"**Notebook.** [the executed notebook](../notebooks/{stem}.ipynb) · "
+              f'<a href="../notebooks/{quote(stem)}.ipynb" download>download (.ipynb)</a> · '
+              f"[source]({repo}/blob/HEAD/notebooks/{quote(stem)}.ipynb) · "
+              f"[launch on Binder]({binder_url(f'notebooks/{stem}.ipynb')}) · "
+              f"[repository]({repo}); its tables are in `figures/{stem}/`.", ""]
     for path, why in broken.get(stem, []):
         name = _rel(path, figures)
         again = "sweep" if name.startswith(f"{stem}/{SWEEP}/") else "reproduce"
         lines += [f'<p class="broken"><strong>Not shown:</strong> {code(name)} '
                   f"{html.escape(why)}; run <code>make {again} NB={stem[:2]}</code> again.</p>",
                   ""]
+    lines += opening_lines(stem, index, figures, broken)
     if parts["conclusion"]:
         lines += ["## What we conclude", "", ":::{container} conclusion", parts["conclusion"],
                   ":::", ""]
@@ -451,20 +473,83 @@ def key_figure(stem: str, folder: Path, bad: set[str]) -> dict | None:
 def findings_lines(index: dict, stems: list[str], figures: Path, broken: dict) -> list[str]:
     """The home's "What we found": per paper its README line, its key figure and a link."""
     found = findings(index)
-    lines = ["## What we found", ""]
+    lines = ["## What we found", "",
+             "Each paper's outcome in ReScience's terms, from its printed numbers: **[Re]** "
+             "every one we can check reproduced or close, **[~Re]** some, **[¬Re]** none.", ""]
     for stem in (s for s in stems if s in index):
         folder = figures / stem
+        label = ""
+        if (folder / "reproduction.csv").is_file() and "reproduction.csv" not in \
+                _bad(stem, folder, broken):
+            label = scorecard.outcome(pd.read_csv(folder / "reproduction.csv", dtype=str,
+                                                  keep_default_na=False))[0] + " "
         lines += [f"### [{md_text(index[stem]['paper'])}](chapters/{stem}.md)", "",
-                  md_text(found.get(stem, "")), ""]
-        fig = key_figure(stem, folder, _bad(stem, folder, broken))
-        if fig:
-            url = f"figures/{stem}/{quote(fig['figure'])}.png"
-            lines += [f"```{{figure}} {url}", f":alt: {_fig_alt(fig['label'], fig['caption'])}",
-                      f":target: {url}", ":class: key-figure", "",
-                      f"**{md_text(fig['label'])}.** {md_text(fig['caption'])}", "```", ""]
+                  f"**{label.strip()}** " * bool(label) + md_text(found.get(stem, "")), ""]
+        lines += key_figure_lines(stem, figures, broken, "")
         lines += [f"[Read the chapter: the figures, the conclusion and every scored row]"
                   f"(chapters/{stem}.md)", ""]
     return lines
+
+
+#: The width (px) of a key figure's preview on the home and a chapter's opening.
+PREVIEW_WIDTH = 800
+
+
+def preview_name(stem: str, figure: str) -> str:
+    """Where a key figure's preview goes in the pages' source (:func:`write_previews`)."""
+    return f"previews/{stem}/{figure}-preview.png"
+
+
+def key_figure_lines(stem: str, figures: Path, broken: dict, up: str) -> list[str]:
+    """A key figure as the home and a chapter's opening show it (a preview, to the full PNG).
+
+    The preview is at most :data:`PREVIEW_WIDTH` px wide in 128 colours; a click enlarges it
+    to the full PNG.  ``up`` leads from the page to the site's root (``""`` or ``"../"``)."""
+    folder = figures / stem
+    fig = key_figure(stem, folder, _bad(stem, folder, broken))
+    if not fig:
+        return []
+    url = f"{up}figures/{stem}/{quote(fig['figure'])}.png"
+    return [f"```{{figure}} {up}{preview_name(stem, quote(fig['figure']))}",
+            f":alt: {_fig_alt(fig['label'], fig['caption'])}", f":target: {url}",
+            ":class: key-figure", "",
+            f"**{md_text(fig['label'])}.** {md_text(fig['caption'])}", "```", ""]
+
+
+def write_previews(src: Path, figures: Path, stems: list[str], broken: dict) -> None:
+    """The key figures' previews (:func:`key_figure_lines`), made with Pillow."""
+    from PIL import Image
+
+    for stem in stems:
+        folder = figures / stem
+        fig = key_figure(stem, folder, _bad(stem, folder, broken))
+        if not fig:
+            continue
+        out = src / preview_name(stem, quote(fig["figure"]))
+        out.parent.mkdir(parents=True, exist_ok=True)
+        with Image.open(folder / f"{fig['figure']}.png") as im:
+            rgb = im.convert("RGB")
+            if rgb.width > PREVIEW_WIDTH:
+                rgb = rgb.resize((PREVIEW_WIDTH, round(rgb.height * PREVIEW_WIDTH / rgb.width)),
+                                 Image.Resampling.LANCZOS)
+            rgb.quantize(128, method=Image.Quantize.MEDIANCUT).save(out, optimize=True)
+
+
+def opening_lines(stem: str, index: dict, figures: Path, broken: dict) -> list[str]:
+    """A paper's chapter's opening: its outcome, its finding and its key figure.
+
+    The outcome is [Re], [~Re] or [¬Re] (:func:`scorecard.outcome`), the finding README.md's
+    line."""
+    folder = figures / stem
+    if stem not in index or "reproduction.csv" in _bad(stem, folder, broken) \
+            or not (folder / "reproduction.csv").is_file():
+        return []
+    cards = pd.read_csv(folder / "reproduction.csv", dtype=str, keep_default_na=False)
+    label, counts = scorecard.outcome(cards)
+    return [":::{container} opening", f"**{label}** {md_text(findings(index).get(stem, ''))}",
+            "", f"{md_text(counts)} Every row: [the scorecard](#scorecard) below; what the labels "
+            "mean: [the overview](../index.md#what-we-found).", ":::", "",
+            *key_figure_lines(stem, figures, broken, "../")]
 
 
 def home(cards: pd.DataFrame, index: dict, stems: list[str], figures: Path | None = None,
@@ -485,7 +570,10 @@ def home(cards: pd.DataFrame, index: dict, stems: list[str], figures: Path | Non
         "(geometric-error sensitivity, thermal error, spindle error separation), each "
         "re-computed by one notebook from its equations, every printed number scored against "
         "what the code gives, with a verdict and the basis of that verdict. Everything here is "
-        "regenerated by `make reproduce`; this book shows what is committed.", "",
+        "regenerated by `make reproduce`; this book shows what is committed. The code, the "
+        f"notebooks and the data: [the repository]({repository()}) (a link that works once the "
+        "repository is published there); each chapter links its notebook's source, a download "
+        "and a Binder launch.", "",
         *findings_lines(index, stems, Path(figures or FIGURES), broken or {}),
         "## The scorecard", "",
         scorecard.headline(cards), "",
@@ -515,7 +603,7 @@ def scorecard_page(cards: pd.DataFrame) -> str:
         "defined on [the first page](index.md#verdicts-by-basis).", "",
         "```{raw} html",
         scorecard_html(cards, "card-all", "./_static/itables/dt_bundle.js",
-                       ["paper", *CARD_COLUMNS]), "```", ""])
+                       ["paper", *CARD_COLUMNS], wide="wide"), "```", ""])
 
 
 def api_modules() -> list[str]:
@@ -580,7 +668,6 @@ def write_source(src: Path, figures: Path, stems: list[str], broken: dict) -> No
     shutil.copy(BOOK / "conf.py", src / "conf.py")
     static = src / "_static"
     shutil.copytree(BOOK / "_static", static)
-    (static / "scorecard.css").write_text(_label_css(), encoding="utf-8")
     shutil.copytree(Path(jupyter_server_mathjax.__file__).parent / "static", static / "mathjax",
                     ignore=shutil.ignore_patterns("localization", "*.md"))
     (static / "itables").mkdir()
@@ -588,6 +675,7 @@ def write_source(src: Path, figures: Path, stems: list[str], broken: dict) -> No
         shutil.copy(Path(itables.__file__).parent / "html" / name, static / "itables" / name)
     index = scorecard.papers_index()
     cards = scorecard.collect(figures)
+    write_previews(src, figures, stems, broken)
     (src / "index.md").write_text(home(cards, index, stems, figures, broken), encoding="utf-8")
     (src / "scorecard.md").write_text(scorecard_page(cards), encoding="utf-8")
     for kind in ("chapters", "notebooks", "api"):
@@ -613,18 +701,34 @@ def write_source(src: Path, figures: Path, stems: list[str], broken: dict) -> No
     shutil.copytree(ROOT / "data", src / "data")
 
 
+#: What the theme loads on every page and the book does without: its icon script (1.5 MB, "so
+#: that users can add custom icons"; its stylesheet draws the icons the book uses with its web
+#: font) and the search index (270 kB, for search-as-you-type, which is off: the search box
+#: submits to search.html, which loads the index itself).
+_HEAVY_SCRIPTS = re.compile(r'<script (?:defer )?src="[^"]*(?:_static/scripts/fontawesome|'
+                            r'searchindex)\.js[^"]*"></script>\s*')
+
+
 def finish_site(src: Path, site: Path) -> None:
-    """What Sphinx does not do: ship the files the pages link and load images lazily.
+    """What Sphinx does not do: ship the files the pages link, load images lazily, stay light.
 
     The figures (PNG, SVG) and tables the chapters link are copied into the site under
-    ``figures/`` (the "full size" and "SVG" links); every ``<img>`` gets ``loading="lazy"``."""
+    ``figures/`` (the "full size" and "SVG" links), the notebooks under ``notebooks/`` (the
+    "download" links); every ``<img>`` gets ``loading="lazy"``; the theme's icon script and
+    the source maps go (:data:`_HEAVY_SCRIPTS`)."""
     if (src / "figures").is_dir():
         shutil.copytree(src / "figures", site / "figures", dirs_exist_ok=True)
+    for nb in sorted((src / "notebooks").glob("*.ipynb")):
+        shutil.copy(nb, site / "notebooks" / nb.name)
     for page in site.rglob("*.html"):
         text = page.read_text(encoding="utf-8")
         lazy = re.sub(r"<img (?![^>]*\bloading=)", '<img loading="lazy" ', text)
+        if page.name != "search.html" or page.parent != site:
+            lazy = _HEAVY_SCRIPTS.sub("", lazy)
         if lazy != text:
             page.write_text(lazy, encoding="utf-8")
+    for f in {*(site / "_static").rglob("*.map"), *(site / "_static").rglob("fontawesome.js*")}:
+        f.unlink()
 
 
 def build(out: Path = BUILD, figures: Path | None = None, *, quiet: bool = True

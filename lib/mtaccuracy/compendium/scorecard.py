@@ -174,6 +174,30 @@ def headline(cards: pd.DataFrame) -> str:
             f"the paper gives.")
 
 
+def outcome(cards: pd.DataFrame) -> tuple[str, str]:
+    """A paper's one-line outcome in ReScience's terms, from its scored printed numbers.
+
+    ``[Re]`` when every printed number that can be checked is reproduced or close, ``[¬Re]``
+    when none is, ``[~Re]`` otherwise; with the sentence of counts it follows from.  Claims,
+    counts, sets and statements are left out (they are not printed numbers).
+
+    Returns
+    -------
+    (label, sentence) : tuple of str
+    """
+    numbers = cards[cards["kind"] == "number"]
+    v = numbers["verdict"].value_counts()
+    agree = int(v.get("reproduced", 0) + v.get("close", 0))
+    checked = agree + int(v.get("differs", 0))
+    label = "[Re]" if checked and agree == checked else "[¬Re]" if not agree else "[~Re]"
+    indep = int(((numbers["verdict"] == "reproduced") & (numbers["basis"] == "independent"))
+                .sum())
+    return label, (f"{len(numbers)} printed numbers scored: {int(v.get('reproduced', 0))} "
+                   f"reproduced ({indep} independently), {int(v.get('close', 0))} close, "
+                   f"{int(v.get('differs', 0))} differ, {int(v.get('not reproducible', 0))} "
+                   "cannot be checked.")
+
+
 def bases_markdown() -> str:
     return "\n".join(f"- `{b}`: {d}." for b, d in BASES.items()) + "\n"
 
