@@ -1,4 +1,4 @@
-"""Which test sees which error: the identifiability of a :class:`~.design.Design`, and the next test.
+"""Which test sees which error: the identifiability of a :class:`~.design.Design`; the next test.
 
 The readings ``y = A eps + N nu + e`` (``e ~ N(0, diag(sigma**2))``) are whitened by the noise
 and the errors scaled by their prior standard deviations, ``z = eps / prior_sd`` (so a priori
