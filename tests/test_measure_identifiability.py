@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from mtaccuracy.measure.design import Design, combine
-from mtaccuracy.measure.identifiability import identifiability, next_test
+from mtaccuracy.measure.identifiability import identifiability, identifiability_table, next_test
 
 ERRORS = ("EXX", "EYY", "EC0Y", "EZZ")
 R = 150.0          # mm
@@ -187,3 +187,11 @@ def test_bad_input_is_refused_naming_it():
         next_test(c, [], prior_sd=PRIOR)
     with pytest.raises(ValueError, match="sigma must be finite and > 0"):
         Design("bad", np.ones((2, 4)), np.zeros((2, 0)), [1.0, 0.0], ERRORS, (), ("a", "b"))
+
+
+def test_the_test_by_error_table():
+    t = identifiability_table([circle(), laser("x")], prior_sd=PRIOR)
+    assert t.columns.tolist() == ["circle", "laser x", "plan", "plan_combination"]
+    assert t["laser x"].tolist() == ["seen", "blind", "blind", "blind"]
+    assert t.plan.tolist() == ["seen", "seen", "seen", "blind"]
+    assert t.loc["EXX", "circle"] == "combination"

@@ -212,3 +212,30 @@ def test_bad_input_is_refused_naming_it():
         predict(res, laser("y"), y=np.zeros(5))
     with pytest.raises(ValueError, match="pass replicate"):
         identify(np.stack([y, y]), c, prior_sd=PRIOR).to_df()
+
+
+def test_map_is_the_joint_gaussian_posterior_with_a_vague_nuisance_prior():
+    # independent formulation: errors and nuisances as one Gaussian unknown, the nuisances with
+    # prior sd 1e5 (flat in the limit), solved by the normal equations; and a design with fewer
+    # readings than errors and no nuisances against Gaussian conditioning
+    rng = np.random.default_rng(4)
+    n, p, m = 30, 5, 2
+    A, N = rng.normal(size=(n, p)), rng.normal(size=(n, m))
+    sig, prior = rng.uniform(0.5, 2, n), rng.uniform(0.2, 1, p)
+    d = Design("random", A, N, sig, tuple(f"E{i}" for i in range(p)), ("n0", "n1"),
+               tuple(map(str, range(n))))
+    y = rng.normal(size=n) * 3
+    J = np.c_[A, N] / sig[:, None]
+    cov = np.linalg.inv(J.T @ J + np.diag(np.r_[1 / prior**2, 1e-10, 1e-10]))
+    mean = cov @ J.T @ (y / sig)
+    res = identify(y, d, prior_sd=prior, method="map")
+    np.testing.assert_allclose(res.estimate, mean[:p], rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(res.nuisance_estimate, mean[p:], rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(res.cov, cov[:p, :p], rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(res.nuisance_cov, cov[p:, p:], rtol=1e-5, atol=1e-9)
+    few = Design("few", A[:3], np.zeros((3, 0)), sig[:3], d.errors, (), ("a", "b", "c"))
+    S0 = np.diag(prior**2)
+    gain = S0 @ A[:3].T @ np.linalg.inv(A[:3] @ S0 @ A[:3].T + np.diag(sig[:3] ** 2))
+    res = identify(y[:3], few, prior_sd=prior, method="map")
+    np.testing.assert_allclose(res.estimate, gain @ y[:3], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(res.cov, S0 - gain @ A[:3] @ S0, rtol=1e-9, atol=1e-12)

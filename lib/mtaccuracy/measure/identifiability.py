@@ -43,7 +43,8 @@ numpy and scipy; no library names the combinations of a machine tool's errors.
 
 from __future__ import annotations
 
-__all__ = ["Identifiability", "NextTest", "identifiability", "next_test", "prior_vector"]
+__all__ = ["Identifiability", "NextTest", "identifiability", "identifiability_table", "next_test",
+           "prior_vector"]
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -118,17 +119,20 @@ class _Core:
     k: int                # number of seen directions
 
 
+def _nuisance_basis(Nt: np.ndarray) -> np.ndarray:
+    """An orthonormal basis (n, rank) of the whitened nuisances' range (numerical rank)."""
+    if not Nt.shape[1]:
+        return np.zeros((Nt.shape[0], 0))
+    Un, Sn, _ = np.linalg.svd(Nt, full_matrices=False)
+    return Un[:, Sn > Sn[0] * max(Nt.shape) * np.finfo(float).eps]
+
+
 def _core(design: Design, s: np.ndarray, shrink: float) -> _Core:
     """Whiten, scale, project out the nuisances and take the SVD (no loop over readings)."""
     w = 1.0 / design.sigma
     At = design.A * w[:, None] * s[None, :]
     Nt = design.N * w[:, None]
-    if Nt.shape[1]:
-        Un, Sn, _ = np.linalg.svd(Nt, full_matrices=False)
-        tol = Sn[0] * max(Nt.shape) * np.finfo(float).eps if Sn.size else 0.0
-        Q = Un[:, Sn > tol]
-    else:
-        Q = np.zeros((Nt.shape[0], 0))
+    Q = _nuisance_basis(Nt)
     Ap = At - Q @ (Q.T @ At)
     U, S, Vt = np.linalg.svd(Ap, full_matrices=False)
     p = At.shape[1]
@@ -321,6 +325,36 @@ def identifiability(design: Design, *, prior_sd, shrink: float = 100.0) -> Ident
     return Identifiability(design.name, design.errors, tuple(status.tolist()), tuple(comb), s,
                            post, b, phys, core.S, core.k, shrink, design.n_obs,
                            core.Q.shape[1])
+
+
+def identifiability_table(designs: Sequence[Design], *, prior_sd,
+                          shrink: float = 100.0) -> pd.DataFrame:
+    """The test x error table: each error's status in each test alone and in the whole plan.
+
+    Parameters
+    ----------
+    designs : sequence of Design
+        The tests of a plan, of the same machine.
+    prior_sd : (n_errors,) array_like or mapping of str to float
+        Each error's prior standard deviation, design units (mm, rad).
+    shrink : float, default 100
+        The factor of :func:`identifiability`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Indexed by error symbol; one column per test (its name) holding ``"seen"``,
+        ``"combination"`` or ``"blind"``, then ``plan`` (all tests together,
+        :func:`~.design.combine`) and ``plan_combination`` (the plan's named combinations).
+    """
+    designs = list(designs)
+    plan = identifiability(combine(designs), prior_sd=prior_sd, shrink=shrink)
+    out = pd.DataFrame(index=pd.Index(plan.errors, name="symbol"))
+    for d in designs:
+        out[d.name] = identifiability(d, prior_sd=prior_sd, shrink=shrink).status
+    out["plan"] = plan.status
+    out["plan_combination"] = plan.combination
+    return out
 
 
 def _information(design: Design, s: np.ndarray) -> np.ndarray:

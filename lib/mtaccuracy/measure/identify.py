@@ -39,7 +39,7 @@ import pandas as pd
 from scipy import optimize, stats
 
 from .design import Design
-from .identifiability import _check_shrink, _core, _statuses, prior_vector
+from .identifiability import _check_shrink, _core, _nuisance_basis, _statuses, prior_vector
 
 #: Display units and their factor from the design's units (mm, rad, and mm/mm for a scale).
 UNIT_FACTORS = {"mm": 1.0, "um": 1e3, "nm": 1e6, "rad": 1.0, "mrad": 1e3, "urad": 1e6,
@@ -393,12 +393,13 @@ def predict(result: Identification, design: Design, *, y=None) -> Prediction:
         raise ValueError(f"y must be ({est.shape[0]}, {design.n_obs}) for "
                          f"{est.shape[0]} replicates, got {y.shape}")
     sig = design.sigma
-    Nt = design.N / sig[:, None]
-    P = Nt @ np.linalg.pinv(Nt) if Nt.shape[1] else np.zeros((design.n_obs,) * 2)
-    M = np.eye(design.n_obs) - P
-    ct = cov_f / np.outer(sig, sig)
+    Q = _nuisance_basis(design.N / sig[:, None])               # P = Q Q'
+    At = A / sig[:, None]
+    Ap = At - Q @ (Q.T @ At)                                   # (I - P) A~, P = Q Q'
     rt = (y - mean) / sig
-    pred = mean + (rt @ P.T) * sig
-    cov = (M @ ct @ M.T + P) * np.outer(sig, sig)
-    rcov = (M @ (ct + np.eye(design.n_obs)) @ M.T) * np.outer(sig, sig)
+    pred = mean + ((rt @ Q) @ Q.T) * sig
+    outer = np.outer(sig, sig)
+    fitted = Ap @ C @ Ap.T
+    cov = (fitted + Q @ Q.T) * outer
+    rcov = (fitted + np.eye(design.n_obs) - Q @ Q.T) * outer
     return Prediction(design.name, design.labels, pred, cov, y, rcov)
