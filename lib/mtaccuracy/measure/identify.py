@@ -28,7 +28,7 @@ coordinates with the prior's residuals ``z`` appended (MAP); the covariance is
 
 from __future__ import annotations
 
-__all__ = ["Identification", "Prediction", "identify", "predict", "UNIT_FACTORS"]
+__all__ = ["Identification", "Prediction", "identify", "predict", "MISFIT_P", "UNIT_FACTORS"]
 
 import warnings
 from collections.abc import Callable, Mapping
@@ -40,6 +40,9 @@ from scipy import optimize, stats
 
 from .design import Design
 from .identifiability import _check_shrink, _core, _nuisance_basis, _statuses, prior_vector
+
+#: Below this p-value of the chi-square, :func:`identify` warns that the model misfits.
+MISFIT_P = 1e-3
 
 #: Display units and their factor from the design's units (mm, rad, and mm/mm for a scale).
 UNIT_FACTORS = {"mm": 1.0, "um": 1e3, "nm": 1e6, "rad": 1.0, "mrad": 1e3, "urad": 1e6,
@@ -215,6 +218,12 @@ def identify(y, design: Design, *, prior_sd, exact: Callable | None = None,
     -------
     Identification
         Estimates, covariance, statuses, nuisances and chi-square (``.to_df()``).
+
+    Warns
+    -----
+    RuntimeWarning
+        For one replicate whose chi-square's p-value is below :data:`MISFIT_P`, and when the
+        refinement does not converge.
     """
     s = prior_vector(design, prior_sd)
     shrink = _check_shrink(shrink)
@@ -243,9 +252,14 @@ def identify(y, design: Design, *, prior_sd, exact: Callable | None = None,
     lin = Identification(design.name, design.errors, z * s, cov_z * np.outer(s, s),
                          tuple(status.tolist()), design.nuisances, nu, cov_nu, chi2, dof,
                          method, tuple(unit_names), factors, core.k)
-    if exact is None:
-        return lin
-    return _refine(y, design, lin, core, s, exact, method)
+    out = lin if exact is None else _refine(y, design, lin, core, s, exact, method)
+    if y.ndim == 1 and out.dof > 0 and out.p_value < MISFIT_P:
+        warnings.warn(f"design {design.name!r}: chi-square {float(out.chi2):.4g} on "
+                      f"{out.dof:.4g} degrees of freedom (p = {float(out.p_value):.2g}): the "
+                      "readings depart from the model by more than their sigma; check sigma, "
+                      "outliers, or the linearisation (give exact=)", RuntimeWarning,
+                      stacklevel=2)
+    return out
 
 
 def _refine(y, design, lin, core, s, exact, method):
