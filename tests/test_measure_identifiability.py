@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from mtaccuracy.measure.design import Design, combine
-from mtaccuracy.measure.identifiability import identifiability, identifiability_table, next_test
+from mtaccuracy.measure.identifiability import (identifiability, identifiability_table, next_test,
+                                                plan_tests)
 
 ERRORS = ("EXX", "EYY", "EC0Y", "EZZ")
 R = 150.0          # mm
@@ -148,6 +149,42 @@ def test_next_test_ranks_by_log_det_gain_and_says_what_changes():
     nt = next_test(circle(), [lz, ly, lx], prior_sd=PRIOR, weights=[1, 1, 1, 0])
     assert list(nt.candidates) == ["laser y", "laser x", "laser z"]
     assert nt.logdet_gain[-1] == pytest.approx(0, abs=1e-12)
+
+
+def _one(name, row):
+    return Design(name, [row], np.zeros((1, 0)), 1.0, ("E0", "E1"), (), (name,))
+
+
+def test_plan_tests_exchanges_past_the_greedy_choice():
+    # analytic: c0 sees E0 + E1 (information 6 [[1, 1], [1, 1]]), c1 and c2 each one error
+    # (information 10): greedy takes c0 first (log 13 > log 11), then det = 83; the exchange
+    # finds {c1, c2}, det = 121
+    cands = [_one("c0", [np.sqrt(6), np.sqrt(6)]), _one("c1", [np.sqrt(10), 0]),
+             _one("c2", [0, np.sqrt(10)])]
+    assert next_test(_one("base", [0, 0]), cands, prior_sd=[1, 1]).best == "c0"
+    df = plan_tests(_one("base", [0, 0]), cands, prior_sd=[1, 1], n=2, shrink=10)
+    assert df.test.tolist() == ["c1", "c2"]
+    np.testing.assert_allclose(df.logdet_gain, [np.log(11), np.log(11)], rtol=1e-12)
+    np.testing.assert_allclose(df.logdet_total.iloc[-1], np.log(121), rtol=1e-12)
+    assert df.changes.tolist() == ["E0: blind -> seen", "E1: blind -> seen"]
+    # against brute force over every pair of five random tests
+    rng = np.random.default_rng(9)
+    tests = [Design(f"t{i}", rng.normal(size=(4, 5)) * rng.uniform(0.5, 5), np.ones((4, 1)),
+                    1.0, tuple(f"E{j}" for j in range(5)), ("z",), tuple("abcd"))
+             for i in range(5)]
+    df = plan_tests(tests[0], tests[1:], prior_sd=np.ones(5), n=2)
+    best = max(np.linalg.slogdet(np.eye(5) + sum(
+        (A.T @ A for A in (_perp(tests[0]), _perp(tests[i]), _perp(tests[j]))), 0))[1]
+        for i in range(1, 5) for j in range(i + 1, 5))
+    np.testing.assert_allclose(df.logdet_total.iloc[-1] + np.linalg.slogdet(
+        np.eye(5) + _perp(tests[0]).T @ _perp(tests[0]))[1], best, rtol=1e-10)
+    with pytest.raises(ValueError, match="n must be an int from 1 to 4"):
+        plan_tests(tests[0], tests[1:], prior_sd=np.ones(5), n=5)
+
+
+def _perp(d):
+    """The design's A with its nuisances projected out (sigma 1, prior 1), by lstsq."""
+    return d.A - d.N @ np.linalg.lstsq(d.N, d.A, rcond=None)[0]
 
 
 def test_a_five_axis_size_plan_with_known_null_space():

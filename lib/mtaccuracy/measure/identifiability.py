@@ -44,7 +44,7 @@ numpy and scipy; no library names the combinations of a machine tool's errors.
 from __future__ import annotations
 
 __all__ = ["Identifiability", "NextTest", "identifiability", "identifiability_table", "next_test",
-           "prior_vector"]
+           "plan_tests", "prior_vector"]
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -382,6 +382,9 @@ class NextTest:
         Per candidate, the errors whose status changes (``"EYY: combination -> seen"``).
     before : Identifiability
         The plan's identifiability before any candidate.
+    scale : (n_errors,) ndarray
+        The weights' factors on the prior standard deviations, ``sqrt(w / max(w))`` (ones
+        without weights).
     """
 
     plan: str
@@ -390,6 +393,7 @@ class NextTest:
     rank_after: np.ndarray
     changes: tuple
     before: Identifiability = field(repr=False)
+    scale: np.ndarray = field(repr=False, default=None)
 
     @property
     def best(self) -> str:
@@ -473,4 +477,82 @@ def next_test(design: Design, candidates: Sequence[Design], *, prior_sd, weights
                                  zip(design.errors, before.status, after.status, strict=True)
                                  if a != b))
     return NextTest(design.name, tuple(candidates[i].name for i in order), gains[order],
-                    np.array(ranks), tuple(changes), before)
+                    np.array(ranks), tuple(changes), before, sw / s)
+
+
+def plan_tests(design: Design, candidates: Sequence[Design], *, prior_sd, n: int,
+               weights=None, shrink: float = 100.0) -> pd.DataFrame:
+    """D-optimal choice of ``n`` tests to add: greedy steps, then a Fedorov exchange.
+
+    The criterion is :func:`next_test`'s, ``log det(I + sum of the tests' A_perp' A_perp)`` in
+    the (weighted) prior-scaled coordinates; the tests' information adds because each has its
+    own nuisances.  Greedy: ``n`` times the candidate of largest gain.  Exchange: swap a chosen
+    test for an unchosen one while the criterion grows by more than 1e-9 nats (the best swap
+    first).  Ties (within 1e-9 nats) go to the earlier candidate.
+
+    Parameters
+    ----------
+    design : Design
+        The plan so far.
+    candidates : sequence of Design
+        The candidate tests, of the same machine; each may be chosen once.
+    prior_sd : (n_errors,) array_like or mapping of str to float
+        The errors' prior standard deviations, design units (mm, rad).
+    n : int
+        How many tests to add (1 to the number of candidates).
+    weights : (n_errors,) array_like or mapping of str to float, optional
+        Non-negative importance weights (:func:`next_test`).
+    shrink : float, default 100
+        The factor of :func:`identifiability`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per chosen test, in the order of their gains: ``step``, ``test``,
+        ``logdet_gain`` (nats, given the tests above it), ``logdet_total`` (nats over the plan
+        alone), ``rank_after`` and ``changes`` (the status changes that test brings).
+    """
+    candidates = list(candidates)
+    if not (isinstance(n, int | np.integer) and 1 <= n <= len(candidates)):
+        raise ValueError(f"n must be an int from 1 to {len(candidates)} (the candidates)")
+    first = next_test(design, candidates, prior_sd=prior_sd, weights=weights, shrink=shrink)
+    s = first.before.prior_sd
+    sw = s * first.scale
+    F0 = np.eye(len(s)) + _information(design, sw)
+    Fc = [_information(c, sw) for c in candidates]
+
+    def crit(chosen):
+        return np.linalg.slogdet(F0 + sum((Fc[i] for i in chosen), np.zeros_like(F0)))[1]
+
+    chosen: list[int] = []
+    for _ in range(n):                      # greedy
+        rest = [i for i in range(len(candidates)) if i not in chosen]
+        vals = np.array([crit(chosen + [i]) for i in rest])
+        chosen.append(rest[int(np.flatnonzero(vals >= vals.max() - 1e-9)[0])])
+    best = crit(chosen)
+    while True:                             # exchange
+        swaps = [(crit([c for c in chosen if c != i] + [j]), k, j)
+                 for k, i in enumerate(chosen) for j in range(len(candidates))
+                 if j not in chosen]
+        if not swaps:
+            break
+        val, k, j = max(swaps, key=lambda t: (t[0], -t[1], -t[2]))
+        if val <= best + 1e-9:
+            break
+        chosen[k], best = j, val
+    order, rows, before = [], [], first.before
+    ld0 = np.linalg.slogdet(F0)[1]
+    while len(order) < n:                   # the chosen tests in the order of their gains
+        rest = sorted(i for i in chosen if i not in order)
+        vals = np.array([crit(order + [i]) for i in rest])
+        i = rest[int(np.flatnonzero(vals >= vals.max() - 1e-9)[0])]
+        gain = vals.max() - crit(order)
+        order.append(i)
+        after = identifiability(combine([design, *(candidates[j] for j in order)]),
+                                prior_sd=s, shrink=shrink)
+        rows.append({"step": len(order), "test": candidates[i].name, "logdet_gain": gain,
+                     "logdet_total": crit(order) - ld0, "rank_after": after.rank,
+                     "changes": "; ".join(f"{e}: {a} -> {b}" for e, a, b in zip(
+                         design.errors, before.status, after.status, strict=True) if a != b)})
+        before = after
+    return pd.DataFrame(rows)
