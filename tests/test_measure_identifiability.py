@@ -12,8 +12,12 @@ import numpy as np
 import pytest
 
 from mtaccuracy.measure.design import Design, combine
-from mtaccuracy.measure.identifiability import (identifiability, identifiability_table, next_test,
-                                                plan_tests)
+from mtaccuracy.measure.identifiability import (
+    identifiability,
+    identifiability_table,
+    next_test,
+    plan_tests,
+)
 
 ERRORS = ("EXX", "EYY", "EC0Y", "EZZ")
 R = 150.0          # mm
