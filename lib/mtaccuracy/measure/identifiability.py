@@ -307,6 +307,21 @@ def identifiability(design: Design, *, prior_sd, shrink: float = 100.0) -> Ident
     Identifiability
         The labelled result (``.to_df()``, ``.summary()``); see the module's docstring for the
         definitions.
+
+    Examples
+    --------
+    A ballbar circle of radius 100 mm on an XY stage with axis scales ``EXX``, ``EYY``
+    (mm/mm) and squareness ``EC0Y`` (rad); centre and bar length are nuisances:
+
+    >>> import numpy as np
+    >>> from mtaccuracy.measure.design import Design
+    >>> th = np.linspace(0, 2 * np.pi, 72, endpoint=False)
+    >>> c, s = np.cos(th), np.sin(th)
+    >>> d = Design("circle", 1e5 * np.c_[c * c, s * s, -s * c], -1e3 * np.c_[c, s, 1 + 0 * c],
+    ...            0.1, ("EXX", "EYY", "EC0Y"), ("cx", "cy", "dL"), tuple(map(str, th)))
+    >>> r = identifiability(d, prior_sd=[1e-5, 1e-5, 1e-5])
+    >>> r.status, r.combination[0], r.rank
+    (('combination', 'combination', 'seen'), 'EXX + EYY', 2)
     """
     s = prior_vector(design, prior_sd)
     shrink = _check_shrink(shrink)
