@@ -130,6 +130,12 @@ def test_refinement_on_the_exact_model_recovers_what_the_linear_one_misses():
     truth = np.array([4e-4, 1e-4, 5e-4, 0.0])
     nu = np.array([0.4, -0.3, 0.05])        # a centre 0.5 mm off: quadratic terms ~0.8 um
     prior = np.full(4, 1e-3)
+    # the test's own model first: at um/urad sizes its linear design is the exact model's
+    # first order (the quadratic remainder ~ (1e-3 mm)^2 / R, 1e-3 of the reading or less)
+    small, nu_small = np.array([2e-5, -1e-5, 3e-5, 0.0]), np.array([1e-3, -2e-3, 1e-3])
+    lin_small = plan.A @ small + plan.N @ nu_small
+    assert np.abs(circle_exact(small, nu_small) - lin_small).max() < 1e-3 * np.abs(
+        lin_small).max()
     clean = circle_exact(truth, nu)
     # the linearisation's error at these sizes is far above the noise (0.05 um)
     assert np.abs(clean - (plan.A @ truth + plan.N @ nu)).max() > 0.2
