@@ -694,7 +694,7 @@ POSE_GRID = Caption(
 
 
 def pose_grid_figure(g: np.ndarray, rho_grid: np.ndarray, top_idx: np.ndarray, *, names,
-                     outputs):
+                     outputs, colours):
     """The error ranked first over a square grid of poses, and the leaders along its diagonal.
 
     Parameters
@@ -709,6 +709,9 @@ def pose_grid_figure(g: np.ndarray, rho_grid: np.ndarray, top_idx: np.ndarray, *
         The errors, in catalogue order.
     outputs : sequence of str
         The four outputs.
+    colours : sequence of str
+        A categorical palette, one colour per leading error in catalogue order (repeated past
+        its length): the compendium's colour-blind-safe ``plotting.CATEGORICAL``.
 
     Returns
     -------
@@ -719,7 +722,11 @@ def pose_grid_figure(g: np.ndarray, rho_grid: np.ndarray, top_idx: np.ndarray, *
 
     gy, gz = np.meshgrid(g, g, indexing="ij")
     leaders = sorted({names[j] for j in np.unique(top_idx)}, key=names.index)
-    cmap = plt.get_cmap("tab20", max(len(leaders), 2))
+    from matplotlib.colors import ListedColormap
+
+    palette = [colours[k % len(colours)] for k in range(max(len(leaders), 2))]
+    cmap = ListedColormap(palette)
+    lead = {names.index(n): palette[k] for k, n in enumerate(leaders)}
     fig, axes = plt.subplots(2, 4, figsize=(14, 6.5))
     for k, o in enumerate(outputs):
         ax = axes[0, k]
@@ -732,7 +739,8 @@ def pose_grid_figure(g: np.ndarray, rho_grid: np.ndarray, top_idx: np.ndarray, *
         diag = np.isclose(gy.ravel(), gz.ravel())
         ax2 = axes[1, k]
         for j in np.argsort(-np.abs(rho_grid[diag, :, k]).max(axis=0), kind="stable")[:6]:
-            ax2.plot(g, rho_grid[diag, j, k], label=names[j])
+            ax2.plot(g, rho_grid[diag, j, k], label=names[j], color=lead.get(j, "0.6"),
+                     ls="-" if j in lead else "--")
         ax2.set_xlabel("y = z (mm)")
         ax2.set_ylabel("Spearman rho")
         ax2.legend(fontsize=7, ncol=2)
