@@ -151,6 +151,30 @@ def test_the_beam_offset_reads_pitch_times_the_offset(three):
     np.testing.assert_allclose(diff, 1000.0 * 50.0 * (ebx + rest), rtol=1e-4, atol=1e-6)
 
 
+def test_the_angular_test_reads_the_sum_of_the_pitches(three):
+    truth = _truth(three, 5)
+    t = ins.angular(three, axis="X", about="y")
+    u = t.pose["x"] / 300.0
+    total = sum(truth[three.names.index(f"EB{a}[0]")] for a in "XYZ") \
+        + truth[three.names.index("EBX[1]")] * u \
+        + truth[three.names.index("EBX[2]")] * (3 * u ** 2 - 1) / 2 \
+        - sum(truth[three.names.index(f"EB{a}[2]")] for a in "YZ") / 2
+    np.testing.assert_allclose(t.readings(truth), 1e6 * total, rtol=1e-4)
+
+
+def test_follow_puts_the_ideal_tool_tip_on_the_path(five):
+    rng = np.random.default_rng(2)
+    tip = rng.uniform(-100.0, 100.0, (20, 3))
+    pose = ins.follow(five, tip, pose={"C": rng.uniform(0, 6, 20), "B": rng.uniform(-1, 1, 20),
+                                       "L": 120.0})
+    _, t = five.machine.relative(np.zeros((20, five.machine.n_errors)), pose,
+                                 with_errors=False)
+    np.testing.assert_allclose(t, tip, atol=1e-9)
+    with pytest.raises(ValueError, match="cannot put the tool tip"):
+        ins.follow(motion_model(iso_machine("w b X Y t"), degree=0), [[0.0, 0.0, 5.0]],
+                   pose={})
+
+
 def test_the_r_test_reads_a_tool_offset_as_a_constant(five):
     # the tool 3 um off in x in the machine frame (the zero of x): in the workpiece frame the
     # error turns with the table, Rot(-C) d; the sensors turn with it (tool frame Rot(-C)), so
@@ -159,7 +183,7 @@ def test_the_r_test_reads_a_tool_offset_as_a_constant(five):
     y = t.readings(_unit(five, EXX_0=3e-3)).reshape(12, 3)
     np.testing.assert_allclose(y, np.tile([3.0, 0.0, 0.0], (12, 1)), atol=1e-9)
     c = np.linspace(0, 2 * np.pi, 12, endpoint=False)
-    np.testing.assert_allclose(t.N[0::3, 0], -1000.0 * np.cos(c), atol=1e-9)
+    np.testing.assert_allclose(t.N[0::3, 0], -np.cos(c), atol=1e-12)
 
 
 # --- what each test sees --------------------------------------------------------------------

@@ -1,8 +1,9 @@
-"""The standard tests as models of a machine: ISO 230-2 laser, ISO 230-1 straightness and
-angular tests, ISO 230-4 circle, five-axis ballbar with rotary motion, R-test.
+"""The standard tests as models of a machine, each a :class:`Measurement`.
 
-Every test reads, at its poses ``q_k``, a point of the tool (the tool tip, or a point offset
-from it in the tool frame: a reflector, a ball, a sensor nest) against the workpiece side:
+ISO 230-2 laser positioning, ISO 230-1 straightness and angular deviations, the ISO 230-4
+circle, the five-axis ballbar with rotary motion (ISO 10791-6 type) and the R-test.  Every
+test reads, at its poses ``q_k``, a point of the tool (the tool tip, or a point offset from it
+in the tool frame: a reflector, a ball, a sensor nest) against the workpiece side:
 
     y_k = g_k' dp(q_k) + n_k' nu + e_k   (um; urad for the angular test),
 
@@ -541,9 +542,10 @@ def rotary_ballbar(machine, *, axis: str, mode: str = "radial", radius: float = 
                    height: float = 100.0, bar_length: float = 100.0, ball=None, bar=None,
                    angles=None, n_angles: int = 36, at=None, tool: float = 100.0,
                    sigma: float = 0.3) -> Measurement:
-    """A ballbar test with rotary motion (ISO 10791-6 type): the rotary axis turns, the
-    linear axes follow, the two balls stand still relative to each other.
+    """A ballbar test with rotary motion (ISO 10791-6 type).
 
+    The rotary axis turns, the linear axes follow, the two balls stand still relative to each
+    other.
     The table ball at ``ball`` (workpiece frame, mm; default for a workpiece-side axis: at
     ``radius`` from the axis line and ``height`` along it, from its pivot) and the tool ball
     (the tool tip) at ``ball + bar`` (default ``bar_length`` along the ``mode`` direction:
@@ -552,8 +554,12 @@ def rotary_ballbar(machine, *, axis: str, mode: str = "radial", radius: float = 
     ``ball = tip - bar``.  Reading: the bar's length change, um.  Nuisance: ``bar length
     (um)`` (the ball positions are set by the machine at the start: their errors there are the
     datum).  One trace gives a first harmonic and a constant: the axis' offset from the linear
-    axes' zeros and its tilt times the height appear only in combination (several set-ups,
-    heights and directions, are needed).
+    axes' zeros and its tilt times the height appear only in combination.  For a table C
+    (notebook 06's ``"w C b X Y Z B t"``, where the zeros of x and y stand for C's line,
+    ``EX0C``, ``EY0C``) a radial or tangential trace at height h sees ``EXX[0] - h EB0C`` and
+    ``EYY[0] + h EA0C``, not the four apart; C's own error motions (constant in the table's
+    frame) and its zero move the workpiece and are blind (``tests/test_measure_models.py``).
+    Several set-ups (heights, an R-test off the axis) are needed.
 
     Parameters
     ----------
@@ -615,13 +621,14 @@ def r_test(machine, *, axis: str, radius: float = 0.0, height: float = 100.0, sp
     the tool length places the sphere relative to the head's pivot); the rotary axis turns and the
     linear axes keep the sensor nest (the tool tip) on the sphere.  Readings: three per
     position, the nest's displacement relative to the sphere along the tool frame's x, y, z
-    (the sensing directions), um.  Nuisances: ``sphere x/y/z (mm)``, the sphere's offset from
+    (the sensing directions), um.  Nuisances: ``sphere x/y/z (um)``, the sphere's offset from
     its nominal place in the workpiece frame (a first harmonic in the readings of a table
     axis); the sensors' zeros are the nest's place on the spindle, a tool offset (calibrated,
     the chain's datum).  A table axis' constant error motions move the workpiece with the
-    sphere and are absorbed by it.  On the axis the
-    offset of the axis line from the linear axes' zeros and its tilt times the height are
-    confounded (the same first harmonic); a second height separates them.
+    sphere and are absorbed by it.  On the axis the offset of the axis line from the linear
+    axes' zeros and its tilt times the height are confounded (the same readings): for a table
+    C at height h, ``EXX[0] - h EB0C`` and ``EYY[0] + h EA0C``; a second height, or the
+    sphere off the axis, separates them.
 
     Parameters
     ----------
@@ -658,12 +665,12 @@ def r_test(machine, *, axis: str, radius: float = 0.0, height: float = 100.0, sp
     pose = {k: np.repeat(v, 3) for k, v in pose.items()}           # x, y, z per position
     g = np.tile(_E, (th.size, 1))
     _, _, ri, _ = model.frames(None, pose)
-    N = -1000.0 * ri.transpose(0, 2, 1)[np.arange(3 * th.size), np.tile(np.arange(3), th.size)]
+    N = -ri.transpose(0, 2, 1)[np.arange(3 * th.size), np.tile(np.arange(3), th.size)]
     labels = [f"R-test {axis} {np.rad2deg(t):.6g} deg {c}" for t in th for c in "xyz"]
     where = ", ".join(f"{v:g}" for v in np.round(sphere, 6))
     return _make(model, f"R-test {axis} sphere ({where}) mm", pose,
                  0.0, g, "tool", sphere, N,
-                 ("sphere x (mm)", "sphere y (mm)", "sphere z (mm)"), labels, sigma)
+                 ("sphere x (um)", "sphere y (um)", "sphere z (um)"), labels, sigma)
 
 
 # ------------------------------------------------------------------------------------------
