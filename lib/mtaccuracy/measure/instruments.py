@@ -40,7 +40,7 @@ MODES = ("workpiece", "distance", "tool", "angle")
 _E = np.eye(3)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Measurement:
     """One test's readings as a model: poses, the point read, its sensing, its nuisances.
 
@@ -483,6 +483,25 @@ def circle(machine, *, plane: str = "XY", radius: float = 100.0, centre=None,
     Returns
     -------
     Measurement
+
+    Examples
+    --------
+    A squareness of 20 urad between X and Y seen by a 100 mm bar: -R alpha sin(2 theta) / 2,
+    1 um at 45 degrees.
+
+    >>> import numpy as np
+    >>> from mtaccuracy.machines.iso import iso_machine
+    >>> from mtaccuracy.measure.motions import motion_model
+    >>> m = iso_machine("w b X Y Z t", travels={"x": (-300.0, 300.0), "y": (-200.0, 200.0),
+    ...                                         "z": (-250.0, 250.0)})
+    >>> model = motion_model(m)
+    >>> t = circle(model, plane="XY", radius=100.0, n_points=8, directions=("ccw",))
+    >>> eps = np.zeros(model.n_params)
+    >>> eps[model.names.index("EC0Y")] = 20e-6                      # rad
+    >>> t.readings(eps).round(4).tolist()                            # um
+    [0.0, -1.0, 0.0, 1.0, 0.0, -1.0, 0.0, 1.0]
+    >>> t.design().nuisances
+    ('centre x (um)', 'centre y (um)', 'bar length (um)')
     """
     model = _as_model(machine)
     plane = str(plane).upper()
