@@ -238,3 +238,22 @@ def test_reader_lists_every_problem_at_once(tmp_path):
     with pytest.raises(MeasurementFileError) as info:
         iso230_4.read_iso230_4(_write(tmp_path, "\n".join(ls) + "\n"))
     assert [p[0] for p in info.value.problems] == [3, 31]
+
+
+def test_the_committed_example_is_the_generators_and_recovers_its_truth():
+    import importlib.util
+    from pathlib import Path
+    path = Path(__file__).resolve().parents[1] / "data" / "measure" / "make_examples.py"
+    spec = importlib.util.spec_from_file_location("make_examples", path)
+    gen = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gen)
+    assert (path.parent / "circle_XY.csv").read_text() == gen.texts()["circle_XY.csv"]
+    table = iso230_4.evaluate_iso230_4(path.parent / "circle_XY.csv").to_df()
+    table = table.set_index("quantity")
+    c = gen.CIRCLE
+    truth = {"scale_mismatch": c["scale_um_per_m"][0] - c["scale_um_per_m"][1],
+             "squareness": c["squareness_urad"], "servo_mismatch": c["lag_ms"][0] - c["lag_ms"][1],
+             "backlash_X": c["backlash_um"][0], "backlash_Y": c["backlash_um"][1],
+             "centre_X": c["centre_um"][0], "centre_Y": c["centre_um"][1]}
+    for q, want in truth.items():
+        assert abs(table.loc[q, "value"] - want) < 3 * table.loc[q, "standard_uncertainty"], q

@@ -22,7 +22,8 @@ that target and direction, up = ``+``, down = ``-``)::
     systematic positional deviation   E_up = max_i xbar_i_up - min_i xbar_i_up   (and down)
                                       E = max(xbar_i_up, xbar_i_down) - min(same)
     mean bidirectional range          M = max_i xbar_i - min_i xbar_i
-    accuracy                          A_up = max_i(xbar_i_up + 2 s_i_up) - min_i(xbar_i_up - 2 s_i_up)
+    accuracy                          A_up = max_i(xbar_i_up + 2 s_i_up)
+                                             - min_i(xbar_i_up - 2 s_i_up)   (and down)
                                       A = max over both directions of (xbar + 2 s)
                                           - min over both directions of (xbar - 2 s)
 

@@ -31,7 +31,7 @@ d = |R u + e| - R is at most |e|**2 / (2R))::
     centre_a, centre_b (um, nuisance): the path's
       centre relative to the instrument's          d = c_a cos theta + c_b sin theta
     scale_mismatch  ds = s_a - s_b (um/m), e_a = s_a x_a, e_b = s_b x_b:
-                                                   d = (R ds / 2) cos 2theta   (+ R(s_a+s_b)/2 in r0)
+                                                   d = (R ds / 2) cos 2theta  (+ R(s_a+s_b)/2: r0)
     squareness  alpha (urad): the +b axis moves along (-sin alpha, cos alpha), so
       alpha > 0 when the angle between +a and +b EXCEEDS 90 deg; e_a = -alpha x_b:
                                                    d = -(R alpha / 2) sin 2theta
