@@ -1,5 +1,6 @@
 """ISO 230-2:2014 evaluation: hand-worked cases, fault injection, invariants, refusals."""
 
+import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -7,8 +8,11 @@ import pandas as pd
 import pytest
 
 from mtaccuracy.measure import iso230_2
-from mtaccuracy.measure.files import MeasurementFileError
+from mtaccuracy.measure.files import BelowStandardWarning, MeasurementFileError
 
+#: The hand-worked cases are smaller than the standard's test (warned, tested below).
+pytestmark = pytest.mark.filterwarnings(
+    "ignore::mtaccuracy.measure.files.BelowStandardWarning")
 SQ2, SQ25 = np.sqrt(2.0), np.sqrt(2.5)
 
 
@@ -114,6 +118,23 @@ def test_cycles_may_differ_between_directions():
     assert t["n_up"].tolist() == [3, 3] and t["n_down"].tolist() == [2, 2]
     np.testing.assert_allclose(t[["mean_up_um", "mean_down_um", "s_up_um", "s_down_um"]]
                                .to_numpy()[0], [3, 2, 3, SQ2], rtol=0, atol=1e-12)
+
+
+def test_a_test_smaller_than_the_standards_is_warned():
+    with pytest.warns(BelowStandardWarning, match="3 targets over 200 mm, 5 to 5 cycles"):
+        iso230_2.evaluate_iso230_2(CASE_3x5)
+    with pytest.warns(BelowStandardWarning, match="asks for 5 targets here"):
+        iso230_2.evaluate_iso230_2(CASE_7x2)                 # 7 targets, 2 cycles
+    many = frame("X", {100.0 * i: ([0, 1, 2, 3, 4], [1, 2, 3, 4, 5]) for i in range(10)})
+    with pytest.warns(BelowStandardWarning, match="asks for 5 targets here"):
+        iso230_2.evaluate_iso230_2(many.query("target_mm < 400"))   # 4 over 300 mm
+    with pytest.warns(BelowStandardWarning, match="asks for 8 targets here"):
+        iso230_2.evaluate_iso230_2(frame("X", {200.0 * i: ([0, 1, 2, 3, 4], [1, 2, 3, 4, 5])
+                                               for i in range(9)})     # 7 over 1600 mm
+                                    .query("target_mm not in [600.0, 800.0]"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        iso230_2.evaluate_iso230_2(many)                    # 10 targets over 900 mm, 5 cycles
 
 
 def _write(tmp_path, lines):

@@ -19,8 +19,8 @@ import numpy as np
 
 from .. import csvlines, validate
 
-__all__ = ["MeasurementFileError", "Problems", "Rows", "read_rows", "MAX_FILE_BYTES",
-           "MAX_ROWS", "SHOWN"]
+__all__ = ["MeasurementFileError", "BelowStandardWarning", "Problems", "Rows", "read_rows",
+           "MAX_FILE_BYTES", "MAX_ROWS", "SHOWN"]
 
 #: A measurement file larger than this (bytes) is refused before it is read: 200 000 rows of
 #: a circle test at about 60 characters a row take 12 MB.
@@ -53,6 +53,11 @@ class MeasurementFileError(ValueError):
         if more > 0:
             shown.append(f"... and {more} more problem(s)")
         super().__init__("\n".join(shown))
+
+
+class BelowStandardWarning(UserWarning):
+    """A test evaluated although it is smaller than its standard asks (fewer cycles or
+    targets): the values follow the standard's definitions, their uncertainty is larger."""
 
 
 class Problems:

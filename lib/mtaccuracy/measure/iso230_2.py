@@ -33,20 +33,24 @@ evaluation is batched (``numpy.bincount`` over target x direction groups).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from .files import MeasurementFileError, Problems, Rows, read_rows
+from .files import BelowStandardWarning, MeasurementFileError, Problems, Rows, read_rows
 
 __all__ = ["read_iso230_2", "evaluate_iso230_2", "PositioningData", "Iso230_2Result",
-           "COLUMNS", "QUANTITIES"]
+           "COLUMNS", "QUANTITIES", "STANDARD_TARGETS", "STANDARD_CYCLES"]
 
 COLUMNS = ("axis", "target_mm", "cycle", "direction", "deviation_um")
 #: The axis quantities, in the order of :meth:`Iso230_2Result.to_df` (all in um).
 QUANTITIES = ("E", "E_up", "E_down", "M", "B", "B_mean", "R", "R_up", "R_down", "A", "A_up",
               "A_down")
+#: The standard's test: at least 5 targets and 5 per metre of travel, 5 cycles each direction;
+#: a smaller test is evaluated with a :class:`~mtaccuracy.measure.files.BelowStandardWarning`.
+STANDARD_TARGETS, STANDARD_CYCLES = 5, 5
 _WHAT = "an ISO 230-2 file"
 _DIRECTIONS = {"+": 0, "-": 1}
 
@@ -134,6 +138,14 @@ def _check(rows: Rows) -> PositioningData:
             f"target {targets[i]:g} mm has {where}: ISO 230-2 needs every target approached "
             f"in both directions ('+' and '-'), at least 2 cycles each (5 in the standard)"))
     problems.raise_if_any()
+    need = max(STANDARD_TARGETS, int(np.ceil(STANDARD_TARGETS * np.ptp(targets) / 1000.0)))
+    if counts.min() < STANDARD_CYCLES or targets.size < need:
+        warnings.warn(
+            f"{rows.path}: {targets.size} targets over {np.ptp(targets):g} mm, "
+            f"{counts.min()} to {counts.max()} cycles per target and direction; ISO 230-2 asks "
+            f"for {need} targets here (at least {STANDARD_TARGETS}, {STANDARD_TARGETS} per "
+            f"metre) and {STANDARD_CYCLES} cycles: evaluated by its definitions, with s_i, R "
+            f"and A less certain", BelowStandardWarning, stacklevel=3)
     return PositioningData(axes[0], target, cyc.astype(int), up, dev, rows.path)
 
 

@@ -113,7 +113,7 @@ class CircleData:
 
 def _single(rows, values, column, problems, unit):
     """The one value a column holds in every row, or a problem at the first other one."""
-    ok = np.isfinite(values)
+    ok = np.isfinite(values) & (values > 0)
     if not ok.any():
         return np.nan
     first = values[ok][0]
@@ -125,6 +125,19 @@ def _single(rows, values, column, problems, unit):
             f"{rows.lines[np.flatnonzero(ok)[0]]}: an ISO 230-4 file holds one circular test "
             f"(one plane, radius and feed); split the file, one test per file"))
     return first
+
+
+def _plane_hint(plane: str) -> str:
+    """What a plane not in :data:`PLANES` probably means (lower case, or the axes swapped:
+    an angle phi from +b towards +a is theta = 90 deg - phi, and the sense reverses)."""
+    up = plane.upper()
+    if up in PLANES:
+        return f"; here {up!r}?"
+    swapped = up[::-1]
+    if swapped in PLANES:
+        return (f"; {plane!r} is {swapped!r} with the axes swapped: write {swapped!r}, each "
+                f"angle as 90 - angle (mod 360) and the directions swapped (cw <-> ccw)")
+    return ""
 
 
 def _check(rows: Rows) -> CircleData:
@@ -143,13 +156,8 @@ def _check(rows: Rows) -> CircleData:
     planes = rows.text["plane"]
     for k, p in enumerate(planes):
         if p not in PLANES:
-            hint = {"YX": "XY", "ZY": "YZ", "XZ": "ZX"}.get(p.upper(), p.upper())
-            problems.add(lines[k], (
-                f"plane is {p!r}: write XY, YZ or ZX (the angle runs from the first axis to the "
-                f"second)" + (f"; {p!r} is {hint!r} with the angle reversed: write "
-                              f"{hint!r} and the angles as 360 - angle, the directions "
-                              f"swapped" if hint in PLANES and hint != p.upper() else
-                              f"; here {hint!r}?" if hint in PLANES else "")))
+            problems.add(lines[k], f"plane is {p!r}: write XY, YZ or ZX (the angle runs from "
+                                   f"the first axis to the second){_plane_hint(p)}")
     names = list(dict.fromkeys(p for p in planes if p in PLANES))
     if len(names) > 1:
         k = planes.index(names[1])
@@ -367,11 +375,10 @@ def evaluate_iso230_4(data) -> Iso230_4Result:
     dof = d.size - x.shape[1]
     cov = (res @ res / dof) * np.linalg.inv(x.T @ x)
     u = np.sqrt(np.diag(cov))
-    ccw_order = np.argsort(ang[ccw])
     cw_at_ccw = np.interp(ang[ccw], ang[~ccw], d[~ccw], period=360.0)
     rows = [("G_cw", _lsc_zone(ang[~ccw], d[~ccw]), "um", np.nan),
             ("G_ccw", _lsc_zone(ang[ccw], d[ccw]), "um", np.nan),
-            ("H", float(np.abs(d[ccw] - cw_at_ccw)[ccw_order].max()), "um", np.nan),
+            ("H", float(np.abs(d[ccw] - cw_at_ccw).max()), "um", np.nan),
             ("F_max", float(d.max()), "um", np.nan), ("F_min", float(d.min()), "um", np.nan)]
     fitted = {name: (float(c), unit, float(s))
               for (name, unit), c, s in zip(PARAMETERS, coef, u, strict=True)}
