@@ -194,6 +194,10 @@ def test_axes_named_from_the_plane():
                  "servo_mismatch", "backlash_Z", "backlash_X", "centre_Z", "centre_X"]
     assert res.value("backlash_Z") == pytest.approx(3.0, rel=2e-3)
     assert list(res.to_df().columns) == ["quantity", "value", "unit", "standard_uncertainty"]
+    said = res.describe().set_index("quantity")["convention"]
+    assert said.notna().all()
+    assert "+Z and +X exceeds 90 deg" in said["squareness"]
+    assert "least-squares centre" in said["G_cw"] and "instrument's centre" in said["F_max"]
 
 
 def _write(tmp_path, text):
@@ -257,3 +261,16 @@ def test_the_committed_example_is_the_generators_and_recovers_its_truth():
              "centre_X": c["centre_um"][0], "centre_Y": c["centre_um"][1]}
     for q, want in truth.items():
         assert abs(table.loc[q, "value"] - want) < 3 * table.loc[q, "standard_uncertainty"], q
+
+
+def test_H_between_paths_sampled_at_different_angles():
+    def path(th, extra):
+        t = np.deg2rad(th)
+        return 4.0 * np.cos(2 * t) + extra * 3.0 * np.sin(t) ** 2   # um
+    th_ccw, th_cw = angles(shift=0.5), angles(shift=0.0)
+    thb = np.concatenate([th_ccw, th_cw])
+    d = np.concatenate([path(th_ccw, 0), path(th_cw, 1)])
+    res = iso230_4.evaluate_iso230_4(frame(thb, np.repeat([True, False], N), d))
+    # linear interpolation over h = 2 deg errs by at most h^2 / 8 * max|f''| (f'' <= 22 um/rad^2
+    # = 3.4e-3 um) and the ccw grid misses 90 deg by 1 deg: 3 (1 - cos^2 1 deg) = 9.1e-4 um
+    assert res.value("H") == pytest.approx(3.0, abs=3.4e-3 + 9.2e-4)

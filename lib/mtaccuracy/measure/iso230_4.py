@@ -302,6 +302,42 @@ class Iso230_4Result:
     residual_um: np.ndarray
     source: str
 
+    @property
+    def conventions(self) -> dict:
+        """What each quantity is measured about, and its sign: ``{quantity: statement}``."""
+        a, b = PLANES[self.plane]
+        return {
+            "G_cw": "minimum radial zone of the cw path about its least-squares centre",
+            "G_ccw": "minimum radial zone of the ccw path about its least-squares centre",
+            "H": "largest |d_ccw - d_cw| at one angle, both about the instrument's centre",
+            "F_max": "largest radial deviation from the nominal radius, about the "
+                     "instrument's centre, both directions",
+            "F_min": "smallest radial deviation from the nominal radius, about the "
+                     "instrument's centre, both directions",
+            "squareness": f"> 0 when the angle between +{a} and +{b} exceeds 90 deg",
+            "scale_mismatch": f"scale of {a} minus scale of {b}",
+            "servo_mismatch": f"lag of {a} minus lag of {b} (> 0: {a} lags more)",
+            f"backlash_{a}": f"lost motion of {a} (> 0: a step outwards at {a}'s reversals)",
+            f"backlash_{b}": f"lost motion of {b} (> 0: a step outwards at {b}'s reversals)",
+            f"centre_{a}": f"the path's centre relative to the instrument's, along {a}",
+            f"centre_{b}": f"the path's centre relative to the instrument's, along {b}",
+        }
+
+    @property
+    def residual_rms_um(self) -> float:
+        """The root mean square of the fit's residuals, um (the noise, if the model holds)."""
+        return float(np.sqrt(np.mean(self.residual_um ** 2)))
+
+    def describe(self) -> pd.DataFrame:
+        """The table with each quantity's convention, for a reader.
+
+        Returns
+        -------
+        DataFrame
+            :meth:`to_df` with a column ``convention``.
+        """
+        return self.table.assign(convention=self.table["quantity"].map(self.conventions))
+
     def to_df(self) -> pd.DataFrame:
         """The table ``iso230_4.csv``.
 
