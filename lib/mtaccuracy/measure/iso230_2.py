@@ -173,6 +173,13 @@ def read_iso230_2(path) -> PositioningData:
     ------
     MeasurementFileError
         Listing every problem found.
+
+    Warns
+    -----
+    BelowStandardWarning
+        When the test is smaller than ISO 230-2's: fewer than :data:`STANDARD_CYCLES` cycles
+        in a target and direction, or fewer than :data:`STANDARD_TARGETS` targets (and 5 per
+        metre of the targets' span).
     """
     return _check(read_rows(path, columns=COLUMNS, what=_WHAT))
 
@@ -275,6 +282,11 @@ def evaluate_iso230_2(data) -> Iso230_2Result:
     ------
     MeasurementFileError
         When the readings break the schema (every problem listed).
+
+    Warns
+    -----
+    BelowStandardWarning
+        When a file or DataFrame holds a smaller test than ISO 230-2's (:func:`read_iso230_2`).
     """
     if isinstance(data, pd.DataFrame):
         data = _from_frame(data)
