@@ -126,8 +126,11 @@ def test_a_combination_is_named_in_physical_units():
 
 
 def test_the_threshold_is_the_stated_shrink_factor():
-    # one reading, one error, prior 1, noise 1: the data shrink the variance by 1 + a^2
-    for a, want in ((np.sqrt(98.0), "blind"), (np.sqrt(99.5), "seen")):
+    # one reading, one error, prior 1, noise 1: the data shrink the variance by 1 + a^2; blind
+    # only when they remove at most 1/shrink of it (1 + a^2 <= 1 / (1 - 0.01)), else learned in
+    # part ("combination": its posterior says how much)
+    for a, want in ((np.sqrt(98.0), "combination"), (np.sqrt(99.5), "seen"), (0.1, "blind"),
+                    (0.0, "blind")):
         d = Design("one", [[a]], np.zeros((1, 0)), 1.0, ("E",), (), ("r",))
         r = identifiability(d, prior_sd=[1.0])
         assert r.status == (want,) and r.rank == (want == "seen")

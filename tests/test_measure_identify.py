@@ -247,3 +247,21 @@ def test_map_is_the_joint_gaussian_posterior_with_a_vague_nuisance_prior():
     res = identify(y[:3], few, prior_sd=prior, method="map")
     np.testing.assert_allclose(res.estimate, gain @ y[:3], rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(res.cov, S0 - gain @ A[:3] @ S0, rtol=1e-9, atol=1e-12)
+
+
+def test_a_weak_direction_below_the_seen_threshold_does_not_bias_a_seen_error():
+    """A direction with S**2 = 49 (below shrink - 1 = 99) still carries signal: the estimate
+    uses it, so the seen error it touches is recovered exactly from noise-free readings (left at
+    the prior mean it would be off by sin(0.05) of a prior standard deviation)."""
+    a = 0.05
+    V = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    rng = np.random.default_rng(4)
+    U = np.linalg.qr(rng.standard_normal((40, 2)))[0]
+    prior = np.array([2.0, 3.0])
+    A = (U * [30.0, 7.0]) @ V.T / prior                       # whitened, prior-scaled: U S V'
+    d = Design("weak", A, np.zeros((40, 0)), 1.0, ("E1", "E2"), (), tuple(map(str, range(40))))
+    truth = np.array([1.5, -2.0])
+    r = identify(A @ truth, d, prior_sd=prior)
+    assert r.status[0] == "seen" and r.status[1] != "seen"
+    assert np.allclose(r.estimate, truth, rtol=1e-9, atol=0)
+    assert abs(r.chi2) < 1e-18 and r.dof == 38

@@ -3,7 +3,7 @@
     PYTHONPATH=lib .venv/bin/python data/measure/make_examples.py          # (re)write both
     PYTHONPATH=lib .venv/bin/python data/measure/make_examples.py --check  # compare, write nothing
 
-``positioning_X.csv``: an ISO 230-2 test of a linear axis X (0 to 1000 mm), the model below;
+``positioning_X.csv``: an ISO 230-2 test of a linear axis X (-400 to 400 mm), the model below;
 ``circle_XY.csv``: an ISO 230-4 circular test in XY, both directions, from an exact geometric
 model of the axes.  The truth is in ``README.md``; ``tests/test_iso230_2.py`` and
 ``tests/test_iso230_4.py`` check that this script gives the committed bytes and that the
@@ -21,12 +21,13 @@ HERE = Path(__file__).resolve().parent
 SEED = 20261129
 
 # --- ISO 230-2: axis X -------------------------------------------------------------------------
-#: Targets (mm): 11 over 1000 mm, spaced unevenly (ISO 230-2 5.3.2: no common period with a
-#: screw's pitch).
-TARGETS_MM = np.array([0.0, 98.7, 201.4, 297.9, 402.6, 499.1, 601.8, 698.3, 803.0, 899.5, 1000.0])
+#: Targets (mm): 11 over the 800 mm travel of notebook 06's machine (X from -400 to 400 mm),
+#: spaced unevenly (ISO 230-2 5.3.2: no common period with a screw's pitch).
+TARGETS_MM = np.array([-400.0, -321.3, -239.6, -160.8, -79.5, 0.4, 80.9, 159.7, 241.2, 319.8,
+                       400.0])
 CYCLES = 5
 POSITIONING = dict(
-    scale_um_per_m=12.0,       # pitch error: x = 12 um/m * P
+    scale_um_per_m=15.0,       # pitch error: x = 15 um/m * P (the circle's X scale)
     periodic_um=1.5,           # the screw's cyclic error: 1.5 um * sin(2 pi P / 10 mm)
     lead_mm=10.0,
     backlash_um=4.0,           # lost motion: -2 um approached in +, +2 um approached in -

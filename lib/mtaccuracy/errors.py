@@ -17,6 +17,8 @@ import numpy as np
 #: The working map of paper symbols to ISO 230-1 codes: package data (``mtaccuracy/data/``),
 #: read through :mod:`importlib.resources`, so that it is found in a checkout, an installed
 #: wheel or a zip alike.
+#:
+#: :meta hide-value:
 ISO230_NAMES = resources.files("mtaccuracy") / "data" / "iso230_names.csv"
 
 #: Paper units -> library units (mm, rad).

@@ -305,7 +305,9 @@ def test_the_scorecard_reads_from_disk_without_a_server(built, browser):
         assert rows.count() == len(scorecard.collect(built[3]))
         card = rows.first.bounding_box()
         assert card["width"] > 300                         # a card as wide as the phone
-        assert "verdict:" in rows.first.inner_text()        # each line labelled
+        label = rows.first.locator('td[data-label="verdict"]').evaluate(
+            "td => getComputedStyle(td, '::before').content")
+        assert label == '"verdict: "'                      # each line labelled
         assert _no_sideways_scroll(page) <= 0
 
 

@@ -705,8 +705,8 @@ def write_source(src: Path, figures: Path, stems: list[str], broken: dict) -> No
 #: that users can add custom icons"; its stylesheet draws the icons the book uses with its web
 #: font) and the search index (270 kB, for search-as-you-type, which is off: the search box
 #: submits to search.html, which loads the index itself).
-_HEAVY_SCRIPTS = re.compile(r'<script (?:defer )?src="[^"]*(?:_static/scripts/fontawesome|'
-                            r'searchindex)\.js[^"]*"></script>\s*')
+_HEAVY_SCRIPTS = tuple(re.compile(rf'<script (?:defer )?src="[^"]*{name}\.js[^"]*"></script>\s*')
+                      for name in ("_static/scripts/fontawesome", "searchindex"))
 
 
 def finish_site(src: Path, site: Path) -> None:
@@ -723,8 +723,8 @@ def finish_site(src: Path, site: Path) -> None:
     for page in site.rglob("*.html"):
         text = page.read_text(encoding="utf-8")
         lazy = re.sub(r"<img (?![^>]*\bloading=)", '<img loading="lazy" ', text)
-        if page.name != "search.html" or page.parent != site:
-            lazy = _HEAVY_SCRIPTS.sub("", lazy)
+        for heavy in _HEAVY_SCRIPTS[:1 if page == site / "search.html" else 2]:
+            lazy = heavy.sub("", lazy)
         if lazy != text:
             page.write_text(lazy, encoding="utf-8")
     for f in {*(site / "_static").rglob("*.map"), *(site / "_static").rglob("fontawesome.js*")}:

@@ -19,6 +19,7 @@ After each save the folder's ``provenance.json`` lists every file written with i
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import pandas as pd
@@ -273,6 +274,15 @@ class Run:
         return df
 
 
+def one_line_warning(message, category, filename, lineno, line=None) -> str:
+    """A warning as a notebook shows it: its kind and message, one line.
+
+    Python's default adds the file and line that raised it: in a notebook, a kernel's
+    temporary file (``/tmp/ipykernel_<pid>/<hash>.py``) that differs on every run, so that an
+    unchanged notebook's output would change; the message names what matters."""
+    return f"{category.__name__}: {message}\n"
+
+
 def start(declared: type[NotebookParameters], namespace: dict, *, notebook=None) -> Run:
     """Check a notebook's parameters and open its run (a notebook's first call).
 
@@ -290,7 +300,8 @@ def start(declared: type[NotebookParameters], namespace: dict, *, notebook=None)
     Returns
     -------
     Run
-        The run: ``run.out``, ``run.parameters``, and the saving methods.
+        The run: ``run.out``, ``run.parameters``, and the saving methods.  From here on a
+        warning shows as one line (:func:`one_line_warning`).
 
     Raises
     ------
@@ -305,6 +316,7 @@ def start(declared: type[NotebookParameters], namespace: dict, *, notebook=None)
                              f"cell tagged 'parameters' first")
     filled = check(declared, {n: namespace[n] for n in declared.names()})
     check_memory(filled)
+    warnings.formatwarning = one_line_warning
     out = output_folder(filled.output_dir, stem)
     out.mkdir(parents=True, exist_ok=True)
     return Run(filled, out, Path(notebook) if notebook else NOTEBOOKS / f"{stem}.ipynb")

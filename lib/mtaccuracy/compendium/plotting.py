@@ -55,6 +55,8 @@ CATEGORICAL = ("#CC6677", "#332288", "#DDCC77", "#117733", "#88CCEE", "#882255",
                "#999933", "#AA4499")
 #: The colour of "no category" (no data, no first-order term): Tol's pale grey.
 NO_CATEGORY = "#DDDDDD"
+# every figure's default line colours (C0, C1, ...) are the same palette, not matplotlib's tab10
+STYLE["axes.prop_cycle"] = mpl.cycler(color=list(CATEGORICAL))
 #: Two things highlighted among many (Yang Fig. 21: the paper's layout and the best), from
 #: :data:`CATEGORICAL`, and the grey of the rest, drawn as context.
 HIGHLIGHT = ("#332288", "#117733")

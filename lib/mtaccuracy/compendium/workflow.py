@@ -43,7 +43,16 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..papers import guo2016, rong, xu2022, yang2021, your_machine, your_spindle, zheng2024
+from ..papers import (
+    guo2016,
+    rong,
+    xu2022,
+    yang2021,
+    your_machine,
+    your_measurements,
+    your_spindle,
+    zheng2024,
+)
 from ..papers.parameters import NotebookParameters, ParameterError, check, values
 from . import provenance
 from .notebook import (
@@ -60,7 +69,7 @@ from .reproduction import VERDICTS, write_table
 
 #: Every notebook's declaration, in notebook order.
 DECLARATIONS = tuple(m.Parameters for m in (zheng2024, rong, guo2016, xu2022, yang2021,
-                                             your_machine, your_spindle))
+                                             your_machine, your_spindle, your_measurements))
 SNAKEFILE = ROOT / "workflow" / "Snakefile"
 MEASURED_NOTE = ("[output of a cell tagged 'measured' (wall-clock times of the machine that ran "
                  "it): not stored, so that re-running an unchanged notebook leaves it unchanged; "

@@ -14,9 +14,10 @@ at least ``shrink`` (default 100: its posterior standard deviation is at most a 
 prior's), i.e. ``s_i**2 >= shrink - 1``.  The rank is the number of seen directions; the
 condition number is ``s_max / s_min`` over the seen ones only (a singular plan's condition number
 would be rounding noise).  Per error ``j``, with ``b_j`` the share of its prior variance lying in
-the unseen directions (``b_j = 1 - ||V_seen[j]||**2``): *seen* when ``b_j <= 1 / shrink``,
-*blind* when ``1 - b_j <= 1 / shrink`` (no seen direction involves it), else *combination*: it is
-seen only together with others.
+the unseen directions (``b_j = 1 - ||V_seen[j]||**2``): *seen* when ``b_j <= 1 / shrink``;
+*blind* when the data remove at most ``1 / shrink`` of its prior variance (``1 - posterior /
+prior``; the test adds next to nothing about it); else *combination*: it is determined only
+together with others, or only in part (its posterior standard deviation says how much).
 
 **Naming a combination, canonically.**  The unseen subspace (the combinations of errors the plan
 cannot tell from zero) has a unique basis in reduced row-echelon form over the errors in the
@@ -24,10 +25,9 @@ design's order: each basis vector has a leading coefficient 1 on its pivot error
 other pivots.  In physical units, the vector ``(pivot: 1, k: c_k)`` means "moving the pivot error
 by one of its units and error ``k`` by ``c_k`` of its units (the design's units, mm and rad, so
 ``c_k`` is in unit_k per unit_pivot) changes no reading by more than the noise can show".  A
-*combination* error is named with every basis vector it appears in; a *blind* one is always a
-pivot whose vector is itself alone.  This choice is canonical (independent of the SVD's signs
-and of how ties among singular values fall): it depends only on the unseen subspace and the
-order of the errors.
+*combination* error is named with every basis vector it appears in.  This choice is canonical
+(independent of the SVD's signs and of how ties among singular values fall): it depends only on
+the unseen subspace and the order of the errors.
 
 **Observability indices** (Sun and Hollerbach 2008, doi:10.1109/ROBOT.2008.4543213, the five
 indices FIGAROH reports), over the ``L`` seen singular values ``s_1 >= ... >= s_L`` of the
@@ -283,8 +283,13 @@ class Identifiability:
                              "unseen_share": self.unseen_share})
 
 
-def _statuses(b: np.ndarray, shrink: float) -> np.ndarray:
-    return np.where(b <= 1.0 / shrink, "seen", np.where(1.0 - b <= 1.0 / shrink, "blind",
+def _learned(core: _Core) -> np.ndarray:
+    """Per error, the share of its prior variance the data remove: ``1 - posterior / prior``."""
+    return np.clip(1.0 - np.sum(core.V**2 / (1.0 + core.S**2)[None, :], axis=1), 0.0, 1.0)
+
+
+def _statuses(b: np.ndarray, learned: np.ndarray, shrink: float) -> np.ndarray:
+    return np.where(b <= 1.0 / shrink, "seen", np.where(learned <= 1.0 / shrink, "blind",
                                                          "combination"))
 
 
@@ -329,7 +334,7 @@ def identifiability(design: Design, *, prior_sd, shrink: float = 100.0) -> Ident
     Vs = core.V[:, :core.k]
     b = np.clip(1.0 - np.sum(Vs**2, axis=1), 0.0, 1.0)
     post = np.sqrt(np.sum(core.V**2 / (1.0 + core.S**2)[None, :], axis=1)) * s
-    status = _statuses(b, shrink)
+    status = _statuses(b, _learned(core), shrink)
     phys, pivots, text = _combinations(core, s, design.errors)
     comb = []
     for j, st in enumerate(status):

@@ -5,19 +5,21 @@ The model and its coordinates are :mod:`.identifiability`'s: whitened readings
 exactly, ``A_perp = U S V'``, and the seen directions (``s_i**2 >= shrink - 1``) first.
 
 **Truncated SVD** (``method="tsvd"``, the default): the minimum-norm least-squares estimate in
-the seen subspace, ``z^ = V_s S_s^-1 U_s' y~``, and the prior mean (zero) along the unseen
-directions.  The estimate of a *seen* error uses the data alone and is unbiased; its covariance
-is ``V_s S_s^-2 V_s'`` plus, for the unseen part, the prior's ``V_b V_b'``.  **MAP**
+the subspace the data determine (every direction above :data:`NULL_RTOL` of the strongest, not
+only the seen ones: a weak direction left at the prior mean would bias the seen errors that
+touch it), ``z^ = V_d S_d^-1 U_d' y~``, and the prior mean (zero) along the null directions.
+The estimate of a *seen* error uses the data alone and is unbiased; its covariance is
+``V_d S_d^-2 V_d'`` plus, for the null part, the prior's ``V_b V_b'``.  **MAP**
 (``method="map"``): ``z^ = V diag(S / (1 + S**2)) U' y~``, covariance
 ``V diag(1 / (1 + S**2)) V'`` (the Gaussian posterior; shrunk towards zero, biased for a
 frequentist).  Either way ``z^ - z = B z + G e~`` with ``G`` the estimator and
 ``B = G A~ - I``, so the covariances of the errors and of the nuisances
 (``nu^ = N~^+ (y~ - A~ z^)``) follow exactly from ``B`` and ``G`` with the prior ``z ~ N(0, I)``.
 
-**Chi-square**: the whitened residuals' sum of squares, with ``n_obs - rank(N) - k`` degrees of
-freedom for the truncated SVD (``k`` seen directions; exact when the truth has no component in
-a direction below the threshold but above zero) and ``n_obs - rank(N) - sum S**2/(1+S**2)``
-(the hat matrix's trace, approximate) for MAP; the p-value is ``P(chi2_dof > value)``.
+**Chi-square**: the whitened residuals' sum of squares, with ``n_obs - rank(N) - d`` degrees of
+freedom for the truncated SVD (``d`` determined directions) and
+``n_obs - rank(N) - sum S**2/(1+S**2)`` (the hat matrix's trace, approximate) for MAP; the
+p-value is ``P(chi2_dof > value)``.
 
 **Refinement** on an exact model ``exact(eps, nu) -> y`` (e.g. the exact chain and the test's
 exact geometry): :func:`scipy.optimize.least_squares` from the linear estimate, over the seen
@@ -39,7 +41,14 @@ import pandas as pd
 from scipy import optimize, stats
 
 from .design import Design
-from .identifiability import _check_shrink, _core, _nuisance_basis, _statuses, prior_vector
+from .identifiability import (
+    _check_shrink,
+    _core,
+    _learned,
+    _nuisance_basis,
+    _statuses,
+    prior_vector,
+)
 
 #: Below this p-value of the chi-square, :func:`identify` warns that the model misfits.
 MISFIT_P = 1e-3
@@ -171,12 +180,29 @@ class Identification:
                              "unit": list(self.units), "status": list(self.status)})
 
 
+#: A direction whose singular value is below this fraction of the largest is numerically null:
+#: its information is below 1e-12 of the strongest direction's.
+NULL_RTOL = 1e-6
+
+
+def _estimable(core) -> int:
+    """The directions the truncated SVD estimates from: every one the data determine.
+
+    Not only the seen ones (``core.k``): a direction below the seen threshold but well above
+    zero carries signal, and leaving it at the prior mean would bias the seen errors that
+    touch it (the five-axis plan of notebook 08 has directions with ``S**2`` of 67 next to the
+    threshold 99, which biased seen errors by more than a standard uncertainty)."""
+    r = core.U.shape[1]
+    S = core.S[:r]
+    return int(np.sum(S > NULL_RTOL * S[0])) if r and S[0] > 0 else 0
+
+
 def _estimator(core, method: str) -> tuple[np.ndarray, np.ndarray]:
     """``G`` (p, n) acting on whitened readings, and ``B = G A~ - I`` (p, p)."""
     r = core.U.shape[1]
     S, V = core.S[:r], core.V[:, :r]
     if method == "tsvd":
-        k = core.k
+        k = _estimable(core)
         G = (V[:, :k] / S[:k][None, :]) @ core.U[:, :k].T
     else:
         G = (V * (S / (1.0 + S**2))[None, :]) @ core.U.T
@@ -246,9 +272,11 @@ def identify(y, design: Design, *, prior_sd, exact: Callable | None = None,
     res = yt - z @ core.At.T - nu @ core.Nt.T
     chi2 = np.sum(res**2, axis=-1)
     r = core.U.shape[1]
-    fitted = core.k if method == "tsvd" else float(np.sum(core.S[:r]**2 / (1 + core.S[:r]**2)))
+    fitted = (_estimable(core) if method == "tsvd"
+              else float(np.sum(core.S[:r]**2 / (1 + core.S[:r]**2))))
     dof = design.n_obs - core.Q.shape[1] - fitted
-    status = _statuses(np.clip(1.0 - np.sum(core.V[:, :core.k]**2, axis=1), 0.0, 1.0), shrink)
+    status = _statuses(np.clip(1.0 - np.sum(core.V[:, :core.k]**2, axis=1), 0.0, 1.0),
+                       _learned(core), shrink)
     lin = Identification(design.name, design.errors, z * s, cov_z * np.outer(s, s),
                          tuple(status.tolist()), design.nuisances, nu, cov_nu, chi2, dof,
                          method, tuple(unit_names), factors, core.k)
@@ -269,7 +297,7 @@ def _refine(y, design, lin, core, s, exact, method):
     if first.shape != (design.n_obs,) or not np.isfinite(first).all():
         raise ValueError(f"exact(eps, nu) must return ({design.n_obs},) finite readings (um) "
                          f"for design {design.name!r}, got shape {first.shape}")
-    D = core.V[:, :core.k] if method == "tsvd" else np.eye(len(s))
+    D = core.V[:, :_estimable(core)] if method == "tsvd" else np.eye(len(s))
     cn = np.linalg.norm(core.Nt, axis=0)
     dnu = np.where(cn > 0, 1.0 / np.where(cn > 0, cn, 1.0), 1.0)
     na = D.shape[1]
@@ -292,7 +320,7 @@ def _refine(y, design, lin, core, s, exact, method):
     cov_x = np.linalg.pinv(sol.jac.T @ sol.jac)
     cov_z = D @ cov_x[:na, :na] @ D.T
     if method == "tsvd":
-        Vb = core.V[:, core.k:]
+        Vb = core.V[:, _estimable(core):]
         cov_z = cov_z + Vb @ Vb.T
     data = sol.fun[:design.n_obs]
     return Identification(lin.design, lin.errors, eps, cov_z * np.outer(s, s), lin.status,

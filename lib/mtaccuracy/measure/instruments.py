@@ -448,8 +448,8 @@ def angular(machine, *, axis: str, about: str, targets=None, n_targets: int = 11
 # ------------------------------------------------------------------------------------------
 
 def circle(machine, *, plane: str = "XY", radius: float = 100.0, centre=None,
-           n_points: int = 72, directions: Sequence[str] = ("ccw", "cw"), at=None,
-           tool: float = 100.0, sigma: float = 0.2) -> Measurement:
+           n_points: int = 72, directions: Sequence[str] = ("ccw", "cw"), angles_deg=None,
+           at=None, tool: float = 100.0, sigma: float = 0.2) -> Measurement:
     """ISO 230-4 circular test (a ballbar) in the plane of two linear axes, both directions.
 
     The tool ball follows a circle of ``radius`` about the table ball at ``centre``; angle
@@ -474,9 +474,11 @@ def circle(machine, *, plane: str = "XY", radius: float = 100.0, centre=None,
         The table ball, workpiece frame, mm (default: the tool tip at the middle of the
         travels).
     n_points : int
-        Readings per direction.
+        Readings per direction, evenly from 0 (when ``angles_deg`` is not given).
     directions : sequence of {"ccw", "cw"}
         The traces, in order.
+    angles_deg : (n,) array_like, optional
+        The readings' angles theta of every trace, deg (a file's; default ``n_points`` evenly).
     at, tool, sigma
         As :func:`laser_positioning`; ``at`` sets the rotary axes.
 
@@ -510,7 +512,13 @@ def circle(machine, *, plane: str = "XY", radius: float = 100.0, centre=None,
     radius = float(radius)
     if not (np.isfinite(radius) and radius > 0):
         raise ValueError(f"circle: radius must be a finite number > 0 (mm), got {radius!r}")
-    n_points = validate.integer(n_points, "n_points", low=4)
+    if angles_deg is None:
+        n_points = validate.integer(n_points, "n_points", low=4)
+        th = 2 * np.pi * np.arange(n_points) / n_points
+    else:
+        th = np.deg2rad(np.asarray(angles_deg, dtype=float).ravel())
+        if th.size < 4 or not np.isfinite(th).all():
+            raise ValueError("circle: angles_deg must be at least 4 finite angles (deg)")
     dirs = tuple(directions)
     if not dirs or any(d not in ("ccw", "cw") for d in dirs):
         raise ValueError(f"circle: directions must be 'ccw' and/or 'cw', got {dirs}")
@@ -522,8 +530,8 @@ def circle(machine, *, plane: str = "XY", radius: float = 100.0, centre=None,
     else:
         c = np.asarray(centre, dtype=float).reshape(3)
     u, v = _E[DIRECTION[plane[0]]], _E[DIRECTION[plane[1]]]
-    th = 2 * np.pi * np.arange(n_points) / n_points
-    theta = np.concatenate([th if d == "ccw" else -th % (2 * np.pi) for d in dirs])
+    theta = np.concatenate([th if d == "ccw" or angles_deg is not None else -th % (2 * np.pi)
+                            for d in dirs])
     tip = c + radius * (np.cos(theta)[:, None] * u + np.sin(theta)[:, None] * v)
     pose = follow(m, tip, pose={k: val for k, val in base.items()})
     g = tip - c

@@ -194,10 +194,9 @@ def conclusion_numbers(catalogue, removed, key_shares, *, centred_ratio: float,
     return lines
 
 
-class Parameters(NotebookParameters):
-    """Notebook 06: your own machine's error atlas."""
+class MachineInputs(NotebookParameters):
+    """A reader's machine as notebooks 06 and 08 take it: declared once, here."""
 
-    stem = "06_your_machine"
     seed = param.Integer(2026, bounds=(0, None), doc="seed of every random draw")
     topology = param.String("w C b X Y Z B t",
                             doc="the machine from the workpiece to the tool (README: Machines)")
@@ -207,6 +206,19 @@ class Parameters(NotebookParameters):
                             doc="error ranges: symbol, low, high, unit")
     tool_length_mm = param.Number(120.0, bounds=(0.0, 1000.0),
                                   doc="tool tip below the spindle nose along the tool axis (mm)")
+
+    def check(self) -> None:
+        # the topology alone; the axis table and the range file are checked against it when read
+        try:
+            parse_topology(self.topology)
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"{self.stem}: {exc}") from None
+
+
+class Parameters(MachineInputs):
+    """Notebook 06: your own machine's error atlas."""
+
+    stem = "06_your_machine"
     n_atlas = param.Integer(10000, bounds=(100, 200000),
                             doc="random poses in the travels for the workspace atlas")
     key_share = param.Number(0.05, bounds=(0.0, 1.0), inclusive_bounds=(False, False),
@@ -220,13 +232,6 @@ class Parameters(NotebookParameters):
     n_boot = param.Integer(200, bounds=(20, 2000),
                            doc="bootstrap resamples for the sampled indices' half-widths")
     output_dir = OutputFolder("figures/06_your_machine", doc="where figures and tables are written")
-
-    def check(self) -> None:
-        # the topology alone; the axis table and the range file are checked against it when read
-        try:
-            parse_topology(self.topology)
-        except (TypeError, ValueError) as exc:
-            raise ParameterError(f"{self.stem}: {exc}") from None
 
     def memory_bytes(self) -> float:
         # the atlas (Jacobians, factor products and indices: 12.7 kB per pose, measured), the

@@ -1,0 +1,234 @@
+"""Paper code of notebook 08 (a reader's own measurements of their machine; no paper).
+
+The notebook's parameters (:class:`Parameters`: the machine as notebook 06 takes it, declared
+once in :class:`.your_machine.MachineInputs`, and the two measurement files), the priors it
+assumes, the conversions to the units a reader reads, its figures and their captions
+(:data:`FIGURES`).  The maths is :mod:`mtaccuracy.measure`'s.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import param
+from matplotlib.colors import ListedColormap
+from matplotlib.patches import Patch
+
+from .figure import Caption, figures
+from .parameters import InputFile, OutputFolder
+from .your_machine import MachineInputs
+
+__all__ = ["Parameters", "prior_sd", "reader_units", "is_shipped_example", "status_figure",
+           "positioning_figure", "circle_figure", "FIGURES", "STATUSES"]
+
+#: The shipped example files (simulated, ``data/measure/README.md`` states their truth).
+EXAMPLE_FOLDER = Path(__file__).resolve().parents[3] / "data" / "measure"
+#: The statuses of :func:`mtaccuracy.measure.identifiability.identifiability`, figure order.
+STATUSES = ("seen", "combination", "blind")
+
+
+class Parameters(MachineInputs):
+    """Notebook 08: your own measurements, the tests that see each error, identification."""
+
+    stem = "08_your_measurements"
+    motion_degree = param.Integer(2, bounds=(0, 4),
+                                  doc="Legendre degree of the linear axes' error motions")
+    sigma_um = param.Number(0.5, bounds=(0.001, 100.0),
+                            doc="noise of a simulated length reading (um)")
+    shrink = param.Number(100.0, bounds=(1.0, 1e6), inclusive_bounds=(False, True),
+                          doc="seen: the tests shrink a direction's prior variance this much")
+    n_replicates = param.Integer(500, bounds=(50, 5000),
+                                 doc="noisy replicates of the simulated plan (coverage)")
+    positioning_file = InputFile("data/measure/positioning_X.csv",
+                                 doc="ISO 230-2 file (data/measure/README.md)")
+    circle_file = InputFile("data/measure/circle_XY.csv",
+                            doc="ISO 230-4 file (data/measure/README.md)")
+    output_dir = OutputFolder("figures/08_your_measurements",
+                              doc="where figures and tables are written")
+
+    def memory_bytes(self) -> float:
+        # the plan's design (1.4k readings x 67 parameters) and the replicates' estimates:
+        # 0.3 GB measured at the defaults, a replicate adds 10 kB
+        return 5e8 + 1e4 * self.n_replicates
+
+
+def prior_sd(model, bounds) -> np.ndarray:
+    """Each parameter's prior standard deviation, from its error's range (mm, rad).
+
+    An error uniform on ``[low, high]`` has the standard deviation ``(high - low) / sqrt(12)``;
+    each Legendre coefficient of an error motion takes its error's (an assumption: a range is
+    given for an error, not for its shape along the travel).
+
+    Parameters
+    ----------
+    model : MotionModel
+        The parameters (:func:`mtaccuracy.measure.motions.motion_model`).
+    bounds : (2, n_errors) array_like
+        The machine's error ranges, low and high (mm, rad), as
+        :func:`mtaccuracy.machines.readers.read_ranges` returns them.
+
+    Returns
+    -------
+    (n_params,) ndarray
+    """
+    b = np.asarray(bounds, dtype=float)
+    return ((b[1] - b[0]) / np.sqrt(12.0))[model.column]
+
+
+def reader_units(model) -> dict:
+    """Each parameter's unit as a reader reads it: um for mm, urad for rad.
+
+    Parameters
+    ----------
+    model : MotionModel
+        The parameters.
+
+    Returns
+    -------
+    dict of str to str
+        Symbol -> ``"um"`` or ``"urad"`` (``units=`` of
+        :func:`mtaccuracy.measure.identify.identify`).
+    """
+    return {n: {"mm": "um", "rad": "urad"}[u] for n, u in zip(model.names, model.units,
+                                                            strict=True)}
+
+
+def is_shipped_example(path, name: str) -> bool:
+    """Whether ``path`` holds the shipped example ``name`` (by content, wherever it lies)."""
+    try:
+        return Path(path).read_bytes() == (EXAMPLE_FOLDER / name).read_bytes()
+    except OSError:
+        return False
+
+
+def status_figure(table: pd.DataFrame, *, colours, names=None):
+    """Which test sees which parameter: a matrix of statuses, tests down, parameters across.
+
+    Parameters
+    ----------
+    table : DataFrame
+        :func:`mtaccuracy.measure.identifiability.identifiability_table`: one row per
+        parameter, a status column per test and ``plan`` (the plan's).
+    colours : sequence of 3 colours
+        For :data:`STATUSES` (a colour-blind-safe palette: the compendium's).
+    names : sequence of str, optional
+        The parameters to show (default all).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    names = list(names if names is not None else table.index)
+    tests = [c for c in table.columns if c != "plan" and not c.startswith("plan_")] + ["plan"]
+    codes = np.array([[STATUSES.index(table.loc[n, t]) for n in names] for t in tests])
+    fig, ax = plt.subplots(figsize=(max(8.0, 0.16 * len(names) + 3.5), 0.24 * len(tests) + 2.2))
+    ax.imshow(codes, cmap=ListedColormap(list(colours)[:3]), vmin=-0.5, vmax=2.5,
+              aspect="auto", interpolation="nearest")
+    ax.set_xticks(range(len(names)), names, rotation=90, fontsize=7)
+    ax.set_yticks(range(len(tests)), [t if t != "plan" else "ALL TESTS (the plan)"
+                                      for t in tests], fontsize=7)
+    ax.axhline(len(tests) - 1.5, color="k", lw=1.2)
+    ax.grid(False)
+    ax.legend(handles=[Patch(color=c, label=s) for c, s in zip(colours, STATUSES, strict=False)],
+              loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=3, fontsize=8, frameon=False)
+    fig.tight_layout()
+    return fig
+
+
+def positioning_figure(result):
+    """An ISO 230-2 test: the mean deviations up and down with their +-2s bands, per target.
+
+    Parameters
+    ----------
+    result : Iso230_2Result
+        :func:`mtaccuracy.measure.iso230_2.evaluate_iso230_2`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    t = result.targets_mm
+    fig, ax = plt.subplots(figsize=(7.5, 4))
+    for k, (label, style) in enumerate((("approached in + (up)", "o-"),
+                                        ("approached in - (down)", "s--"))):
+        m, s = result.mean[:, k], result.s[:, k]
+        line, = ax.plot(t, m, style, ms=4, label=label)
+        ax.fill_between(t, m - 2 * s, m + 2 * s, color=line.get_color(), alpha=0.2, lw=0)
+    ax.plot(t, result.mean[:, 2], "k-", lw=1, label="mean bidirectional")
+    ax.set_xlabel(f"target position of {result.axis} (mm)")
+    ax.set_ylabel("positional deviation (µm)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def circle_figure(data):
+    """An ISO 230-4 test: both directions' deviations, on a polar plot and against the angle.
+
+    The polar plot draws each deviation about a ring (twice the deviations' range), to scale.
+
+    Parameters
+    ----------
+    data : CircleData
+        :func:`mtaccuracy.measure.iso230_4.read_iso230_4`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig = plt.figure(figsize=(11, 4.2))
+    ax = fig.add_subplot(1, 2, 1, projection="polar")
+    ax2 = fig.add_subplot(1, 2, 2)
+    dev = data.deviation_um
+    ring = 2.0 * max(np.ptp(dev), 1e-9)
+    for run, label, style in ((True, "ccw", "-"), (False, "cw", "--")):
+        i = np.flatnonzero(data.ccw == run)
+        i = i[np.argsort(np.mod(data.angle_deg[i], 360.0), kind="stable")]
+        th = np.deg2rad(np.mod(data.angle_deg[i], 360.0))
+        ax.plot(np.append(th, th[0]), np.append(dev[i], dev[i][0]) + ring, style, lw=1,
+                label=label)
+        ax2.plot(np.rad2deg(th), dev[i], style, lw=1, label=label)
+    ax.set_yticks([ring], [f"R = {data.radius_mm:g} mm"], fontsize=7)
+    ax.set_ylim(0, ring + dev.max() * 1.1)
+    ax.set_title(f"{data.plane}: deviation about a ring of R (µm to scale)", fontsize=9)
+    ax2.set_xlabel(f"angle from +{data.plane[0]} towards +{data.plane[1]} (°)")
+    ax2.set_ylabel("radial deviation (µm)")
+    ax2.set_xticks(range(0, 361, 45))
+    ax2.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+FIGURES = figures(
+    Caption("test_status", "Figure 1",
+            "Which standard test sees which parameter of the machine `{topology}` (error motions "
+            "as Legendre polynomials of degree {degree} over the travels, {n_params} parameters; "
+            "priors from {ranges_file}): seen (the tests shrink its prior variance at least "
+            "{shrink:g}-fold), seen only in a combination with others, or blind. The last row is "
+            "the whole plan of {n_tests} tests: rank {rank}, {n_seen} seen, {n_combination} in "
+            "combinations, {n_blind} blind. Simulated designs, no measurement.", key=True),
+    Caption("simulated_recovery", "Figure 2",
+            "A simulated measurement of the whole plan (truth drawn from the priors, seed "
+            "{seed}, noise {sigma:g} µm per reading): each seen parameter's estimate minus the "
+            "truth, in standard uncertainties; over {n_replicates} noisy replicates the 95 % "
+            "intervals covered the truth {coverage:.1%} of the time. Simulated data, not a "
+            "measurement."),
+    Caption("positioning", "Figure 3",
+            "ISO 230-2 test of axis {axis} ({source_name}): mean unidirectional deviations "
+            "approached in + and - with their ±2 s bands, and the mean bidirectional deviation. "
+            "E = {E:.2f} µm, M = {M:.2f} µm, B = {B:.2f} µm, R = {R:.2f} µm, A = {A:.2f} µm. "
+            "{source}"),
+    Caption("circle", "Figure 4",
+            "ISO 230-4 circular test in {plane} ({source_name}), R = {radius:g} mm at "
+            "{feed:g} mm/min, both directions. G = {G_ccw:.2f} µm (ccw), {G_cw:.2f} µm (cw) about "
+            "the least-squares centre; H = {H:.2f} µm; squareness {squareness:.1f} ± "
+            "{u_squareness:.1f} µrad, scale mismatch {scale_mismatch:.1f} ± {u_scale:.1f} µm/m. "
+            "{source}"),
+)
+
+#: How a caption names the data behind a figure.
+SOURCES = {True: "Simulated data: the shipped example file, not a measurement.",
+           False: "Data: the file given, not the shipped example."}
