@@ -1,0 +1,106 @@
+"""The explorer's shared pieces: styles, messages, guarded widgets, CSV buttons, figures.
+
+:mod:`mtaccuracy.apps.explore` and its tabs (:mod:`~mtaccuracy.apps.explore_tabs`) build on
+these; :func:`guarded` is the server-side gate every value from the page passes (the bounds of
+:mod:`~mtaccuracy.apps.explore_model`).
+"""
+
+from __future__ import annotations
+
+import html
+import io
+
+import panel as pn
+from bokeh.plotting import figure
+
+from . import explore_model as M
+
+#: A blue, the figures' orange of published values, a red: cancelled, a grey: no first order.
+BLUE, ORANGE, RED, GREY = "#1b6ca8", "#d95f02", "#b2182b", "#cccccc"
+CSS = """
+.mt-note {font-size: 12px; color: #555; line-height: 1.35;}
+.mt-error {background: #fde8e8; border: 1px solid #b2182b; color: #7a1020; padding: 6px 9px;
+           border-radius: 4px; font-size: 12.5px; white-space: pre-wrap;}
+table.mt-top {border-collapse: collapse; font-size: 12.5px;}
+table.mt-top td, table.mt-top th {padding: 2px 8px; border-bottom: 1px solid #e3e3e3;
+                                  text-align: left;}
+"""
+
+
+def note(text: str, **kw):
+    return pn.pane.HTML(f'<div class="mt-note">{text}</div>', **kw)
+
+
+def error_html(message: str) -> str:
+    return f'<div class="mt-error" data-role="error">{html.escape(message)}</div>' \
+        if message else ""
+
+
+def prompt(widget):
+    """Act on the widget's changes after 5 ms, not Panel's 50: the Machine tab's update is fast."""
+    widget._debounce = 5
+    return widget
+
+
+def guarded(widget, check, refuse):
+    """``widget`` whose browser values pass ``check`` on the server before Panel applies them.
+
+    A message from the page (or a crafted one) setting ``value`` goes through ``check`` first
+    (:func:`mtaccuracy.apps.explore_model.checked_number` and the like): a refused value is never
+    applied, ``refuse`` gets the message to show in the app (no traceback on the server) and the
+    page gets the server's value back; an accepted one calls ``refuse("")`` (clears it).
+    """
+    process = widget._process_events
+
+    def guarded(events):
+        events = dict(events)
+        try:
+            for key in ("value", "value_throttled"):
+                if key in events:
+                    events[key] = check(events[key])
+            if "active" in events:             # a button or check box group: option indices
+                n, active = len(widget.options), events["active"]
+                many = isinstance(active, list | tuple)
+                if not all(isinstance(i, int) and not isinstance(i, bool) and 0 <= i < n
+                           for i in (active if many else [active])):
+                    raise ValueError(f"{widget.name or 'a choice'}: {active!r} is not a "
+                                     f"choice of 0..{n - 1}")
+        except ValueError as exc:
+            refuse(str(exc))
+            widget.param.trigger("value")           # the page shows the server's value again
+            return
+        refuse("")
+        process(events)
+
+    widget._process_events = guarded
+    return widget
+
+
+def number_check(name: str, low: float, high: float, *, unit: str = "",
+                  integer: bool = False):
+    def check(value):
+        return M.checked_number(value, name, low=low, high=high, unit=unit, integer=integer)
+    return check
+
+
+def option_check(widget):
+    """Accept only one of ``widget``'s labels (a list of them for a multiple choice)."""
+    def check(value):
+        labels = [str(v) for v in (widget.labels if hasattr(widget, "labels")
+                                   else widget.options)]
+        many = isinstance(value, list | tuple)
+        if not all(isinstance(v, str) and v in labels for v in (value if many else [value])):
+            raise ValueError(f"{widget.name or 'a choice'}: {value!r} is not one of "
+                             f"{', '.join(labels)}")
+        return value
+    return check
+
+
+def csv_button(label: str, filename: str, frame, **kw):
+    """A download of ``frame()`` (a DataFrame, computed at the click) as ``filename``."""
+    return pn.widgets.FileDownload(callback=lambda: io.StringIO(M.to_csv(frame())),
+                                   filename=filename, label=label, embed=False, **kw)
+
+
+def new_figure(title: str, **kw):
+    return figure(title=title, tools="hover,save", toolbar_location="above", **kw)
