@@ -48,6 +48,7 @@ from .explore_ui import (
     csv_button,
     error_html,
     guarded,
+    guarded_table,
     new_figure,
     note,
     number_check,
@@ -79,9 +80,23 @@ class MachineTab(param.Parameterized):
     pose = param.Parameter(doc="the pose sliders: a Parameterized with one number per axis")
     error = param.String("", doc="the library's message on the last topology typed")
     refused = param.String("", doc="why the last value sent by the page was refused")
+    half_range = param.Array(np.zeros(0), doc="every error's half range (mm, rad), the table's")
 
     def __init__(self, **params):
         super().__init__(**params)
+        self.ranges = guarded_table(pn.widgets.Tabulator(
+            M.ranges_table(M.machine_setup(self.machine)), show_index=False, height=260,
+            width=290, layout="fit_data_table", selectable=False, sortable=False,
+            css_classes=["error-ranges"], editors={
+                "error": None, "unit": None, "notebook": None, "half_range": {
+                    "type": "number", "min": M.ERROR_RANGE_BOUNDS[0],
+                    "max": M.ERROR_RANGE_BOUNDS[1], "step": 0.1}},
+            titles={"half_range": "± half range", "notebook": "notebook's"},
+            formatters={c: {"type": "money", "precision": 4, "symbol": ""}
+                        for c in ("half_range", "notebook")}),
+            "half_range", lambda v: M.checked_half_ranges(self.setup, v, in_table_units=True),
+            self.refuse)
+        self.ranges.param.watch(self._table_edited, "value")
         self.top, self.status = pn.pane.HTML("", width=460), pn.pane.HTML("", width=290)
         self.result = None                     # the last PoseIndices shown (the CSV exports)
         # heat map: errors (rows) x outputs (columns)
@@ -136,7 +151,7 @@ class MachineTab(param.Parameterized):
         pose.param.watch(self.update, [a.name for a in setup.axes])
         across, up = M.default_map_axes(setup)
         self.param.update(setup=setup, pose=pose, error="", across=across, up=up,
-                          output=setup.outputs[0],
+                          output=setup.outputs[0], half_range=setup.half_range.copy(),
                           position_um=min(max(setup.position_um, M.RANGE_BOUNDS[0]),
                                           M.RANGE_BOUNDS[1]),
                           angular_arcsec=min(max(setup.angular_arcsec, M.RANGE_BOUNDS[0]),
@@ -169,16 +184,63 @@ class MachineTab(param.Parameterized):
         """The pose sliders' values (mm, deg) by axis."""
         return {a.name: float(getattr(self.pose, a.name)) for a in self.setup.axes}
 
-    @param.depends("pose", "position_um", "angular_arcsec", "across", "up",
-                   "output", watch=True)
+    @param.depends("position_um", watch=True)
+    def _scale_position(self) -> None:
+        self._scale(True, self.position_um)
+
+    @param.depends("angular_arcsec", watch=True)
+    def _scale_angular(self) -> None:
+        self._scale(False, self.angular_arcsec)
+
+    def _scale(self, translational: bool, largest: float) -> None:
+        """A group slider moved: its group's half ranges scaled, their ratios kept."""
+        try:
+            new = M.scaled_group(self.setup, self.half_range, translational=translational,
+                                 largest=largest)
+        except ValueError as exc:
+            self.refused = str(exc)
+            return
+        if not np.array_equal(new, self.half_range):
+            self.half_range = new
+
+    def _table_edited(self, event) -> None:
+        """A half range typed in the table (checked by the table's guard, and again here)."""
+        try:
+            new = M.checked_half_ranges(self.setup, event.new["half_range"].to_numpy(),
+                                        in_table_units=True)
+        except (ValueError, KeyError) as exc:
+            self.refused = str(exc)
+            return
+        if new.shape == self.half_range.shape and not np.array_equal(new, self.half_range):
+            self.set_half_ranges(new)
+
+    def set_half_ranges(self, half_range) -> None:
+        """Every error's half range (mm, rad; checked), the group sliders at their largest."""
+        half = M.checked_half_ranges(self.setup, half_range)
+        per = np.where(self.setup.translational, 1e-3, M.ARCSEC)
+        sliders = {}
+        for name, group in (("position_um", self.setup.translational),
+                            ("angular_arcsec", ~self.setup.translational)):
+            top = float((half[group] / per[group]).max()) if group.any() else 0.0
+            if M.RANGE_BOUNDS[0] <= top <= M.RANGE_BOUNDS[1]:
+                sliders[name] = top
+        self.half_range = half
+        self.param.update(sliders)            # scaled to their own largest: no change
+
+    @param.depends("half_range", watch=True)
+    def _show_ranges(self) -> None:
+        table = M.ranges_table(self.setup, self.half_range)
+        if not table.equals(self.ranges.value):
+            self.ranges.value = table
+
+    @param.depends("pose", "half_range", "across", "up", "output", watch=True)
     def update(self, *events) -> None:
         """Recompute the indices and the map at the sliders' values and redraw both in place."""
         t0 = time.perf_counter()
         pose, setup = self.pose_values(), self.setup
         try:                                   # every bound checked again before the work
             res, dmap = M.slider_update(setup, pose, axes=(self.across, self.up),
-                                        position_um=self.position_um,
-                                        angular_arcsec=self.angular_arcsec)
+                                        half_range=self.half_range)
         except ValueError as exc:
             self.refused = str(exc)
             return
@@ -289,10 +351,16 @@ class MachineTab(param.Parameterized):
             pn.pane.HTML(p.error.rx.pipe(error_html), width=290),
             pn.pane.HTML(p.refused.rx.pipe(error_html), width=290), self._notes,
             pn.pane.HTML("<b>Pose</b>"), self._sliders,
-            pn.pane.HTML("<b>Error ranges</b> (uniform)"),
+            pn.pane.HTML("<b>Error ranges</b> (uniform on ± the half range)"),
             *ranges,
-            note("Each slider sets the largest half range of its group; the errors the "
-                  "notebook gives smaller ranges keep their ratio to it."),
+            note("Each slider sets the largest half range of its group; the others keep "
+                 "their ratio to it. Type any error's own half range in the table (µm or "
+                 "arcsec, 0 to 10 000); the notebook's is beside it."),
+            self.ranges,
+            pn.Row(w.Button(label="notebook's ranges", width=140, on_click=lambda e:
+                            self.set_half_ranges(self.setup.half_range)),
+                   csv_button("ranges (CSV)", "error_ranges.csv",
+                              lambda: M.ranges_table(self.setup, self.half_range), width=140)),
             pn.Row(*(choice(prompt(w.Select.from_param(p[n], width=90)))
                      for n in ("across", "up", "output"))),
             self.status, pn.Row(

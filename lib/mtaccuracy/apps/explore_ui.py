@@ -76,6 +76,37 @@ def guarded(widget, check, refuse):
     return widget
 
 
+def guarded_table(table, column: str, check, refuse):
+    """``table`` (a Tabulator) whose edits from the page pass ``check`` on the server first.
+
+    Every change of the table's data the page sends (an edited cell, or a crafted message with
+    any columns and rows) reaches Panel only as ``column``, and only once ``check`` (called with
+    that column's values, in row order) accepts it; the other columns are never taken from the
+    page.  A refused change is never applied: ``refuse`` gets the message and the page gets the
+    server's table back; an accepted one calls ``refuse("")``.
+    """
+    process = table._process_data
+
+    def guarded_data(data):
+        try:
+            if column not in data:
+                raise ValueError(f"the table's edit has no column {column!r}")
+            values = data[column]
+            if isinstance(values, dict):            # a patch: {row: value}
+                values = [v for _, v in sorted(values.items(), key=lambda kv: int(kv[0]))]
+            values = list(values)
+            check(values)
+        except (ValueError, TypeError) as exc:
+            refuse(str(exc))
+            table.param.trigger("value")
+            return
+        refuse("")
+        process({column: values})
+
+    table._process_data = guarded_data
+    return table
+
+
 def number_check(name: str, low: float, high: float, *, unit: str = "",
                   integer: bool = False):
     def check(value):
