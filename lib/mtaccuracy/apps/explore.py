@@ -16,8 +16,16 @@ layout cancels and amplifies, for least squares and the weighted method.  Therma
 split, the decoupled model (MLR or SVR, fitted off the event loop with its progress shown)
 against the measured error.
 
-The server listens on 127.0.0.1 only (:func:`check_address`), its websocket accepts pages from
-``127.0.0.1:<port>`` and ``localhost:<port>`` only, and Panel serves its own JavaScript and CSS.
+Machine-tab ranges: a table of every error's half range (µm, arcsec), seeded from the notebook's
+declarations, typed in or read from the reader's own ranges file; the reader's probe file
+(Spindle) and thermal measurements (Thermal) too, through the notebooks' own readers
+(:mod:`~mtaccuracy.apps.explore_files`).
+
+The server listens on 127.0.0.1 only (:func:`check_address`) and needs its token (printed in the
+URL at start; ``--token`` sets it), serves at most
+:data:`~mtaccuracy.apps.explore_server.MAX_SESSIONS` sessions at once, its websocket accepts
+pages from ``127.0.0.1:<port>`` and ``localhost:<port>`` only (whatever
+``BOKEH_ALLOW_WS_ORIGIN`` says), and Panel serves its own JavaScript and CSS.
 Every value the page sends is checked on the server before Panel applies it
 (:func:`~mtaccuracy.apps.explore_ui.guarded`, the bounds of
 :mod:`~mtaccuracy.apps.explore_model`): a refused one is shown as a message.
@@ -40,13 +48,17 @@ from bokeh import models as bm
 from bokeh.palettes import Viridis256
 
 from ..compendium.plotting import category_colours, unit_symbol
+from . import explore_files as EF
 from . import explore_model as M
+from . import explore_server as ES
 from .explore_tabs import SpindleTab, ThermalTab
 from .explore_ui import (
     CSS,
     GREY,
     csv_button,
     error_html,
+    file_box,
+    file_status,
     guarded,
     guarded_table,
     new_figure,
@@ -81,6 +93,8 @@ class MachineTab(param.Parameterized):
     error = param.String("", doc="the library's message on the last topology typed")
     refused = param.String("", doc="why the last value sent by the page was refused")
     half_range = param.Array(np.zeros(0), doc="every error's half range (mm, rad), the table's")
+    file_error = param.String("", doc="the reader's message on the last ranges file")
+    file_read = param.String("", doc="what the last ranges file gave")
 
     def __init__(self, **params):
         super().__init__(**params)
@@ -213,6 +227,17 @@ class MachineTab(param.Parameterized):
             return
         if new.shape == self.half_range.shape and not np.array_equal(new, self.half_range):
             self.set_half_ranges(new)
+
+    def load_ranges(self, names, contents) -> None:
+        """A ranges file uploaded: read as notebook 06 reads it, against this machine."""
+        up = EF.read_upload(names, contents, lambda path: M.ranges_from_file(self.setup, path))
+        if up.message:
+            self.param.update(file_error=up.message, file_read="")
+            return
+        self.set_half_ranges(up.result)
+        self.param.update(file_error="", file_read=f"{up.names[0]}: {len(up.result)} ranges "
+                          f"read for {self.setup.label}" + "".join(
+                              f"; {w}" for w in up.warnings))
 
     def set_half_ranges(self, half_range) -> None:
         """Every error's half range (mm, rad; checked), the group sliders at their largest."""
@@ -361,6 +386,10 @@ class MachineTab(param.Parameterized):
                             self.set_half_ranges(self.setup.half_range)),
                    csv_button("ranges (CSV)", "error_ranges.csv",
                               lambda: M.ranges_table(self.setup, self.half_range), width=140)),
+            note("Your ranges file (notebook 06's: symbol, low, high, unit; one row per error "
+                 "of this machine):"),
+            file_box("ranges-file", self.load_ranges),
+            pn.pane.HTML(pn.rx(file_status)(p.file_error, p.file_read), width=290),
             pn.Row(*(choice(prompt(w.Select.from_param(p[n], width=90)))
                      for n in ("across", "up", "output"))),
             self.status, pn.Row(
@@ -379,7 +408,7 @@ class MachineTab(param.Parameterized):
 
 def create_app():
     """The explorer's three tabs, a new independent app per call (one per browser session)."""
-    pn.extension(raw_css=[CSS])
+    pn.extension("tabulator", raw_css=[CSS])
     tabs = {"machine": MachineTab(), "spindle": SpindleTab(), "thermal": ThermalTab()}
     header = pn.pane.HTML(
         "<h2 style='margin:4px 0'>mtaccuracy explorer</h2><div class='mt-note'>Closed-form "
@@ -406,33 +435,56 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def serve(*, port: int = 0, address: str = LOOPBACK, show: bool = False):
-    """A server of :func:`create_app` on 127.0.0.1 (port 0: a free one) and its URL, not started."""
+def _too_many():
+    return pn.pane.HTML(f"<p>The explorer serves {ES.MAX_SESSIONS} sessions at once: close "
+                        "another tab, then reload this one.</p>")
+
+
+def serve(*, port: int = 0, address: str = LOOPBACK, show: bool = False,
+          token: str | None = None, max_sessions: int = ES.MAX_SESSIONS):
+    """A server of :func:`create_app` on 127.0.0.1 (port 0: a free one) and its URL, not started.
+
+    Every request needs ``token`` (None: a random one; :mod:`~mtaccuracy.apps.explore_server`),
+    which the URL returned carries; at most ``max_sessions`` sessions at once; the websocket
+    takes the server's own origins only, whatever ``BOKEH_ALLOW_WS_ORIGIN`` says.
+    """
     check_address(address)
     if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
         raise ValueError(f"port must be an integer in 0..65535, got {port!r}")
+    token = ES.new_token() if token is None else ES.checked_token(token)
+    ES.own_origins()
+    app = ES.SessionCap(max_sessions).gate(create_app, _too_many)
     for attempt in range(5):
         chosen = port or free_port()
         try:
-            server = pn.serve(create_app, port=chosen, address=LOOPBACK,
+            server = pn.serve(app, port=chosen, address=LOOPBACK,
                               websocket_origin=[f"{LOOPBACK}:{chosen}", f"localhost:{chosen}"],
-                              show=show, start=False, verbose=False,
-                              title="mtaccuracy explorer")
+                              show=False, start=False, verbose=False,
+                              title="mtaccuracy explorer", auth_provider=ES.TokenAuth(
+                                  token, chosen),
+                              websocket_max_message_size=2 * EF.MAX_UPLOAD_BYTES)
             break
         except OSError:
             if port or attempt == 4:       # a port asked for is taken; or no luck, 5 times
                 raise
-    return server, f"http://{LOOPBACK}:{chosen}/"
+    url = f"http://{LOOPBACK}:{chosen}/?token={token}"
+    if show:
+        import webbrowser
+        server.io_loop.add_callback(webbrowser.open, url)
+    return server, url
 
 
 def main(argv=None) -> int:
-    """``python -m mtaccuracy.apps.explore [--port N] [--show/--no-show] [--from-env]``."""
+    """``python -m mtaccuracy.apps.explore [--port N] [--token T] [--show] [--from-env]``."""
     ap = argparse.ArgumentParser(prog="python -m mtaccuracy.apps.explore",
                                  description="Serve the mtaccuracy explorer on 127.0.0.1.")
     ap.add_argument("--port", type=int, default=0,
                     help="port on 127.0.0.1 (default 0: a free one)")
     ap.add_argument("--show", action=argparse.BooleanOptionalAction, default=False,
                     help="open the page in the default browser (default: --no-show)")
+    ap.add_argument("--token", default=None,
+                    help="the token every request needs (16 to 128 letters, digits, - or _; "
+                         "default: a random one, printed in the URL)")
     ap.add_argument("--from-env", action="store_true",
                     help="take further arguments from $EXPLORE_ARGS (make explore), split like "
                          "a shell would, never evaluated by one")
@@ -445,7 +497,7 @@ def main(argv=None) -> int:
             return 2
     args = ap.parse_args(argv)
     try:
-        server, url = serve(port=args.port, show=args.show)
+        server, url = serve(port=args.port, show=args.show, token=args.token)
     except (ValueError, OSError) as exc:
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
         print(f"explore: cannot serve on {LOOPBACK}:{args.port}: {reason}", file=sys.stderr)

@@ -315,7 +315,7 @@ def checked_half_ranges(setup: MachineSetup, half_range, *, in_table_units: bool
         f"the half range of {n}", low=ERROR_RANGE_BOUNDS[0], high=ERROR_RANGE_BOUNDS[1],
         unit=f" {un}") for v, u, n, un in zip(values, unit, setup.names, range_units(setup),
                                             strict=True)])
-    return shown * unit
+    return shown * unit if in_table_units else np.array(values, dtype=float)   # as given
 
 
 def scaled_group(setup: MachineSetup, half_range, *, translational: bool, largest: float):

@@ -18,8 +18,11 @@ from bokeh import models as bm
 from bokeh.palettes import Plasma256
 from bokeh.plotting import figure
 
+from .. import thermal
 from ..compendium import provenance
 from ..papers import xu2022, yang2021, your_spindle
+from ..spindle import probefile
+from . import explore_files as EF
 from . import explore_model as M
 from .explore_ui import (
     BLUE,
@@ -27,6 +30,8 @@ from .explore_ui import (
     RED,
     csv_button,
     error_html,
+    file_box,
+    file_status,
     guarded,
     new_figure,
     note,
@@ -61,10 +66,37 @@ class SpindleTab(param.Parameterized):
                                    bounds=M.AMPLIFIED_BOUNDS, step=0.5,
                                    label="amplified when q_k above")
     refused = param.String("", doc="why the last value sent by the page was refused")
+    file_error = param.String("", doc="the reader's message on the last probe file")
+    file_read = param.String("", doc="what the last probe file gave")
 
     def refuse(self, message: str) -> None:
         """Show why a value from the page was refused ("": clear the message)."""
         self.refused = message
+
+    def load_probes(self, names, contents) -> None:
+        """A probe file uploaded: read as notebook 07 reads it; its layout shown (probe 1 at 0)."""
+        p = _YOURS.defaults()
+        up = EF.read_upload(names, contents, lambda path: probefile.read_probe_file(
+            path, max_harmonic=p["max_harmonic"] or None, allow_cancelled=p["allow_cancelled"]))
+        data, name = up.result, up.names[0] if up.names else "the file"
+        error = up.message
+        if not error and data.angles_deg.size != 4:
+            error = (f"{name}: {data.angles_deg.size} probes; this tab shows four-probe layouts "
+                     f"(notebook 07 separates any layout: make reproduce NB=07)")
+        rel = None if error else (np.asarray(data.angles_deg, float) - data.angles_deg[0]) % 360
+        if rel is not None and rel.max() > self.param.probe2.bounds[1]:
+            error = (f"{name}: a probe at {rel.max():g} deg from probe 1, beyond this tab's "
+                     f"{self.param.probe2.bounds[1]:g} deg")
+        if error:
+            self.param.update(file_error=error, file_read="")
+            return
+        k = int(min(max(data.max_harmonic, M.HARMONIC_BOUNDS[0]), M.HARMONIC_BOUNDS[1]))
+        self.param.update(probe2=float(rel[1]), probe3=float(rel[2]), probe4=float(rel[3]),
+                          max_harmonic=k, file_error="", file_read=(
+                              f"{name}: probes at {', '.join(f'{a:g}' for a in data.angles_deg)}"
+                              f" deg, {data.revolutions.size} revolution(s) of "
+                              f"{data.sample_deg.size} samples; shown from probe 1 (at 0 deg)"
+                              + "".join(f"; {w}" for w in up.warnings)))
 
     def transfer(self) -> M.ProbeTransfer:
         """The model at the controls' values (probe 1 at 0 deg); a ValueError if refused."""
@@ -212,7 +244,10 @@ class SpindleTab(param.Parameterized):
                                            visible=p.weights.rx() == "eq5"), "a3"),
             guard(w.FloatSlider.from_param(p.amplified_above, width=280), "amplified_above"),
             csv_button("harmonics (CSV)", "spindle_harmonics.csv",
-                        lambda: M.probe_table(self.transfer()), width=140),
+                       lambda: M.probe_table(self.transfer()), width=140),
+            note("Your probe file (notebook 07's: revolution, angle_deg, probe_<angle>_um):"),
+            file_box("probe-file", self.load_probes),
+            pn.pane.HTML(pn.rx(file_status)(p.file_error, p.file_read), width=290),
             width=310), self.plots)
 
 
@@ -230,10 +265,36 @@ class ThermalTab(param.Parameterized):
     busy = param.Boolean(False, doc="a fit runs")
     result = param.Parameter(doc="the last prediction, or the library's message")
     refused = param.String("", doc="why the last value sent by the page was refused")
+    file_error = param.String("", doc="the reader's message on the last thermal files")
+    source = param.String("", doc="where the data shown come from, in words")
 
     def refuse(self, message: str) -> None:
         """Show why a value from the page was refused ("": clear the message)."""
         self.refused = message
+
+    def _use(self, data, reconstructed: bool) -> None:
+        """Show ``data``: notebook 04's split when it applies, else the last experiment tested."""
+        self.data, self.reconstructed = data, reconstructed
+        exps = [int(e) for e in data.experiments]
+        try:
+            start = M.thermal_defaults(data, reconstructed)          # notebook 04's
+        except ValueError:
+            start = {"train": exps[:-1], "test": exps[-1], "inputs": "published"}
+        self.param.train.objects, self.param.test.objects = exps, exps
+        shown = html.escape(provenance.shown(data.source))
+        self.param.update(start, source=f"Data: {shown}" + (
+            " - the paper's reconstruction (data/thermal/README.md), not measurements."
+            if reconstructed else " - not the paper's reconstruction: no comparison with the "
+            "paper."))
+
+    def load_files(self, names, contents) -> None:
+        """Thermal files uploaded together: read as notebook 04 reads its ``data_dir``."""
+        up = EF.read_upload(names, contents, thermal.read_measurements, folder=True)
+        if up.message:
+            self.file_error = up.message
+            return
+        self.file_error = ""
+        self._use(up.result, False)
 
     def _csv(self):
         if not isinstance(self.result, M.ThermalPrediction):
@@ -242,10 +303,7 @@ class ThermalTab(param.Parameterized):
 
     def __init__(self, **params):
         super().__init__(**params)
-        self.data, self.reconstructed = M.thermal_data()
-        exps = [int(e) for e in self.data.experiments]
-        self.param.train.objects, self.param.test.objects = exps, exps
-        self.param.update(M.thermal_defaults(self.data, self.reconstructed))  # notebook 04's
+        self._use(*M.thermal_data())
 
     @param.depends("train", "test", "inputs", "kind", watch=True)
     async def _fit(self) -> None:
@@ -320,7 +378,6 @@ class ThermalTab(param.Parameterized):
     def view(self):
         """The tab: controls, status, and the prediction against the measurement."""
         p, w = self.param, pn.widgets
-        source = html.escape(provenance.shown(self.data.source))
         test = w.Select.from_param(p.test, width=140)
 
         def accept(value):
@@ -338,8 +395,10 @@ class ThermalTab(param.Parameterized):
             pn.Row(pn.indicators.LoadingSpinner(value=p.busy, visible=p.busy, size=22),
                    pn.pane.HTML(p.status.rx.pipe(lambda s: f'<div class="mt-note">'
                                                  f'{html.escape(s)}</div>'), width=260)),
-            note(f"Data: {source}" + (
-                " - the paper's reconstruction (data/thermal/README.md), not measurements."
-                if self.reconstructed else " - not the paper's reconstruction: no comparison "
-                "with the paper.")), width=310),
+            pn.pane.HTML(p.source.rx.pipe(lambda s: f'<div class="mt-note">{s}</div>'),
+                         width=290),
+            note("Your measurements (notebook 04's data_dir: temperatures.csv and errors.csv, "
+                 "experiments.csv if any; choose them together):"),
+            file_box("thermal-files", self.load_files, multiple=True),
+            pn.pane.HTML(p.file_error.rx.pipe(error_html), width=290), width=310),
             self.plots)

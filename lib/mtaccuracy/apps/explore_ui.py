@@ -107,6 +107,19 @@ def guarded_table(table, column: str, check, refuse):
     return table
 
 
+def file_box(css: str, on_file, *, multiple: bool = False):
+    """A ``.csv`` upload (Panel's FileInput) whose file(s) go to ``on_file(names, contents)``."""
+    box = pn.widgets.FileInput(accept=".csv", multiple=multiple, css_classes=[css], width=290)
+    box.param.watch(lambda event: on_file(box.filename, box.value), "value")
+    return box
+
+
+def file_status(error: str, told: str) -> str:
+    """The reader's message (an error box), else what was read (a note)."""
+    return error_html(error) if error else (
+        f'<div class="mt-note" data-role="file-read">{html.escape(told)}</div>' if told else "")
+
+
 def number_check(name: str, low: float, high: float, *, unit: str = "",
                   integer: bool = False):
     def check(value):
