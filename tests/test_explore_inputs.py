@@ -228,3 +228,73 @@ def test_the_thermal_tab_takes_a_folder_through_notebook_04_s_reader():
     assert "not the paper's reconstruction" in tab.source
     tab.load_files(["temperatures.csv"], [contents[0]])          # errors.csv missing
     assert "errors.csv" in tab.file_error and "/tmp" not in tab.file_error
+
+
+# -- the state in the URL ----------------------------------------------------------------------
+
+def test_a_link_restores_the_tab_the_pose_the_ranges_and_the_probes():
+    pytest.importorskip("panel")
+    from mtaccuracy.apps import explore
+    from mtaccuracy.apps.explore_state import UrlState
+
+    a = explore.create_app()
+    m, s = a.tabs["machine"], a.tabs["spindle"]
+    m.topology = TOPOLOGY                                   # a typed machine
+    m.pose.param.update(x=-212.5, B=33.25)
+    m.param.update(across="x", up="B", output="Py")
+    half = m.half_range.copy()
+    half[4] = 17.5e-3 if m.setup.translational[4] else 17.5 * M.ARCSEC
+    m.set_half_ranges(half)
+    s.param.update(probe2=41.5, probe3=170.0, probe4=300.125)
+    a.views.active = 1
+    link = {p: getattr(a.url_state, p) for p in a.url_state.param if p != "name"}
+    assert link["tab"] == "spindle" and link["machine"] == M.TOPOLOGY and link["ranges"]
+    b = explore.create_app()                                 # a reload with that link
+    state = UrlState(**link)
+    active = []
+    assert state.apply(b.tabs, active=active.append) == [] and active == [1]
+    mb, sb = b.tabs["machine"], b.tabs["spindle"]
+    assert mb.setup.key == M.TOPOLOGY and mb.topology == TOPOLOGY
+    assert mb.pose_values() == m.pose_values() and (mb.across, mb.up, mb.output) == (
+        "x", "B", "Py")
+    np.testing.assert_allclose(mb.half_range, m.half_range, rtol=1e-15)
+    assert (sb.probe2, sb.probe3, sb.probe4) == (41.5, 170.0, 300.125)
+    assert np.array_equal(mb.heat_src.data["index"], m.heat_src.data["index"], equal_nan=True)
+    # the notebook's ranges are not written in the link
+    mb.set_half_ranges(mb.setup.half_range)
+    b.url_state.read(b.tabs)
+    assert b.url_state.ranges == ""
+
+
+def test_a_bad_link_is_named_part_by_part_and_the_rest_applied():
+    pytest.importorskip("panel")
+    from mtaccuracy.apps import explore
+    from mtaccuracy.apps.explore_state import UrlState
+
+    app = explore.create_app()
+    m, s = app.tabs["machine"], app.tabs["spindle"]
+    before = m.pose_values()
+    state = UrlState(machine="vertical_xyfz", pose="x:1e9", view="x,Q,Px",
+                     ranges="1,2", probes="10,nan,20", tab="<script>")
+    problems = state.apply(app.tabs)
+    assert m.setup.key == "vertical_xyfz" and m.pose_values() != before    # applied
+    text = "; ".join(problems)
+    for why in ("pose: axis x = 1e+09 is out of bounds", "view: 'x,Q,Px' is not two axes",
+                "ranges: the link's ranges has 2 values, 21 expected", "probes: probe 3 angle "
+                "is not a number (NaN)", "tab: '<script>' is not one of"):
+        assert why in text, text
+    assert (s.probe2, s.probe3) == M.YANG_DEG[1:3]
+    assert UrlState(machine="x" * 3000).apply(app.tabs)[0].startswith("machine: the link's")
+    assert UrlState(machine=M.TOPOLOGY, topology="w Q t").apply(app.tabs)[0].startswith(
+        "machine: unknown axis letter")
+
+
+def test_each_tab_links_its_chapter(tmp_path):
+    from mtaccuracy.apps import explore_state as EU
+
+    cff = tmp_path / "CITATION.cff"
+    cff.write_text('cff-version: 1.2.0\nurl: "https://example.org/book"\n')
+    assert EU.chapter_url("vertical_xyfz", cff) == \
+        "https://example.org/book/chapters/03_guo2016_spearman_21_errors.html"
+    assert EU.chapter_url("thermal", tmp_path / "none.cff") == ""
+    assert set(EU.CHAPTERS.values()) == {p.stem for p in (ROOT / "notebooks").glob("*.ipynb")}

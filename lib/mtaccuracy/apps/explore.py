@@ -51,6 +51,7 @@ from ..compendium.plotting import category_colours, unit_symbol
 from . import explore_files as EF
 from . import explore_model as M
 from . import explore_server as ES
+from . import explore_state as EU
 from .explore_tabs import SpindleTab, ThermalTab
 from .explore_ui import (
     CSS,
@@ -113,6 +114,7 @@ class MachineTab(param.Parameterized):
         self.ranges.param.watch(self._table_edited, "value")
         self.top, self.status = pn.pane.HTML("", width=460), pn.pane.HTML("", width=290)
         self.result = None                     # the last PoseIndices shown (the CSV exports)
+        self.on_update = []                    # called after each redraw (the URL's state)
         # heat map: errors (rows) x outputs (columns)
         self.heat_src = bm.ColumnDataSource(dict(error=[], output=[], index=[], label=[],
                                                  text_color=[], note=[]))
@@ -288,6 +290,8 @@ class MachineTab(param.Parameterized):
                 for o in res.outputs) + "</table>"
         self.status.object = f'<div class="mt-note" data-role="timing">computed in {ms:.0f} ms ' \
             '(server side)</div>'
+        for callback in self.on_update:
+            callback()
 
     def _draw_heat(self, res: M.PoseIndices) -> None:
         d, q = res.indices.shape
@@ -414,9 +418,40 @@ def create_app():
         "<h2 style='margin:4px 0'>mtaccuracy explorer</h2><div class='mt-note'>Closed-form "
         "sensitivity of the papers' machines, what a probe layout does to each harmonic, and "
         "the thermal model of notebook 04. Hover over a plot for its values.</div>")
-    app = pn.Column(header, pn.Tabs(*((k.capitalize(), t.view()) for k, t in tabs.items())),
-                    sizing_mode="stretch_width")
-    app.tabs = tabs
+    views = pn.Tabs(*((k.capitalize(), t.view()) for k, t in tabs.items()))
+    state, problems = EU.UrlState(), pn.pane.HTML("", sizing_mode="stretch_width")
+    chapter = pn.pane.HTML("", sizing_mode="stretch_width")
+    machine, spindle = tabs["machine"], tabs["spindle"]
+
+    def show_chapter(*_):
+        tab = EU.TABS[views.active]
+        key = machine.setup.key if tab == "machine" else (
+            "probe file" if tab == "spindle" and spindle.file_read else tab)
+        url = EU.chapter_url(key)
+        chapter.object = (f'<div class="mt-note">What this tab shows, in the book: <a '
+                          f'data-role="chapter" href="{html.escape(url)}" target="_blank" '
+                          f'rel="noopener">{html.escape(EU.CHAPTERS[key])}</a> (online once '
+                          f'the repository is published; make book builds it here)</div>'
+                          if url else "")
+
+    location = pn.state.location if pn.state.curdoc is not None else None
+    if location is not None:                 # a served session: the link's state, checked
+        location.sync(state, {n: n for n in ("tab", "machine", "topology", "pose", "view",
+                                             "ranges", "probes")})
+        refused = state.apply(tabs, active=lambda i: setattr(views, "active", i))
+        problems.object = error_html("The link's state was not all applied: " + "; ".join(
+            refused)) if refused else ""
+
+    def remember(*_):
+        state.read(tabs)
+        state.tab = EU.TABS[views.active]
+        show_chapter()
+    machine.on_update.append(remember)
+    spindle.param.watch(remember, ["probe2", "probe3", "probe4", "file_read"])
+    views.param.watch(remember, "active")
+    remember()
+    app = pn.Column(header, problems, chapter, views, sizing_mode="stretch_width")
+    app.tabs, app.url_state, app.views = tabs, state, views
     return app
 
 
