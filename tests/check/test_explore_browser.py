@@ -46,7 +46,8 @@ def server(tmp_path):
         url = None
         while url is None and time.monotonic() < deadline and proc.poll() is None:
             try:
-                found = re.search(r"http://127\.0\.0\.1:\d+/", lines.get(timeout=0.5))
+                found = re.search(r"http://127\.0\.0\.1:\d+/\?token=[\w-]+",
+                                  lines.get(timeout=0.5))
             except queue.Empty:
                 continue
             url = found.group(0) if found else None
@@ -83,12 +84,13 @@ def _tooltip_values(page) -> list[str]:
 
 def test_the_explorer_in_a_browser(server, browser):
     expect = playwright.expect
+    base = server.split("?")[0]
     problems, external = [], []
     context = browser.new_context(viewport={"width": 1500, "height": 1000},
                                   service_workers="block")
     try:
         def route(r):
-            if r.request.url.startswith(server):
+            if r.request.url.startswith(base):
                 r.continue_()
             else:
                 external.append(r.request.url)

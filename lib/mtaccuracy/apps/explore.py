@@ -56,6 +56,7 @@ from .explore_tabs import SpindleTab, ThermalTab
 from .explore_ui import (
     CSS,
     GREY,
+    block,
     csv_button,
     error_html,
     file_box,
@@ -67,6 +68,7 @@ from .explore_ui import (
     number_check,
     option_check,
     prompt,
+    wrap,
 )
 
 #: The only address the explorer listens on.
@@ -112,7 +114,8 @@ class MachineTab(param.Parameterized):
             "half_range", lambda v: M.checked_half_ranges(self.setup, v, in_table_units=True),
             self.refuse)
         self.ranges.param.watch(self._table_edited, "value")
-        self.top, self.status = pn.pane.HTML("", width=460), pn.pane.HTML("", width=290)
+        self.top = pn.pane.HTML("", sizing_mode="stretch_width", css_classes=["mt-scroll"])
+        self.status = pn.pane.HTML("", width=290)
         self.result = None                     # the last PoseIndices shown (the CSV exports)
         self.on_update = []                    # called after each redraw (the URL's state)
         # heat map: errors (rows) x outputs (columns)
@@ -121,7 +124,7 @@ class MachineTab(param.Parameterized):
         self.heat_colours = bm.LinearColorMapper(palette=Viridis256, low=0.0, high=1.0,
                                                  nan_color=GREY)
         self.heat = new_figure("Sobol indices at the pose (closed form)", x_range=bm.FactorRange(),
-                            y_range=bm.FactorRange(), width=430, height=700,
+                            y_range=bm.FactorRange(), max_width=460, height=700,
                             x_axis_location="above")
         r = self.heat.rect(x="output", y="error", width=0.96, height=0.92, line_color=None,
                            source=self.heat_src,
@@ -139,7 +142,7 @@ class MachineTab(param.Parameterized):
         # dominant-error map: numbers as arrays (binary on the websocket), colours by a mapper
         self.map_src = bm.ColumnDataSource(dict(u=[], v=[], error=[], index=[]))
         self.map_colours = bm.CategoricalColorMapper(factors=["-"], palette=[GREY])
-        self.dmap = new_figure("", width=560, height=430, x_range=bm.Range1d(0, 1),
+        self.dmap = new_figure("", max_width=600, height=430, x_range=bm.Range1d(0, 1),
                             y_range=bm.Range1d(0, 1))
         rm = self.dmap.rect(x="u", y="v", width=1.0, height=1.0, source=self.map_src,
                             fill_color={"field": "error", "transform": self.map_colours},
@@ -401,11 +404,11 @@ class MachineTab(param.Parameterized):
                             width=140),
                 csv_button("indices (CSV)", "indices.csv", lambda: self._csv("indices"),
                             width=140)), width=310)
-        return pn.Row(controls, pn.Column(self.top, self.heat), pn.Column(note(
+        return wrap(controls, block(self.top, self.heat, max_width=480), block(note(
             "Dominant error: the error with the largest closed-form index at each pose of a "
             "25 x 25 grid over the two axes chosen, the other axes at their slider values; "
             "grey: the output has no first-order term there; the circle marks the pose of the "
-            "sliders.", width=540), self.dmap))
+            "sliders.", sizing_mode="stretch_width"), self.dmap, basis=360))
 
 
 # -- The app and the server ------------------------------------------------------------------------
@@ -418,7 +421,7 @@ def create_app():
         "<h2 style='margin:4px 0'>mtaccuracy explorer</h2><div class='mt-note'>Closed-form "
         "sensitivity of the papers' machines, what a probe layout does to each harmonic, and "
         "the thermal model of notebook 04. Hover over a plot for its values.</div>")
-    views = pn.Tabs(*((k.capitalize(), t.view()) for k, t in tabs.items()))
+    views = pn.Tabs(*((k.capitalize(), t.view()) for k, t in tabs.items()), dynamic=True)
     state, problems = EU.UrlState(), pn.pane.HTML("", sizing_mode="stretch_width")
     chapter = pn.pane.HTML("", sizing_mode="stretch_width")
     machine, spindle = tabs["machine"], tabs["spindle"]

@@ -28,6 +28,7 @@ from .explore_ui import (
     BLUE,
     ORANGE,
     RED,
+    block,
     csv_button,
     error_html,
     file_box,
@@ -37,6 +38,7 @@ from .explore_ui import (
     note,
     number_check,
     option_check,
+    wrap,
 )
 
 # -- Spindle tab -----------------------------------------------------------------------------------
@@ -122,7 +124,7 @@ class SpindleTab(param.Parameterized):
         try:
             t = self.transfer()
         except ValueError as exc:
-            return pn.pane.HTML(error_html(str(exc)), width=560)
+            return pn.pane.HTML(error_html(str(exc)), sizing_mode="stretch_width")
         ks = t.harmonics
 
         def fmt(q):
@@ -143,7 +145,7 @@ class SpindleTab(param.Parameterized):
         finite = np.concatenate([t.q_least_squares[np.isfinite(t.q_least_squares)],
                                  t.q_weighted[np.isfinite(t.q_weighted)], [t.amplified_above]])
         top = float(finite.max()) * 1.6
-        fig = new_figure("What the layout does to each harmonic of the profile", width=640,
+        fig = new_figure("What the layout does to each harmonic", max_width=640,
                       height=400, y_axis_type="log", x_axis_label="harmonic k",
                       y_axis_label="noise amplification q_k",
                       y_range=bm.Range1d(float(finite.min()) / 1.6, top * 1.6))
@@ -205,7 +207,8 @@ class SpindleTab(param.Parameterized):
             f"{listed(t.amplified_weighted)}.<br>Worst q_k: least squares "
             f"{worst(t.q_least_squares)}; weighted {worst(t.q_weighted)}. Weights of "
             f"probes 1..{phi.size} (a_0..a_{phi.size - 1} in Yang et al.): {weights}.</div>")
-        return pn.Row(pn.Column(pn.pane.HTML(summary, width=560), fig), pn.Column(dirs, note(
+        return wrap(block(pn.pane.HTML(summary, sizing_mode="stretch_width"), fig, basis=360),
+                    block(dirs, note(
             "q_k: how much the separation multiplies white probe noise at harmonic k (the "
             "weighted method's error transfer function, Eqs. 14, 19; least squares: the "
             "Gauss-Markov variance). Red: the layout cancels the harmonic, no estimator "
@@ -230,7 +233,7 @@ class SpindleTab(param.Parameterized):
                       f"probe{i}", unit=" deg"))
 
         layout = w.Select.from_param(p.layout, width=290)
-        return pn.Row(pn.Column(
+        return wrap(pn.Column(
             guarded(layout, option_check(layout), self.refuse),
             pn.pane.HTML(p.refused.rx.pipe(error_html), width=290),
             note("Probe 1 sits at 0 deg: it defines the x axis."),
@@ -245,10 +248,10 @@ class SpindleTab(param.Parameterized):
             guard(w.FloatSlider.from_param(p.amplified_above, width=280), "amplified_above"),
             csv_button("harmonics (CSV)", "spindle_harmonics.csv",
                        lambda: M.probe_table(self.transfer()), width=140),
-            note("Your probe file (notebook 07's: revolution, angle_deg, probe_<angle>_um):"),
+            note("Your probe file (notebook 07's: revolution, angle_deg, probe_&lt;angle&gt;_um):"),
             file_box("probe-file", self.load_probes),
             pn.pane.HTML(pn.rx(file_status)(p.file_error, p.file_read), width=290),
-            width=310), self.plots)
+            width=310), block(self.plots, basis=360, max_width=1000))
 
 
 # -- Thermal tab -----------------------------------------------------------------------------------
@@ -333,7 +336,7 @@ class ThermalTab(param.Parameterized):
         """The prediction against the measurement, with its RMSE; the library's message."""
         r = self.result
         if r is None or isinstance(r, str):
-            return pn.pane.HTML(error_html(r or ""), width=560)
+            return pn.pane.HTML(error_html(r or ""), sizing_mode="stretch_width")
         n, p = r.measured.shape
         src = bm.ColumnDataSource(dict(
             x=np.tile(r.positions_mm, n), y=r.measured.ravel(), pred=r.predicted.ravel(),
@@ -342,7 +345,7 @@ class ThermalTab(param.Parameterized):
         colours = {"field": "t", "transform": bm.LinearColorMapper(
             palette=Plasma256[:220], low=float(r.time_min.min()),
             high=float(r.time_min.max()) + 1e-9)}
-        curves = new_figure("Test experiment: measured (dots), predicted (lines)", width=560,
+        curves = new_figure("Measured (dots), predicted (lines)", max_width=600,
                          height=380, x_axis_label="position (mm)",
                          y_axis_label="thermal error (µm)")
         curves.multi_line(xs="xs", ys="ys", line_width=1.6, line_color=colours,
@@ -353,7 +356,7 @@ class ThermalTab(param.Parameterized):
             ("measurement", "@m"), ("time", "@t{0} min"), ("position", "@x mm"),
             ("measured", "@y{0.000} µm"), ("predicted", "@pred{0.000} µm"),
             ("residual", "@res{0.000} µm")])
-        scatter = new_figure("Predicted against measured", width=380, height=380,
+        scatter = new_figure("Predicted against measured", max_width=400, height=380,
                           x_axis_label="measured (µm)", y_axis_label="predicted (µm)")
         lo = float(min(r.measured.min(), r.predicted.min()))
         hi = float(max(r.measured.max(), r.predicted.max()))
@@ -373,7 +376,9 @@ class ThermalTab(param.Parameterized):
             f"(temperatures), b from {', '.join(r.inputs['b'])} (rises from the first "
             f"measurement)." + (f'<br><span style="color:{RED};font-weight:bold">{label}</span>'
                                 if label else "") + "</div>")
-        return pn.Column(pn.pane.HTML(summary, width=620), pn.Row(curves, scatter))
+        return pn.Column(pn.pane.HTML(summary, sizing_mode="stretch_width"),
+                         wrap(block(curves, basis=360), block(scatter, basis=300, max_width=420)),
+                         sizing_mode="stretch_width")
 
     def view(self):
         """The tab: controls, status, and the prediction against the measurement."""
@@ -382,7 +387,7 @@ class ThermalTab(param.Parameterized):
 
         def accept(value):
             return value
-        return pn.Row(pn.Column(
+        return wrap(pn.Column(
             pn.pane.HTML("<b>Training experiments</b>"),
             guarded(w.CheckBoxGroup.from_param(p.train, inline=True), accept, self.refuse),
             guarded(test, option_check(test), self.refuse),
@@ -401,4 +406,4 @@ class ThermalTab(param.Parameterized):
                  "experiments.csv if any; choose them together):"),
             file_box("thermal-files", self.load_files, multiple=True),
             pn.pane.HTML(p.file_error.rx.pipe(error_html), width=290), width=310),
-            self.plots)
+            block(self.plots, basis=360, max_width=1100))

@@ -21,7 +21,8 @@ CSS = """
 .mt-note {font-size: 12px; color: #555; line-height: 1.35;}
 .mt-error {background: #fde8e8; border: 1px solid #b2182b; color: #7a1020; padding: 6px 9px;
            border-radius: 4px; font-size: 12.5px; white-space: pre-wrap;}
-table.mt-top {border-collapse: collapse; font-size: 12.5px;}
+table.mt-top {border-collapse: collapse; font-size: 12.5px; max-width: 100%;}
+.mt-scroll {overflow-x: auto; max-width: 100%;}
 table.mt-top td, table.mt-top th {padding: 2px 8px; border-bottom: 1px solid #e3e3e3;
                                   text-align: left;}
 """
@@ -146,5 +147,22 @@ def csv_button(label: str, filename: str, frame, **kw):
                                    filename=filename, label=label, embed=False, **kw)
 
 
+def block(*objects, basis: int = 340, max_width: int = 640):
+    """A column that shares a row when there is room, else takes the row (``wrap``).
+
+    Its width grows from ``basis`` px to ``max_width``; it may shrink below ``basis`` on a
+    narrow screen (CSS ``min-width: 0``): nothing in it is wider than the screen.
+    """
+    return pn.Column(*objects, sizing_mode="stretch_width", max_width=max_width,
+                     styles={"flex": f"1 1 {basis}px", "min-width": "0"})
+
+
+def wrap(*objects):
+    """Blocks side by side on a wide screen, one under another on a narrow one."""
+    return pn.FlexBox(*objects, flex_wrap="wrap", sizing_mode="stretch_width")
+
+
 def new_figure(title: str, **kw):
+    kw.setdefault("sizing_mode", "stretch_width")        # the block's width, on any screen
+    kw.setdefault("min_width", 280)
     return figure(title=title, tools="hover,save", toolbar_location="above", **kw)
