@@ -118,6 +118,7 @@ class MachineTab(param.Parameterized):
         self.status = pn.pane.HTML("", width=290)
         self.result = None                     # the last PoseIndices shown (the CSV exports)
         self.on_update = []                    # called after each redraw (the URL's state)
+        self.moves = 0
         # heat map: errors (rows) x outputs (columns)
         self.heat_src = bm.ColumnDataSource(dict(error=[], output=[], index=[], label=[],
                                                  text_color=[], note=[]))
@@ -276,11 +277,8 @@ class MachineTab(param.Parameterized):
             return
         ms = (time.perf_counter() - t0) * 1e3
         self.result = res
-        with pn.io.unlocked():  # some callbacks (a text input's Enter) lack the doc's lock
-            self._draw_heat(res)
-            self._draw_map(dmap, pose)
         top = {o: (e, v) for o, e, v in M.top_errors(res)}
-        self.top.object = '<table class="mt-top"><tr><th>output</th><th>top error (every ' \
+        table = '<table class="mt-top"><tr><th>output</th><th>top error (every ' \
             'tie)</th><th>index</th></tr>' + "".join(
                 f'<tr data-role="top-error" data-output="{o}" '
                 f'data-error="{html.escape(", ".join(top[o][0]))}" '
@@ -291,8 +289,15 @@ class MachineTab(param.Parameterized):
                 f'<tr data-role="top-error" data-output="{o}" data-error="" data-index="">'
                 f'<td>{o}</td><td colspan="2">no first-order term at this pose</td></tr>'
                 for o in res.outputs) + "</table>"
-        self.status.object = f'<div class="mt-note" data-role="timing">computed in {ms:.0f} ms ' \
-            '(server side)</div>'
+        # the numbers first (a small message the page shows at once), then the plots
+        with pn.io.unlocked():  # some callbacks (a text input's Enter) lack the doc's lock
+            self.top.object = table                     # its own message, sent at once
+        with pn.io.unlocked():
+            self._draw_heat(res)
+            self._draw_map(dmap, pose)
+        self.moves += 1                       # the status changes at every move (make bench)
+        self.status.object = f'<div class="mt-note" data-role="timing" data-move=' \
+            f'"{self.moves}">computed in {ms:.0f} ms (server side)</div>'
         for callback in self.on_update:
             callback()
 
@@ -306,12 +311,17 @@ class MachineTab(param.Parameterized):
         self.heat.y_range.factors = list(reversed(res.names))
         self.heat.x_range.factors = list(res.outputs)
         self.heat.height = 110 + 15 * d
-        self.heat_src.data = dict(
-            error=np.repeat(res.names, q).tolist(), output=list(res.outputs) * d, index=flat,
-            label=["" if not np.isfinite(v) or v < 0.01 else f"{v:.2f}" for v in flat],
+        changed = dict(
+            index=flat, label=["" if not np.isfinite(v) or v < 0.01 else f"{v:.2f}" for v in flat],
             text_color=["black" if np.isfinite(v) and v > 0.6 * high else "white" for v in flat],
             note=["" if res.first_order[k] else "no first-order term at this pose"
                   for _ in range(d) for k in range(q)])
+        error, output = np.repeat(res.names, q).tolist(), list(res.outputs) * d
+        old = self.heat_src.data
+        if old.get("error") == error and old.get("output") == output:
+            old.update(changed)               # only the columns a move changes are sent
+        else:
+            self.heat_src.data = dict(error=error, output=output, **changed)
 
     def _draw_map(self, dmap: M.DominantMap, pose: dict) -> None:
         k = dmap.outputs.index(self.output) if self.output in dmap.outputs else 0
@@ -326,8 +336,14 @@ class MachineTab(param.Parameterized):
         du = (dmap.u[-1] - dmap.u[0]) / (len(dmap.u) - 1)
         dv = du if dmap.axes[0] == dmap.axes[1] else (dmap.v[-1] - dmap.v[0]) / (len(dmap.v) - 1)
         self.map_glyph.update(width=du, height=dv)
-        self.map_src.data = dict(u=uu.ravel(), v=vv.ravel(), index=dmap.index[:, :, k].ravel(),
-                                 error=label[np.searchsorted(present, err)].tolist())
+        changed = dict(index=dmap.index[:, :, k].ravel(),
+                       error=label[np.searchsorted(present, err)].tolist())
+        old = self.map_src.data
+        if np.array_equal(old.get("u", []), uu.ravel()) and \
+                np.array_equal(old.get("v", []), vv.ravel()):
+            old.update(changed)               # the grid is the same: not sent again
+        else:
+            self.map_src.data = dict(u=uu.ravel(), v=vv.ravel(), **changed)
         a1, a2 = (self.setup.axis(a) for a in dmap.axes)
         self.here.data = dict(u=[pose[a1.name]], v=[pose[a2.name]])
         self.dmap.x_range.update(start=dmap.u[0] - du / 2, end=dmap.u[-1] + du / 2)
