@@ -10,6 +10,11 @@ library's message when it is bad and its machine when it is good; the Spindle ta
 the harmonics four equally spaced probes cancel; the Thermal tab must show an RMSE.  Every
 request must stay on the server (Panel serves its own JavaScript: no CDN, no web font), and
 the console must show no error.  A screenshot goes to ``.test-output/explore/explore.png``.
+At 400 px (issue 35): without the token the page is refused; no tab scrolls sideways; a half
+range typed in the ranges table is applied and an out-of-bounds one refused; a probe file
+(written here from a known profile, spindle motion and layout) sets the Spindle tab's layout
+and a bad one shows notebook 07's reader's message; the URL then restores the tab, the pose,
+the range and the probes in a new page, and a crafted link names its bad parts.
 Waits are bounded.
 """
 

@@ -11,7 +11,8 @@ the numbers come from :mod:`mtaccuracy.apps.explore_model`; the Spindle and Ther
 
 Machine: a paper's machine or a typed topology; the closed-form Sobol indices at the pose of the
 sliders (heat map, top error per output) and the dominant error over two chosen axes, redrawn in
-place at every move (``make bench``, row ``explore_update``).  Spindle: per harmonic, what a probe
+place at every move (``make bench``, rows ``explore_update`` and ``explore_browser``, the
+latter in Chromium: :mod:`~mtaccuracy.apps.explore_bench`).  Spindle: per harmonic, what a probe
 layout cancels and amplifies, for least squares and the weighted method.  Thermal: notebook 04's
 split, the decoupled model (MLR or SVR, fitted off the event loop with its progress shown)
 against the measured error.
@@ -523,7 +524,7 @@ def serve(*, port: int = 0, address: str = LOOPBACK, show: bool = False,
                 raise
     url = f"http://{LOOPBACK}:{chosen}/?token={token}"
     if show:
-        import webbrowser
+        import webbrowser  # only with --show
         server.io_loop.add_callback(webbrowser.open, url)
     return server, url
 

@@ -77,7 +77,7 @@ def slider_latency(moves: int = MOVES, warmup: int = WARMUP) -> dict:
     if not CHROMIUM.exists():
         return {"skipped": f"{CHROMIUM} is missing (make browser installs it)"}
     try:
-        from playwright.sync_api import sync_playwright
+        from playwright.sync_api import sync_playwright  # optional: the bench says so
     except ImportError:
         return {"skipped": "Playwright is not installed"}
     proc, url = _start()

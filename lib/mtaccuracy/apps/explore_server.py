@@ -19,6 +19,7 @@ import hmac
 import re
 import secrets
 
+import panel as pn
 from bokeh.server.auth_provider import AuthProvider
 from bokeh.settings import settings
 from tornado.web import RequestHandler
@@ -111,8 +112,6 @@ class SessionCap:
 
     def gate(self, factory, refused):
         """A factory building ``factory()`` while fewer than ``limit`` live, else ``refused()``."""
-        import panel as pn
-
         def build():
             doc = pn.state.curdoc
             context = getattr(doc, "session_context", None)
