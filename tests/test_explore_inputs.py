@@ -298,3 +298,28 @@ def test_each_tab_links_its_chapter(tmp_path):
         "https://example.org/book/chapters/03_guo2016_spearman_21_errors.html"
     assert EU.chapter_url("thermal", tmp_path / "none.cff") == ""
     assert set(EU.CHAPTERS.values()) == {p.stem for p in (ROOT / "notebooks").glob("*.ipynb")}
+
+
+def test_a_crafted_upload_is_refused_before_panel_decodes_it(caplog):
+    """What the page sends for a FileInput goes through Panel's _process_events."""
+    pytest.importorskip("panel")
+    import base64
+
+    import panel as pn
+
+    from mtaccuracy.apps.explore_tabs import SpindleTab
+
+    tab = SpindleTab()
+    box = [w for w in tab.view().select(pn.widgets.FileInput)][0]
+    with caplog.at_level("ERROR"):
+        for value, why in (("@@not base64@@", "not base64"), (12, "not base64"),
+                           ("A" * (EF.MAX_UPLOAD_BYTES * 2), "at most"),
+                           (["QQ=="] * 9, "at most 5")):
+            box._process_events({"value": value, "filename": "x.csv"})
+            assert why in tab.refused and tab.file_read == "" and tab.file_error == ""
+        good = base64.b64encode(_probe_csv([20.0, 60.0, 200.0, 335.0])).decode()
+        box._process_events({"filename": "p.csv", "value": good})
+        assert tab.refused == "" and "p.csv: probes at 20, 60, 200, 335 deg" in tab.file_read
+        box._process_events({"filename": "../p.csv", "value": good})
+        assert "not a plain .csv file name" in tab.file_error
+    assert not [r for r in caplog.records if r.levelname == "ERROR"], caplog.text

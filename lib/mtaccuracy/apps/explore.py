@@ -412,7 +412,7 @@ class MachineTab(param.Parameterized):
                               lambda: M.ranges_table(self.setup, self.half_range), width=140)),
             note("Your ranges file (notebook 06's: symbol, low, high, unit; one row per error "
                  "of this machine):"),
-            file_box("ranges-file", self.load_ranges),
+            file_box("ranges-file", self.load_ranges, self.refuse),
             pn.pane.HTML(pn.rx(file_status)(p.file_error, p.file_read), width=290),
             pn.Row(*(choice(prompt(w.Select.from_param(p[n], width=90)))
                      for n in ("across", "up", "output"))),

@@ -13,6 +13,8 @@ temporary folder taken out: the file is named as the reader named it on their di
 
 from __future__ import annotations
 
+import base64
+import binascii
 import re
 import tempfile
 import warnings
@@ -67,6 +69,29 @@ def checked_files(names, contents) -> dict[str, bytes]:
                              f"{MAX_UPLOAD_BYTES:,} (run the notebook on larger files)")
         out[name] = bytes(content)
     return out
+
+
+def checked_base64(value):
+    """``value`` as the page sends a ``FileInput``'s content (base64 text, or a list of them),
+    refused before Panel decodes it: not text, more than :data:`MAX_UPLOAD_FILES`, more than
+    :data:`MAX_UPLOAD_BYTES` once decoded (judged from its length), or not base64.
+    """
+    many = isinstance(value, list | tuple)
+    items = list(value) if many else [value]
+    if len(items) > MAX_UPLOAD_FILES:
+        raise ValueError(f"{len(items)} files chosen: at most {MAX_UPLOAD_FILES}")
+    for item in items:
+        if not isinstance(item, str):
+            raise ValueError("the page sent a file that is not base64 text")
+        if len(item) * 3 // 4 > MAX_UPLOAD_BYTES + 2:
+            raise ValueError(f"a file of about {len(item) * 3 // 4:,} bytes: the explorer "
+                             f"takes at most {MAX_UPLOAD_BYTES:,} (run the notebook on larger "
+                             "files)")
+        try:
+            base64.b64decode(item, validate=True)
+        except (binascii.Error, ValueError):
+            raise ValueError("the page sent a file that is not base64 text") from None
+    return value
 
 
 def read_upload(names, contents, reader, *, folder: bool = False) -> Upload:

@@ -249,7 +249,7 @@ class SpindleTab(param.Parameterized):
             csv_button("harmonics (CSV)", "spindle_harmonics.csv",
                        lambda: M.probe_table(self.transfer()), width=140),
             note("Your probe file (notebook 07's: revolution, angle_deg, probe_&lt;angle&gt;_um):"),
-            file_box("probe-file", self.load_probes),
+            file_box("probe-file", self.load_probes, self.refuse),
             pn.pane.HTML(pn.rx(file_status)(p.file_error, p.file_read), width=290),
             width=310), block(self.plots, basis=360, max_width=1000))
 
@@ -404,6 +404,6 @@ class ThermalTab(param.Parameterized):
                          width=290),
             note("Your measurements (notebook 04's data_dir: temperatures.csv and errors.csv, "
                  "experiments.csv if any; choose them together):"),
-            file_box("thermal-files", self.load_files, multiple=True),
+            file_box("thermal-files", self.load_files, self.refuse, multiple=True),
             pn.pane.HTML(p.file_error.rx.pipe(error_html), width=290), width=310),
             block(self.plots, basis=360, max_width=1100))

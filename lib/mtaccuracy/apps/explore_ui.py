@@ -13,6 +13,7 @@ import io
 import panel as pn
 from bokeh.plotting import figure
 
+from . import explore_files as EF
 from . import explore_model as M
 
 #: A blue, the figures' orange of published values, a red: cancelled, a grey: no first order.
@@ -108,11 +109,16 @@ def guarded_table(table, column: str, check, refuse):
     return table
 
 
-def file_box(css: str, on_file, *, multiple: bool = False):
-    """A ``.csv`` upload (Panel's FileInput) whose file(s) go to ``on_file(names, contents)``."""
+def file_box(css: str, on_file, refuse, *, multiple: bool = False):
+    """A ``.csv`` upload (Panel's FileInput) whose file(s) go to ``on_file(names, contents)``.
+
+    What the page sends passes :func:`~mtaccuracy.apps.explore_files.checked_base64` first
+    (:func:`guarded`: a refused upload's message goes to ``refuse``).
+    """
     box = pn.widgets.FileInput(accept=".csv", multiple=multiple, css_classes=[css], width=290)
-    box.param.watch(lambda event: on_file(box.filename, box.value), "value")
-    return box
+    box.param.watch(lambda *events: box.value and on_file(box.filename, box.value),
+                    ["value", "filename"])                 # one call for both (one message)
+    return guarded(box, EF.checked_base64, refuse)
 
 
 def file_status(error: str, told: str) -> str:
