@@ -8,9 +8,12 @@ Error ranges: every error is uniform on ``+- h_i``; the default ``h_i`` are note
 ``position_range_um`` and ``angular_range_arcsec``, notebook 02's ``range_factor`` x the
 acceptance values of its ``ranges_file``, the half widths of notebook 03's ``[0, r]`` ranges
 (the same variance), and +-5 um, +-3 arcsec for a typed topology (the explorer's choice, about
-notebook 06's illustrative ranges).  Two sliders scale them: the largest translational half
-range (um) and the largest angular one (arcsec); the others keep their ratio to it.  Indices of
-the linear model depend only on the ratios of the variances, so the distribution does not matter.
+notebook 06's illustrative ranges).  Every error's half range can be set on its own
+(:func:`ranges_table`, :func:`checked_half_ranges`, or a ranges file read as notebook 06 reads it:
+:func:`ranges_from_file`); two sliders scale a group: the largest translational half range (um)
+and the largest angular one (arcsec), the others keeping their ratio to it
+(:func:`scaled_group`).  Indices of the linear model depend only on the ratios of the variances,
+so the distribution does not matter.
 """
 
 from __future__ import annotations
