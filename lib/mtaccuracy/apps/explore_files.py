@@ -72,9 +72,11 @@ def checked_files(names, contents) -> dict[str, bytes]:
 
 
 def checked_base64(value):
-    """``value`` as the page sends a ``FileInput``'s content (base64 text, or a list of them),
-    refused before Panel decodes it: not text, more than :data:`MAX_UPLOAD_FILES`, more than
-    :data:`MAX_UPLOAD_BYTES` once decoded (judged from its length), or not base64.
+    """An upload's content as the page sends it, checked before Panel decodes it.
+
+    ``value``: base64 text, or a list of them (``multiple``).  Refused (a ValueError): not text,
+    more than :data:`MAX_UPLOAD_FILES`, more than :data:`MAX_UPLOAD_BYTES` once decoded (judged
+    from its length), or not base64.
     """
     many = isinstance(value, list | tuple)
     items = list(value) if many else [value]
