@@ -491,20 +491,96 @@ def test_the_command_refuses_a_bad_port_in_one_line(capsys):
     assert explore.main(["--port", "70000"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "0..65535" in err
+    assert explore.main(["--token", "short"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "a token is 16 to 128 letters" in err
 
 
-def test_the_server_listens_on_loopback_with_restricted_websocket_origins():
+def test_the_token_or_its_cookie_is_required():
+    from mtaccuracy.apps import explore_server as ES
+
+    class Request:                                    # what Bokeh's handlers offer
+        def __init__(self, args=None, cookies=None):
+            self.args, self.cookies, self.set = args or {}, cookies or {}, {}
+
+        def get_argument(self, name, default=None):
+            return self.args.get(name, default)
+
+        def get_cookie(self, name):
+            return self.cookies.get(name)
+
+        def set_cookie(self, name, value, **kw):
+            self.set[name] = (value, kw)
+
+    token = ES.new_token()
+    assert token != ES.new_token() and ES.TOKEN_PATTERN.fullmatch(token)
+    auth = ES.TokenAuth(token, 5006)
+    first = Request(args={"token": token})
+    assert auth.get_user(first) == "reader"
+    assert first.set["mtaccuracy_explore_5006"][0] == token
+    assert auth.get_user(Request(cookies={"mtaccuracy_explore_5006": token})) == "reader"
+    for bad in (Request(), Request(args={"token": token[:-1] + "x"}),
+                Request(cookies={"mtaccuracy_explore_5007": token}),
+                Request(cookies={"mtaccuracy_explore_5006": token + "x"})):
+        assert auth.get_user(bad) is None
+    for bad in ("short", "a" * 129, "has space in it 123", "é" * 20, 12345678901234567):
+        with pytest.raises(ValueError, match="16 to 128"):
+            ES.checked_token(bad)
+
+
+def test_sessions_are_capped():
+    pytest.importorskip("panel")
+    from bokeh.document import Document
+    from panel.io.state import set_curdoc
+
+    from mtaccuracy.apps import explore_server as ES
+
+    built, docs = [], [Document() for _ in range(5)]
+    cap = ES.SessionCap(2)
+    app = cap.gate(lambda: built.append(1) or "app", lambda: "too many")
+    shown = []
+    for doc in docs[:4]:
+        with set_curdoc(doc):
+            shown.append(app())
+    assert shown == ["app", "app", "too many", "too many"] and len(built) == 2
+    for callback in docs[0].session_destroyed_callbacks:   # what Bokeh calls at the end
+        callback(None)
+    with set_curdoc(docs[4]):
+        assert app() == "app"                         # a session ended: room for one
+
+
+def test_the_server_listens_on_loopback_with_restricted_websocket_origins(monkeypatch):
+    from bokeh.settings import settings
+    from tornado.httpclient import AsyncHTTPClient
+
     from mtaccuracy.apps import explore
 
+    monkeypatch.setenv("BOKEH_ALLOW_WS_ORIGIN", "evil.example:80")   # must not replace ours
     previous = signal.getsignal(signal.SIGINT)
     server, url = explore.serve(port=0)
     try:
         signal.signal(signal.SIGINT, previous)         # pn.serve installs its own handler
         port = server.port
-        assert url == f"http://127.0.0.1:{port}/" and server.address == "127.0.0.1"
+        base, token = url.split("?token=")
+        assert base == f"http://127.0.0.1:{port}/" and server.address == "127.0.0.1"
+        assert len(token) == 32 and server._tornado.auth_provider.token == token
         assert server._tornado.websocket_origins == {f"127.0.0.1:{port}", f"localhost:{port}"}
+        assert settings.allowed_ws_origin() == []     # Bokeh uses the server's own list
         with socket.create_connection(("127.0.0.1", port), timeout=5):
             pass                                       # listening on the loopback address
+        server.start()
+
+        async def get(path, **headers):
+            return await AsyncHTTPClient().fetch(base + path, raise_error=False,
+                                                 follow_redirects=False, headers=headers)
+        no, bad = (server.io_loop.run_sync(lambda p=p: get(p), timeout=30)
+                   for p in ("", "?token=" + "x" * 32))
+        assert no.code == bad.code == 302 and "token-required" in no.headers["Location"]
+        page = server.io_loop.run_sync(lambda: get(f"?token={token}"), timeout=60)
+        assert page.code == 200 and b"mtaccuracy explorer" in page.body
+        cookie = page.headers["Set-Cookie"]
+        assert f"mtaccuracy_explore_{port}={token}" in cookie and "HttpOnly" in cookie
+        assert "SameSite=Strict" in cookie
     finally:
         server.unlisten()
         server.stop()

@@ -10,6 +10,11 @@ library's message when it is bad and its machine when it is good; the Spindle ta
 the harmonics four equally spaced probes cancel; the Thermal tab must show an RMSE.  Every
 request must stay on the server (Panel serves its own JavaScript: no CDN, no web font), and
 the console must show no error.  A screenshot goes to ``.test-output/explore/explore.png``.
+At 400 px (issue 35): without the token the page is refused; no tab scrolls sideways; a half
+range typed in the ranges table is applied and an out-of-bounds one refused; a probe file
+(written here from a known profile, spindle motion and layout) sets the Spindle tab's layout
+and a bad one shows notebook 07's reader's message; the URL then restores the tab, the pose,
+the range and the probes in a new page, and a crafted link names its bad parts.
 Waits are bounded.
 """
 
@@ -46,7 +51,8 @@ def server(tmp_path):
         url = None
         while url is None and time.monotonic() < deadline and proc.poll() is None:
             try:
-                found = re.search(r"http://127\.0\.0\.1:\d+/", lines.get(timeout=0.5))
+                found = re.search(r"http://127\.0\.0\.1:\d+/\?token=[\w-]+",
+                                  lines.get(timeout=0.5))
             except queue.Empty:
                 continue
             url = found.group(0) if found else None
@@ -83,12 +89,13 @@ def _tooltip_values(page) -> list[str]:
 
 def test_the_explorer_in_a_browser(server, browser):
     expect = playwright.expect
+    base = server.split("?")[0]
     problems, external = [], []
     context = browser.new_context(viewport={"width": 1500, "height": 1000},
                                   service_workers="block")
     try:
         def route(r):
-            if r.request.url.startswith(server):
+            if r.request.url.startswith(base):
                 r.continue_()
             else:
                 external.append(r.request.url)
@@ -198,4 +205,118 @@ def test_the_explorer_in_a_browser(server, browser):
     finally:
         context.close()
     assert not external, f"requests left 127.0.0.1: {external}"
+    assert not problems, problems
+
+
+def _probe_file(path, angles_deg, n=64):
+    """A probe file of a known roundness profile and spindle motion (µm), as notebook 07 reads."""
+    import numpy as np
+
+    theta = np.arange(n) * 2 * np.pi / n
+    rows = ["revolution,angle_deg," + ",".join(f"probe_{a:g}_um" for a in angles_deg)]
+    for r in (1, 2):
+        x, y = 0.8 * np.cos(theta + 0.3 * r), 0.6 * np.sin(theta + 0.1)
+        for j in range(n):
+            vals = [2.0 * np.cos(3 * (theta[j] + a)) + np.sin(5 * (theta[j] + a))
+                    + x[j] * np.cos(a) + y[j] * np.sin(a) for a in np.deg2rad(angles_deg)]
+            rows.append(f"{r},{float(np.rad2deg(theta[j]))!r}," + ",".join(
+                f"{v:.6f}" for v in vals))
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def _scroll_width(page) -> int:
+    return page.evaluate("document.documentElement.scrollWidth")
+
+
+def test_the_explorer_at_400px_round_trips_its_url_and_reads_a_probe_file(server, browser,
+                                                                          tmp_path):
+    expect = playwright.expect
+    base = server.split("?")[0]
+    problems = []
+    context = browser.new_context(viewport={"width": 400, "height": 900},
+                                  service_workers="block")
+    try:
+        context.route("**/*", lambda r: r.continue_() if r.request.url.startswith(base)
+                      else (problems.append(f"external: {r.request.url}"), r.abort()))
+        page = context.new_page()
+        page.set_default_timeout(TIMEOUT_MS)
+        page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
+        # no token, no app: the page says where the token is
+        assert page.goto(base).status == 403
+        assert "needs its token" in page.content()
+        page.goto(server, wait_until="load")
+        px = page.locator('tr[data-role="top-error"][data-output="Px"]')
+        px.wait_for()
+        assert _scroll_width(page) <= 400, "the Machine tab scrolls sideways at 400 px"
+
+        # a typed pose, one error's range typed in the table: both go into the URL
+        box = page.locator(".pose-y-input input")
+        box.fill("-212.5")
+        box.press("Enter")
+        expect(page.locator(".pose-y")).to_contain_text("-212.5", timeout=10_000)
+        cell = page.locator('.error-ranges .tabulator-row').nth(2).locator(
+            '[tabulator-field="half_range"]')
+        cell.scroll_into_view_if_needed()
+        page.wait_for_timeout(300)                     # the table settles after scrolling
+        cell.click()
+        page.locator(".error-ranges input").wait_for(state="attached")
+        page.keyboard.press("Control+A")
+        page.keyboard.type("25")
+        page.keyboard.press("Enter")
+        expect(cell).to_contain_text("25.0000", timeout=10_000)
+        page.wait_for_timeout(300)
+        cell.click()                                   # a value out of bounds: refused
+        page.locator(".error-ranges input").wait_for(state="attached")
+        page.keyboard.press("Control+A")
+        page.keyboard.type("99999")
+        page.keyboard.press("Enter")
+        expect(cell).to_contain_text("25.0000", timeout=10_000)
+
+        # the Spindle tab at 400 px: a probe file through notebook 07's reader
+        page.get_by_text("Spindle", exact=True).click()
+        expect(page.locator('[data-role="spindle-summary"]')).to_be_visible()
+        assert _scroll_width(page) <= 400, "the Spindle tab scrolls sideways at 400 px"
+        upload = page.locator(".probe-file input[type=file]")
+        bad = _probe_file(tmp_path / "bad.csv", [0.0, 50.0, 190.0, 300.0])
+        bad.write_text(bad.read_text().replace("probe_50_um", "probe_50_mm"))
+        upload.set_input_files(str(bad))
+        error = page.locator('[data-role="error"]').filter(has_text="bad.csv")
+        expect(error).to_contain_text("line 1", timeout=10_000)
+        assert "/tmp" not in error.text_content()
+        upload.set_input_files(str(_probe_file(tmp_path / "mine.csv",
+                                               [10.0, 50.0, 190.0, 300.0])))
+        expect(page.locator('[data-role="file-read"]')).to_contain_text(
+            "mine.csv: probes at 10, 50, 190, 300 deg", timeout=10_000)
+        expect(page.locator(".probe-3-input input")).to_have_value("180", timeout=10_000)
+        expect(page.get_by_role("link", name="07_your_spindle")).to_be_visible()
+
+        page.get_by_text("Thermal", exact=True).click()
+        expect(page.locator('[data-role="thermal-summary"]')).to_be_visible()
+        assert _scroll_width(page) <= 400, "the Thermal tab scrolls sideways at 400 px"
+        page.get_by_text("Spindle", exact=True).click()
+
+        # the URL holds the state: a reload restores the tab, the pose, the range, the probes
+        page.wait_for_function("location.search.includes('tab=spindle')")
+        link = page.url
+        assert "token=" in link and "tab=spindle" in link and "ranges=" in link
+        again = context.new_page()
+        again.set_default_timeout(TIMEOUT_MS)
+        again.goto(link, wait_until="load")
+        expect(again.locator(".probe-3-input input")).to_have_value("180")
+        expect(again.locator(".probe-2-input input")).to_have_value("40")
+        again.get_by_text("Machine", exact=True).click()
+        expect(again.locator(".pose-y-input input")).to_have_value(re.compile(r"-212\.50*$"))
+        expect(again.locator('.error-ranges .tabulator-row').nth(2).locator(
+            '[tabulator-field="half_range"]')).to_contain_text("25.0000")
+        # a crafted link: its bad part named, the rest applied, no traceback
+        again.goto(link.replace("probes=", "probes=1e9%2C") + "&pose=x%3Anan",
+                   wait_until="load")
+        refused = again.locator('[data-role="error"]').filter(has_text="link's state")
+        expect(refused).to_contain_text("probes:")
+        expect(refused).to_contain_text("pose:")
+    except AssertionError as exc:
+        raise AssertionError(f"{exc}\npage problems: {problems}") from None
+    finally:
+        context.close()
     assert not problems, problems

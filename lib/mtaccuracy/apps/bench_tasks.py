@@ -331,6 +331,19 @@ def explore_update() -> dict:
                 note="; ".join(f"{n} {t * 1e3:.1f} ms" for n, t in times.items()))
 
 
+def explore_browser() -> dict:
+    """Slider moves of the explorer in Chromium, from the key to the new top-error table."""
+    from .explore_bench import slider_latency
+
+    r = slider_latency()
+    if "skipped" in r:
+        return dict(time=float("nan"), note=f"not run: {r['skipped']}")
+    t, last = np.array(r["times"]) * 1e3, np.median(r["last"]) * 1e3
+    server = f"{np.median(r['server_ms']):.0f} ms" if r["server_ms"] else "-"
+    return dict(time=r["median"], note=f"median of {t.size} moves (min {t.min():.0f}, max "
+                f"{t.max():.0f} ms); server update {server}; plots' data in by {last:.0f} ms")
+
+
 class Row(NamedTuple):
     """One row of the table: paper, task, what is measured, size, target, measuring function."""
 
@@ -383,6 +396,8 @@ def _rows():
               "<= 10 s", zheng_linear_atlas)
     yield Row("explorer", "explore_update", "slider move: indices + map",
               "3 machines, 25 x 25 grid", "<= 0.1 s", explore_update)
+    yield Row("explorer", "explore_browser", "slider move to new numbers, Chromium",
+              "AC double turntable, 1280 px", "<= 0.1 s median", explore_browser)
     for name, (n, degrees, ot_degree, _) in PCE_CASES.items():
         for m in ("omp", "lars"):
             yield Row("PCE bench", f"pce_{name}_{m}", f"{name} ({m})",

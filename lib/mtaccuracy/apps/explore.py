@@ -6,27 +6,36 @@ until Ctrl-C; ``binder/explore.ipynb`` shows it on Binder (Panel's Jupyter serve
 ``?urlpath=panel-preview/render/binder/explore.ipynb``).  Each tab is a ``param.Parameterized``:
 its parameters are the controls (Panel builds the widgets), its ``@param.depends`` methods
 redraw; every start is a notebook's declared default (``Parameters``, :mod:`mtaccuracy.papers`);
-the numbers come from :mod:`mtaccuracy.apps.explore_model`.
+the numbers come from :mod:`mtaccuracy.apps.explore_model`; the Spindle and Thermal tabs live in
+:mod:`~mtaccuracy.apps.explore_tabs`, the shared pieces in :mod:`~mtaccuracy.apps.explore_ui`.
 
 Machine: a paper's machine or a typed topology; the closed-form Sobol indices at the pose of the
 sliders (heat map, top error per output) and the dominant error over two chosen axes, redrawn in
-place at every move (``make bench``, row ``explore_update``).  Spindle: per harmonic, what a probe
+place at every move (``make bench``, rows ``explore_update`` and ``explore_browser``, the
+latter in Chromium: :mod:`~mtaccuracy.apps.explore_bench`).  Spindle: per harmonic, what a probe
 layout cancels and amplifies, for least squares and the weighted method.  Thermal: notebook 04's
 split, the decoupled model (MLR or SVR, fitted off the event loop with its progress shown)
 against the measured error.
 
-The server listens on 127.0.0.1 only (:func:`check_address`), its websocket accepts pages from
-``127.0.0.1:<port>`` and ``localhost:<port>`` only, and Panel serves its own JavaScript and CSS.
-Every value the page sends is checked on the server before Panel applies it (:func:`_guarded`,
-the bounds of :mod:`~mtaccuracy.apps.explore_model`): a refused one is shown as a message.
+Machine-tab ranges: a table of every error's half range (µm, arcsec), seeded from the notebook's
+declarations, typed in or read from the reader's own ranges file; the reader's probe file
+(Spindle) and thermal measurements (Thermal) too, through the notebooks' own readers
+(:mod:`~mtaccuracy.apps.explore_files`).
+
+The server listens on 127.0.0.1 only (:func:`check_address`) and needs its token (printed in the
+URL at start; ``--token`` sets it), serves at most
+:data:`~mtaccuracy.apps.explore_server.MAX_SESSIONS` sessions at once, its websocket accepts
+pages from ``127.0.0.1:<port>`` and ``localhost:<port>`` only (whatever
+``BOKEH_ALLOW_WS_ORIGIN`` says), and Panel serves its own JavaScript and CSS.
+Every value the page sends is checked on the server before Panel applies it
+(:func:`~mtaccuracy.apps.explore_ui.guarded`, the bounds of
+:mod:`~mtaccuracy.apps.explore_model`): a refused one is shown as a message.
 """
 
 from __future__ import annotations
 
 import argparse
-import asyncio
 import html
-import io
 import os
 import shlex
 import socket
@@ -37,105 +46,34 @@ import numpy as np
 import panel as pn
 import param
 from bokeh import models as bm
-from bokeh.palettes import Plasma256, Viridis256
-from bokeh.plotting import figure
+from bokeh.palettes import Viridis256
 
-from ..compendium import provenance
 from ..compendium.plotting import category_colours, unit_symbol
-from ..papers import xu2022, yang2021, your_spindle
+from . import explore_files as EF
 from . import explore_model as M
+from . import explore_server as ES
+from . import explore_state as EU
+from .explore_tabs import SpindleTab, ThermalTab
+from .explore_ui import (
+    CSS,
+    GREY,
+    block,
+    csv_button,
+    error_html,
+    file_box,
+    file_status,
+    guarded,
+    guarded_table,
+    new_figure,
+    note,
+    number_check,
+    option_check,
+    prompt,
+    wrap,
+)
 
 #: The only address the explorer listens on.
 LOOPBACK = "127.0.0.1"
-#: A blue, the figures' orange of published values, a red: cancelled, a grey: no first order.
-BLUE, ORANGE, RED, GREY = "#1b6ca8", "#d95f02", "#b2182b", "#cccccc"
-_CSS = """
-.mt-note {font-size: 12px; color: #555; line-height: 1.35;}
-.mt-error {background: #fde8e8; border: 1px solid #b2182b; color: #7a1020; padding: 6px 9px;
-           border-radius: 4px; font-size: 12.5px; white-space: pre-wrap;}
-table.mt-top {border-collapse: collapse; font-size: 12.5px;}
-table.mt-top td, table.mt-top th {padding: 2px 8px; border-bottom: 1px solid #e3e3e3;
-                                  text-align: left;}
-"""
-
-
-def _note(text: str, **kw):
-    return pn.pane.HTML(f'<div class="mt-note">{text}</div>', **kw)
-
-
-def _error_html(message: str) -> str:
-    return f'<div class="mt-error" data-role="error">{html.escape(message)}</div>' \
-        if message else ""
-
-
-def _prompt(widget):
-    """Act on the widget's changes after 5 ms, not Panel's 50: the Machine tab's update is fast."""
-    widget._debounce = 5
-    return widget
-
-
-def _guarded(widget, check, refuse):
-    """``widget`` whose browser values pass ``check`` on the server before Panel applies them.
-
-    A message from the page (or a crafted one) setting ``value`` goes through ``check`` first
-    (:func:`mtaccuracy.apps.explore_model.checked_number` and the like): a refused value is never
-    applied, ``refuse`` gets the message to show in the app (no traceback on the server) and the
-    page gets the server's value back; an accepted one calls ``refuse("")`` (clears it).
-    """
-    process = widget._process_events
-
-    def guarded(events):
-        events = dict(events)
-        try:
-            for key in ("value", "value_throttled"):
-                if key in events:
-                    events[key] = check(events[key])
-            if "active" in events:             # a button or check box group: option indices
-                n, active = len(widget.options), events["active"]
-                many = isinstance(active, list | tuple)
-                if not all(isinstance(i, int) and not isinstance(i, bool) and 0 <= i < n
-                           for i in (active if many else [active])):
-                    raise ValueError(f"{widget.name or 'a choice'}: {active!r} is not a "
-                                     f"choice of 0..{n - 1}")
-        except ValueError as exc:
-            refuse(str(exc))
-            widget.param.trigger("value")           # the page shows the server's value again
-            return
-        refuse("")
-        process(events)
-
-    widget._process_events = guarded
-    return widget
-
-
-def _number_check(name: str, low: float, high: float, *, unit: str = "",
-                  integer: bool = False):
-    def check(value):
-        return M.checked_number(value, name, low=low, high=high, unit=unit, integer=integer)
-    return check
-
-
-def _option_check(widget):
-    """Accept only one of ``widget``'s labels (a list of them for a multiple choice)."""
-    def check(value):
-        labels = [str(v) for v in (widget.labels if hasattr(widget, "labels")
-                                   else widget.options)]
-        many = isinstance(value, list | tuple)
-        if not all(isinstance(v, str) and v in labels for v in (value if many else [value])):
-            raise ValueError(f"{widget.name or 'a choice'}: {value!r} is not one of "
-                             f"{', '.join(labels)}")
-        return value
-    return check
-
-
-def _csv_button(label: str, filename: str, frame, **kw):
-    """A download of ``frame()`` (a DataFrame, computed at the click) as ``filename``."""
-    return pn.widgets.FileDownload(callback=lambda: io.StringIO(M.to_csv(frame())),
-                                   filename=filename, label=label, embed=False, **kw)
-
-
-def _figure(title: str, **kw):
-    return figure(title=title, tools="hover,save", toolbar_location="above", **kw)
 
 
 # -- Machine tab -----------------------------------------------------------------------------------
@@ -158,18 +96,37 @@ class MachineTab(param.Parameterized):
     pose = param.Parameter(doc="the pose sliders: a Parameterized with one number per axis")
     error = param.String("", doc="the library's message on the last topology typed")
     refused = param.String("", doc="why the last value sent by the page was refused")
+    half_range = param.Array(np.zeros(0), doc="every error's half range (mm, rad), the table's")
+    file_error = param.String("", doc="the reader's message on the last ranges file")
+    file_read = param.String("", doc="what the last ranges file gave")
 
     def __init__(self, **params):
         super().__init__(**params)
-        self.top, self.status = pn.pane.HTML("", width=460), pn.pane.HTML("", width=290)
+        self.ranges = guarded_table(pn.widgets.Tabulator(
+            M.ranges_table(M.machine_setup(self.machine)), show_index=False, height=260,
+            width=290, layout="fit_data_table", selectable=False, sortable=False,
+            css_classes=["error-ranges"], editors={
+                "error": None, "unit": None, "notebook": None, "half_range": {
+                    "type": "number", "min": M.ERROR_RANGE_BOUNDS[0],
+                    "max": M.ERROR_RANGE_BOUNDS[1], "step": 0.1}},
+            titles={"half_range": "± half range", "notebook": "notebook's"},
+            formatters={c: {"type": "money", "precision": 4, "symbol": ""}
+                        for c in ("half_range", "notebook")}),
+            "half_range", lambda v: M.checked_half_ranges(self.setup, v, in_table_units=True),
+            self.refuse)
+        self.ranges.param.watch(self._table_edited, "value")
+        self.top = pn.pane.HTML("", sizing_mode="stretch_width", css_classes=["mt-scroll"])
+        self.status = pn.pane.HTML("", width=290)
         self.result = None                     # the last PoseIndices shown (the CSV exports)
+        self.on_update = []                    # called after each redraw (the URL's state)
+        self.moves = 0
         # heat map: errors (rows) x outputs (columns)
         self.heat_src = bm.ColumnDataSource(dict(error=[], output=[], index=[], label=[],
                                                  text_color=[], note=[]))
         self.heat_colours = bm.LinearColorMapper(palette=Viridis256, low=0.0, high=1.0,
                                                  nan_color=GREY)
-        self.heat = _figure("Sobol indices at the pose (closed form)", x_range=bm.FactorRange(),
-                            y_range=bm.FactorRange(), width=430, height=700,
+        self.heat = new_figure("Sobol indices at the pose (closed form)", x_range=bm.FactorRange(),
+                            y_range=bm.FactorRange(), max_width=460, height=700,
                             x_axis_location="above")
         r = self.heat.rect(x="output", y="error", width=0.96, height=0.92, line_color=None,
                            source=self.heat_src,
@@ -187,7 +144,7 @@ class MachineTab(param.Parameterized):
         # dominant-error map: numbers as arrays (binary on the websocket), colours by a mapper
         self.map_src = bm.ColumnDataSource(dict(u=[], v=[], error=[], index=[]))
         self.map_colours = bm.CategoricalColorMapper(factors=["-"], palette=[GREY])
-        self.dmap = _figure("", width=560, height=430, x_range=bm.Range1d(0, 1),
+        self.dmap = new_figure("", max_width=600, height=430, x_range=bm.Range1d(0, 1),
                             y_range=bm.Range1d(0, 1))
         rm = self.dmap.rect(x="u", y="v", width=1.0, height=1.0, source=self.map_src,
                             fill_color={"field": "error", "transform": self.map_colours},
@@ -215,7 +172,7 @@ class MachineTab(param.Parameterized):
         pose.param.watch(self.update, [a.name for a in setup.axes])
         across, up = M.default_map_axes(setup)
         self.param.update(setup=setup, pose=pose, error="", across=across, up=up,
-                          output=setup.outputs[0],
+                          output=setup.outputs[0], half_range=setup.half_range.copy(),
                           position_um=min(max(setup.position_um, M.RANGE_BOUNDS[0]),
                                           M.RANGE_BOUNDS[1]),
                           angular_arcsec=min(max(setup.angular_arcsec, M.RANGE_BOUNDS[0]),
@@ -248,26 +205,81 @@ class MachineTab(param.Parameterized):
         """The pose sliders' values (mm, deg) by axis."""
         return {a.name: float(getattr(self.pose, a.name)) for a in self.setup.axes}
 
-    @param.depends("pose", "position_um", "angular_arcsec", "across", "up",
-                   "output", watch=True)
+    @param.depends("position_um", watch=True)
+    def _scale_position(self) -> None:
+        self._scale(True, self.position_um)
+
+    @param.depends("angular_arcsec", watch=True)
+    def _scale_angular(self) -> None:
+        self._scale(False, self.angular_arcsec)
+
+    def _scale(self, translational: bool, largest: float) -> None:
+        """A group slider moved: its group's half ranges scaled, their ratios kept."""
+        try:
+            new = M.scaled_group(self.setup, self.half_range, translational=translational,
+                                 largest=largest)
+        except ValueError as exc:
+            self.refused = str(exc)
+            return
+        if not np.array_equal(new, self.half_range):
+            self.half_range = new
+
+    def _table_edited(self, event) -> None:
+        """A half range typed in the table (checked by the table's guard, and again here)."""
+        try:
+            new = M.checked_half_ranges(self.setup, event.new["half_range"].to_numpy(),
+                                        in_table_units=True)
+        except (ValueError, KeyError) as exc:
+            self.refused = str(exc)
+            return
+        if new.shape == self.half_range.shape and not np.array_equal(new, self.half_range):
+            self.set_half_ranges(new)
+
+    def load_ranges(self, names, contents) -> None:
+        """A ranges file uploaded: read as notebook 06 reads it, against this machine."""
+        up = EF.read_upload(names, contents, lambda path: M.ranges_from_file(self.setup, path))
+        if up.message:
+            self.param.update(file_error=up.message, file_read="")
+            return
+        self.set_half_ranges(up.result)
+        self.param.update(file_error="", file_read=f"{up.names[0]}: {len(up.result)} ranges "
+                          f"read for {self.setup.label}" + "".join(
+                              f"; {w}" for w in up.warnings))
+
+    def set_half_ranges(self, half_range) -> None:
+        """Every error's half range (mm, rad; checked), the group sliders at their largest."""
+        half = M.checked_half_ranges(self.setup, half_range)
+        per = np.where(self.setup.translational, 1e-3, M.ARCSEC)
+        sliders = {}
+        for name, group in (("position_um", self.setup.translational),
+                            ("angular_arcsec", ~self.setup.translational)):
+            top = float((half[group] / per[group]).max()) if group.any() else 0.0
+            if M.RANGE_BOUNDS[0] <= top <= M.RANGE_BOUNDS[1]:
+                sliders[name] = top
+        self.half_range = half
+        self.param.update(sliders)            # scaled to their own largest: no change
+
+    @param.depends("half_range", watch=True)
+    def _show_ranges(self) -> None:
+        table = M.ranges_table(self.setup, self.half_range)
+        if not table.equals(self.ranges.value):
+            self.ranges.value = table
+
+    @param.depends("pose", "half_range", "across", "up", "output", watch=True)
     def update(self, *events) -> None:
         """Recompute the indices and the map at the sliders' values and redraw both in place."""
         t0 = time.perf_counter()
         pose, setup = self.pose_values(), self.setup
         try:                                   # every bound checked again before the work
             res, dmap = M.slider_update(setup, pose, axes=(self.across, self.up),
-                                        position_um=self.position_um,
-                                        angular_arcsec=self.angular_arcsec)
+                                        half_range=self.half_range)
         except ValueError as exc:
             self.refused = str(exc)
             return
         ms = (time.perf_counter() - t0) * 1e3
         self.result = res
-        with pn.io.unlocked():  # some callbacks (a text input's Enter) lack the doc's lock
-            self._draw_heat(res)
-            self._draw_map(dmap, pose)
         top = {o: (e, v) for o, e, v in M.top_errors(res)}
-        self.top.object = '<table class="mt-top"><tr><th>output</th><th>top error (every ' \
+        table = '<table class="mt-top"><tr><th>output</th><th>top error (every ' \
             'tie)</th><th>index</th></tr>' + "".join(
                 f'<tr data-role="top-error" data-output="{o}" '
                 f'data-error="{html.escape(", ".join(top[o][0]))}" '
@@ -278,8 +290,17 @@ class MachineTab(param.Parameterized):
                 f'<tr data-role="top-error" data-output="{o}" data-error="" data-index="">'
                 f'<td>{o}</td><td colspan="2">no first-order term at this pose</td></tr>'
                 for o in res.outputs) + "</table>"
-        self.status.object = f'<div class="mt-note" data-role="timing">computed in {ms:.0f} ms ' \
-            '(server side)</div>'
+        # the numbers first (a small message the page shows at once), then the plots
+        with pn.io.unlocked():  # some callbacks (a text input's Enter) lack the doc's lock
+            self.top.object = table                     # its own message, sent at once
+        with pn.io.unlocked():
+            self._draw_heat(res)
+            self._draw_map(dmap, pose)
+        self.moves += 1                       # the status changes at every move (make bench)
+        self.status.object = f'<div class="mt-note" data-role="timing" data-move=' \
+            f'"{self.moves}">computed in {ms:.0f} ms (server side)</div>'
+        for callback in self.on_update:
+            callback()
 
     def _draw_heat(self, res: M.PoseIndices) -> None:
         d, q = res.indices.shape
@@ -291,12 +312,17 @@ class MachineTab(param.Parameterized):
         self.heat.y_range.factors = list(reversed(res.names))
         self.heat.x_range.factors = list(res.outputs)
         self.heat.height = 110 + 15 * d
-        self.heat_src.data = dict(
-            error=np.repeat(res.names, q).tolist(), output=list(res.outputs) * d, index=flat,
-            label=["" if not np.isfinite(v) or v < 0.01 else f"{v:.2f}" for v in flat],
+        changed = dict(
+            index=flat, label=["" if not np.isfinite(v) or v < 0.01 else f"{v:.2f}" for v in flat],
             text_color=["black" if np.isfinite(v) and v > 0.6 * high else "white" for v in flat],
             note=["" if res.first_order[k] else "no first-order term at this pose"
                   for _ in range(d) for k in range(q)])
+        error, output = np.repeat(res.names, q).tolist(), list(res.outputs) * d
+        old = self.heat_src.data
+        if old.get("error") == error and old.get("output") == output:
+            old.update(changed)               # only the columns a move changes are sent
+        else:
+            self.heat_src.data = dict(error=error, output=output, **changed)
 
     def _draw_map(self, dmap: M.DominantMap, pose: dict) -> None:
         k = dmap.outputs.index(self.output) if self.output in dmap.outputs else 0
@@ -311,8 +337,14 @@ class MachineTab(param.Parameterized):
         du = (dmap.u[-1] - dmap.u[0]) / (len(dmap.u) - 1)
         dv = du if dmap.axes[0] == dmap.axes[1] else (dmap.v[-1] - dmap.v[0]) / (len(dmap.v) - 1)
         self.map_glyph.update(width=du, height=dv)
-        self.map_src.data = dict(u=uu.ravel(), v=vv.ravel(), index=dmap.index[:, :, k].ravel(),
-                                 error=label[np.searchsorted(present, err)].tolist())
+        changed = dict(index=dmap.index[:, :, k].ravel(),
+                       error=label[np.searchsorted(present, err)].tolist())
+        old = self.map_src.data
+        if np.array_equal(old.get("u", []), uu.ravel()) and \
+                np.array_equal(old.get("v", []), vv.ravel()):
+            old.update(changed)               # the grid is the same: not sent again
+        else:
+            self.map_src.data = dict(u=uu.ravel(), v=vv.ravel(), **changed)
         a1, a2 = (self.setup.axis(a) for a in dmap.axes)
         self.here.data = dict(u=[pose[a1.name]], v=[pose[a2.name]])
         self.dmap.x_range.update(start=dmap.u[0] - du / 2, end=dmap.u[-1] + du / 2)
@@ -323,19 +355,19 @@ class MachineTab(param.Parameterized):
 
     @param.depends("setup")
     def _notes(self):
-        return _note("<br>".join(html.escape(n) for n in self.setup.notes), width=290)
+        return note("<br>".join(html.escape(n) for n in self.setup.notes), width=290)
 
     @param.depends("pose")
     def _sliders(self):
         """A slider and a number box per axis, the same parameter and bounds."""
         rows = []
         for a in self.setup.axes:
-            check = _number_check(f"axis {a.name}", a.low, a.high, unit=f" {a.unit}")
+            check = number_check(f"axis {a.name}", a.low, a.high, unit=f" {a.unit}")
             rows.append(pn.Row(
-                _guarded(_prompt(pn.widgets.FloatSlider.from_param(
+                guarded(prompt(pn.widgets.FloatSlider.from_param(
                     self.pose.param[a.name], width=195, css_classes=[f"pose-{a.name}"])),
                     check, self.refuse),
-                _guarded(pn.widgets.FloatInput.from_param(
+                guarded(pn.widgets.FloatInput.from_param(
                     self.pose.param[a.name], name="", width=85, start=a.low, end=a.high,
                     format="0[.]00000", css_classes=[f"pose-{a.name}-input"]),
                     check, self.refuse)))
@@ -350,7 +382,7 @@ class MachineTab(param.Parameterized):
         p, w = self.param, pn.widgets
 
         def choice(widget):
-            return _guarded(widget, _option_check(widget), self.refuse)
+            return guarded(widget, option_check(widget), self.refuse)
 
         def text(value):
             if not isinstance(value, str) or len(value) > M.MAX_TOPOLOGY_CHARS:
@@ -358,358 +390,88 @@ class MachineTab(param.Parameterized):
                                  "characters, such as 'w C b X Y Z B t'")
             return value
 
-        ranges = [_guarded(_prompt(w.FloatSlider.from_param(p[n], width=280)), _number_check(
+        ranges = [guarded(prompt(w.FloatSlider.from_param(p[n], width=280)), number_check(
             p[n].label, *M.RANGE_BOUNDS, unit=unit), self.refuse)
             for n, unit in (("position_um", " µm"), ("angular_arcsec", " arcsec"))]
         controls = pn.Column(
             choice(w.Select.from_param(p.machine, width=290)),
-            _guarded(w.TextInput.from_param(p.topology, placeholder="w C b X Y Z B t",
+            guarded(w.TextInput.from_param(p.topology, placeholder="w C b X Y Z B t",
                                             width=290), text, self.refuse),
-            pn.pane.HTML(p.error.rx.pipe(_error_html), width=290),
-            pn.pane.HTML(p.refused.rx.pipe(_error_html), width=290), self._notes,
+            pn.pane.HTML(p.error.rx.pipe(error_html), width=290),
+            pn.pane.HTML(p.refused.rx.pipe(error_html), width=290), self._notes,
             pn.pane.HTML("<b>Pose</b>"), self._sliders,
-            pn.pane.HTML("<b>Error ranges</b> (uniform)"),
+            pn.pane.HTML("<b>Error ranges</b> (uniform on ± the half range)"),
             *ranges,
-            _note("Each slider sets the largest half range of its group; the errors the "
-                  "notebook gives smaller ranges keep their ratio to it."),
-            pn.Row(*(choice(_prompt(w.Select.from_param(p[n], width=90)))
+            note("Each slider sets the largest half range of its group; the others keep "
+                 "their ratio to it. Type any error's own half range in the table (µm or "
+                 "arcsec, 0 to 10 000); the notebook's is beside it."),
+            self.ranges,
+            pn.Row(w.Button(label="notebook's ranges", width=140, on_click=lambda e:
+                            self.set_half_ranges(self.setup.half_range)),
+                   csv_button("ranges (CSV)", "error_ranges.csv",
+                              lambda: M.ranges_table(self.setup, self.half_range), width=140)),
+            note("Your ranges file (notebook 06's: symbol, low, high, unit; one row per error "
+                 "of this machine):"),
+            file_box("ranges-file", self.load_ranges, self.refuse),
+            pn.pane.HTML(pn.rx(file_status)(p.file_error, p.file_read), width=290),
+            pn.Row(*(choice(prompt(w.Select.from_param(p[n], width=90)))
                      for n in ("across", "up", "output"))),
             self.status, pn.Row(
-                _csv_button("top errors (CSV)", "top_errors.csv", lambda: self._csv("top"),
+                csv_button("top errors (CSV)", "top_errors.csv", lambda: self._csv("top"),
                             width=140),
-                _csv_button("indices (CSV)", "indices.csv", lambda: self._csv("indices"),
+                csv_button("indices (CSV)", "indices.csv", lambda: self._csv("indices"),
                             width=140)), width=310)
-        return pn.Row(controls, pn.Column(self.top, self.heat), pn.Column(_note(
+        return wrap(controls, block(self.top, self.heat, max_width=480), block(note(
             "Dominant error: the error with the largest closed-form index at each pose of a "
             "25 x 25 grid over the two axes chosen, the other axes at their slider values; "
             "grey: the output has no first-order term there; the circle marks the pose of the "
-            "sliders.", width=540), self.dmap))
-
-
-# -- Spindle tab -----------------------------------------------------------------------------------
-
-_PRESETS = {f"Yang et al. 2021 (samples {', '.join(map(str, M.YANG_POSITIONS))} of "
-            f"{M.YANG_SAMPLES})": M.YANG_DEG,
-            "four probes equally spaced": (0.0, 90.0, 180.0, 270.0)}
-_YANG, _YOURS = yang2021.Parameters, your_spindle.Parameters
-
-
-def _angle(i: int):
-    return param.Number(M.YANG_DEG[i - 1], bounds=(M.ANGLE_BOUNDS[0], M.ANGLE_BOUNDS[1] - 0.1),
-                        step=0.1, label=f"probe {i} angle (°)")
-
-
-class SpindleTab(param.Parameterized):
-    """What a probe layout does to each harmonic, for both estimators."""
-
-    layout = param.Selector(objects=[*_PRESETS, "custom"], label="Layout")
-    probe2, probe3, probe4 = _angle(2), _angle(3), _angle(4)
-    max_harmonic = param.Integer(_YANG.param["worst_k"].default, bounds=M.HARMONIC_BOUNDS,
-                                 label="highest harmonic")
-    weights = param.Selector(objects={"optimal (layout_weights)": "optimal",
-                                      "Eq. 5 with a3": "eq5"}, default="optimal")
-    a3 = param.Number(M.YANG_A3, bounds=_YANG.param["a3"].bounds, step=0.001, label="a3 (Eq. 5)")
-    amplified_above = param.Number(_YOURS.param["amplified_above"].default,
-                                   bounds=M.AMPLIFIED_BOUNDS, step=0.5,
-                                   label="amplified when q_k above")
-    refused = param.String("", doc="why the last value sent by the page was refused")
-
-    def refuse(self, message: str) -> None:
-        """Show why a value from the page was refused ("": clear the message)."""
-        self.refused = message
-
-    def transfer(self) -> M.ProbeTransfer:
-        """The model at the controls' values (probe 1 at 0 deg); a ValueError if refused."""
-        return M.probe_transfer([0.0, self.probe2, self.probe3, self.probe4],
-                                self.max_harmonic, self.weights, self.a3, self.amplified_above)
-
-    @param.depends("layout", watch=True)
-    def _preset(self) -> None:
-        if self.layout in _PRESETS:
-            self.param.update(dict(zip(("probe2", "probe3", "probe4"), _PRESETS[self.layout][1:],
-                                       strict=True)))
-
-    @param.depends("probe2", "probe3", "probe4", watch=True)
-    def _custom(self) -> None:
-        now = (self.probe2, self.probe3, self.probe4)
-        self.layout = next((n for n, a in _PRESETS.items() if np.allclose(a[1:], now, atol=1e-9)),
-                           "custom")
-
-    @param.depends("probe2", "probe3", "probe4", "max_harmonic", "weights", "a3",
-                   "amplified_above")
-    def plots(self):
-        """The summary, ``q_k`` per harmonic and the probe directions; a bad layout: its message."""
-        try:
-            t = self.transfer()
-        except ValueError as exc:
-            return pn.pane.HTML(_error_html(str(exc)), width=560)
-        ks = t.harmonics
-
-        def fmt(q):
-            return "inf (cancelled)" if not np.isfinite(q) else f"{q:.3f}"
-
-        def status(j):
-            if t.cancelled[j]:
-                return "cancelled by the layout: no estimator recovers it"
-            if t.cancelled_by_weights[j]:
-                return "cancelled by the weights (least squares recovers it)"
-            who = [n for n, a in (("least squares", t.amplified_least_squares[j]),
-                                  ("weighted", t.amplified_weighted[j])) if a]
-            return f"amplified ({', '.join(who)})" if who else ""
-
-        common = dict(k=ks.tolist(), q_ls=[fmt(q) for q in t.q_least_squares],
-                      q_w=[fmt(q) for q in t.q_weighted], gain=t.gain_weighted.tolist(),
-                      status=[status(j) for j in range(ks.size)])
-        finite = np.concatenate([t.q_least_squares[np.isfinite(t.q_least_squares)],
-                                 t.q_weighted[np.isfinite(t.q_weighted)], [t.amplified_above]])
-        top = float(finite.max()) * 1.6
-        fig = _figure("What the layout does to each harmonic of the profile", width=640,
-                      height=400, y_axis_type="log", x_axis_label="harmonic k",
-                      y_axis_label="noise amplification q_k",
-                      y_range=bm.Range1d(float(finite.min()) / 1.6, top * 1.6))
-        cut = np.flatnonzero(t.cancelled | t.cancelled_by_weights)
-        cut_src = bm.ColumnDataSource(dict({c: [common[c][j] for j in cut] for c in common},
-                                           x0=(ks[cut] - 0.5).tolist(),
-                                           x1=(ks[cut] + 0.5).tolist(), y=[top] * cut.size))
-        fig.vstrip(x0="x0", x1="x1", source=cut_src, fill_color=RED, fill_alpha=0.18,
-                   line_color=None)
-        hover = [fig.scatter(x="k", y="y", source=cut_src, marker="x", size=11, color=RED,
-                             line_width=2, legend_label="cancelled")]
-        for q, colour, marker, name in ((t.q_least_squares, BLUE, "circle", "least squares"),
-                                        (t.q_weighted, ORANGE, "square",
-                                         "weighted (Yang et al. 2021)")):
-            src = bm.ColumnDataSource(dict(common, q=np.where(np.isfinite(q), q, np.nan).tolist()))
-            fig.line(x="k", y="q", source=src, color=colour, line_width=1.5, legend_label=name)
-            hover.append(fig.scatter(x="k", y="q", source=src, color=colour, size=6,
-                                     marker=marker, legend_label=name))
-        fig.add_layout(bm.Span(location=t.amplified_above, dimension="width",
-                               line_dash="dashed", line_color="#555"))
-        fig.select_one(bm.HoverTool).update(renderers=hover, tooltips=[
-            ("k", "@k"), ("q least squares", "@q_ls"), ("q weighted", "@q_w"),
-            ("weighted gain |Lambda_k|/||a||", "@gain{0.0000}"), ("", "@status")])
-        fig.legend.update(orientation="horizontal", label_text_font_size="8pt")
-        fig.add_layout(fig.legend[0], "below")
-
-        phi = np.deg2rad(t.angles_deg)
-        w = t.weights if t.weights is not None else np.full(phi.shape, np.nan)
-        probes = bm.ColumnDataSource(dict(x=np.cos(phi), y=np.sin(phi), angle=t.angles_deg,
-                                          weight=[f"{v:.4f}" for v in np.round(w, 4) + 0.0],
-                                          name=[f"{i + 1}" for i in range(phi.size)]))
-        dirs = figure(width=300, height=300, tools="hover", toolbar_location=None,
-                      x_range=bm.Range1d(-1.35, 1.35), y_range=bm.Range1d(-1.35, 1.35),
-                      title="Probe directions")
-        dirs.circle(x=0, y=0, radius=1.0, fill_color=None, line_color="#999")
-        dirs.segment(x0=0, y0=0, x1="x", y1="y", source=probes, line_width=2, color=BLUE)
-        rp = dirs.scatter(x="x", y="y", source=probes, size=10, color=BLUE)
-        dirs.text(x="x", y="y", text="name", source=probes, x_offset=6, y_offset=-4,
-                  text_font_size="9pt")
-        dirs.select_one(bm.HoverTool).update(renderers=[rp], tooltips=[
-            ("probe", "@name"), ("angle", "@angle{0.000} deg"), ("weight", "@weight")])
-        dirs.axis.visible = dirs.grid.visible = False
-
-        def listed(mask):
-            return ", ".join(str(int(k)) for k in ks[mask]) or "none"
-
-        def worst(q):
-            f = np.isfinite(q)
-            return f"{q[f].max():.3f} at k = {int(ks[f][np.argmax(q[f])])}" if f.any() else "-"
-
-        weights = ("none (every harmonic is cancelled)" if t.weights is None
-                   else ", ".join(f"{v:.4f}" for v in np.round(t.weights, 4) + 0.0))
-        summary = (
-            f'<div class="mt-note" data-role="spindle-summary">'
-            f"<b>Harmonics 2..{int(ks[-1])}.</b> Cancelled by the layout: "
-            f"<b>{listed(t.cancelled)}</b>. Cancelled by the weights only: "
-            f"{listed(t.cancelled_by_weights)}.<br>Amplified (q_k &gt; {t.amplified_above:g}): "
-            f"least squares {listed(t.amplified_least_squares)}; weighted "
-            f"{listed(t.amplified_weighted)}.<br>Worst q_k: least squares "
-            f"{worst(t.q_least_squares)}; weighted {worst(t.q_weighted)}. Weights of "
-            f"probes 1..{phi.size} (a_0..a_{phi.size - 1} in Yang et al.): {weights}.</div>")
-        return pn.Row(pn.Column(pn.pane.HTML(summary, width=560), fig), pn.Column(dirs, _note(
-            "q_k: how much the separation multiplies white probe noise at harmonic k (the "
-            "weighted method's error transfer function, Eqs. 14, 19; least squares: the "
-            "Gauss-Markov variance). Red: the layout cancels the harmonic, no estimator "
-            "recovers it.", width=300)))
-
-    def view(self):
-        """The tab: controls and the plots."""
-        p, w = self.param, pn.widgets
-
-        def guard(widget, name, *, integer=False, unit=""):
-            par = p[name]
-            return _guarded(widget, _number_check(par.label, *par.bounds, unit=unit,
-                                                  integer=integer), self.refuse)
-
-        def probe(i):          # a slider and a number box, the same parameter and bounds
-            return pn.Row(
-                guard(w.FloatSlider.from_param(p[f"probe{i}"], width=195,
-                                               css_classes=[f"probe-{i}"]), f"probe{i}",
-                      unit=" deg"),
-                guard(w.FloatInput.from_param(p[f"probe{i}"], name="", width=85,
-                                              css_classes=[f"probe-{i}-input"]),
-                      f"probe{i}", unit=" deg"))
-
-        layout = w.Select.from_param(p.layout, width=290)
-        return pn.Row(pn.Column(
-            _guarded(layout, _option_check(layout), self.refuse),
-            pn.pane.HTML(p.refused.rx.pipe(_error_html), width=290),
-            _note("Probe 1 sits at 0 deg: it defines the x axis."),
-            *(probe(i) for i in (2, 3, 4)),
-            guard(w.IntSlider.from_param(p.max_harmonic, width=280), "max_harmonic",
-                  integer=True),
-            pn.pane.HTML("<b>Weighted method</b>"),
-            _guarded(w.RadioButtonGroup.from_param(p.weights, width=280), lambda v: v,
-                     self.refuse),
-            guard(w.FloatSlider.from_param(p.a3, width=280, format="0.000",
-                                           visible=p.weights.rx() == "eq5"), "a3"),
-            guard(w.FloatSlider.from_param(p.amplified_above, width=280), "amplified_above"),
-            _csv_button("harmonics (CSV)", "spindle_harmonics.csv",
-                        lambda: M.probe_table(self.transfer()), width=140),
-            width=310), self.plots)
-
-
-# -- Thermal tab -----------------------------------------------------------------------------------
-
-class ThermalTab(param.Parameterized):
-    """The decoupled model (Eq. 9) fitted on chosen experiments, predicting another."""
-
-    train = param.ListSelector(default=[], objects=[], label="training experiments")
-    test = param.Selector(objects=[], label="test experiment")
-    inputs = param.Selector(objects={"paper's sensors": "published",
-                                     "selected on training data": "selected"})
-    kind = param.Selector(objects={"MLR": "mlr", "SVR (about 2 s)": "svr"}, default="mlr")
-    status = param.String("", doc="what the fit is doing")
-    busy = param.Boolean(False, doc="a fit runs")
-    result = param.Parameter(doc="the last prediction, or the library's message")
-    refused = param.String("", doc="why the last value sent by the page was refused")
-
-    def refuse(self, message: str) -> None:
-        """Show why a value from the page was refused ("": clear the message)."""
-        self.refused = message
-
-    def _csv(self):
-        if not isinstance(self.result, M.ThermalPrediction):
-            raise ValueError("no prediction to export")
-        return M.thermal_table(self.result)
-
-    def __init__(self, **params):
-        super().__init__(**params)
-        self.data, self.reconstructed = M.thermal_data()
-        exps = [int(e) for e in self.data.experiments]
-        self.param.train.objects, self.param.test.objects = exps, exps
-        self.param.update(M.thermal_defaults(self.data, self.reconstructed))  # notebook 04's
-
-    @param.depends("train", "test", "inputs", "kind", watch=True)
-    async def _fit(self) -> None:
-        """Refit off the event loop (the SVR takes seconds); only the latest request is drawn."""
-        ticket, doc = object(), pn.state.curdoc
-        self._ticket = ticket
-
-        def show(**values):     # from the loop or the fitting thread: under the document's lock
-            def apply():
-                if self._ticket is ticket:
-                    self.param.update(values)
-            if doc is not None and doc.session_context is not None:
-                doc.add_next_tick_callback(apply)
-            else:
-                apply()
-        show(busy=True, status="fitting...")
-        try:
-            r = await asyncio.to_thread(M.thermal_prediction, self.data, train=self.train,
-                                        test=self.test, inputs=self.inputs, kind=self.kind,
-                                        progress=lambda text: show(status=text))
-        except ValueError as exc:
-            r = str(exc)
-        show(result=r, busy=False, status="" if isinstance(r, str) else "done")
-
-    @param.depends("result")
-    def plots(self):
-        """The prediction against the measurement, with its RMSE; the library's message."""
-        r = self.result
-        if r is None or isinstance(r, str):
-            return pn.pane.HTML(_error_html(r or ""), width=560)
-        n, p = r.measured.shape
-        src = bm.ColumnDataSource(dict(
-            x=np.tile(r.positions_mm, n), y=r.measured.ravel(), pred=r.predicted.ravel(),
-            res=(r.measured - r.predicted).ravel(), t=np.repeat(r.time_min, p),
-            m=np.repeat(r.measurement, p)))
-        colours = {"field": "t", "transform": bm.LinearColorMapper(
-            palette=Plasma256[:220], low=float(r.time_min.min()),
-            high=float(r.time_min.max()) + 1e-9)}
-        curves = _figure("Test experiment: measured (dots), predicted (lines)", width=560,
-                         height=380, x_axis_label="position (mm)",
-                         y_axis_label="thermal error (µm)")
-        curves.multi_line(xs="xs", ys="ys", line_width=1.6, line_color=colours,
-                          source=bm.ColumnDataSource(dict(xs=[r.positions_mm] * n,
-                                                       ys=list(r.predicted), t=r.time_min)))
-        rm = curves.scatter(x="x", y="y", source=src, size=6, color=colours)
-        curves.select_one(bm.HoverTool).update(renderers=[rm], tooltips=[
-            ("measurement", "@m"), ("time", "@t{0} min"), ("position", "@x mm"),
-            ("measured", "@y{0.000} µm"), ("predicted", "@pred{0.000} µm"),
-            ("residual", "@res{0.000} µm")])
-        scatter = _figure("Predicted against measured", width=380, height=380,
-                          x_axis_label="measured (µm)", y_axis_label="predicted (µm)")
-        lo = float(min(r.measured.min(), r.predicted.min()))
-        hi = float(max(r.measured.max(), r.predicted.max()))
-        scatter.line(x=[lo, hi], y=[lo, hi], color="#777", line_dash="dashed")
-        rs = scatter.scatter(x="y", y="pred", source=src, size=5, alpha=0.8, color=colours)
-        scatter.select_one(bm.HoverTool).update(renderers=[rs], tooltips=[
-            ("measurement", "@m"), ("position", "@x mm"), ("measured", "@y{0.000} µm"),
-            ("predicted", "@pred{0.000} µm")])
-        label = xu2022.RECONSTRUCTED_LABEL if self.reconstructed else ""
-        summary = (
-            f'<div class="mt-note" data-role="thermal-summary" data-rmse="{r.rmse:.6f}">'
-            f"Decoupled {r.kind.upper()} trained on experiment(s) "
-            f"{', '.join(map(str, r.train))}, predicting experiment {r.test}: "
-            f"<b>RMSE {r.rmse:.3f} µm</b> (pooled over {n} measurements x {p} positions), "
-            f"largest residual {r.max_residual:.3f} µm; without compensation the RMSE is "
-            f"{r.rmse_uncompensated:.3f} µm.<br>Inputs: k from {', '.join(r.inputs['k'])} "
-            f"(temperatures), b from {', '.join(r.inputs['b'])} (rises from the first "
-            f"measurement)." + (f'<br><span style="color:{RED};font-weight:bold">{label}</span>'
-                                if label else "") + "</div>")
-        return pn.Column(pn.pane.HTML(summary, width=620), pn.Row(curves, scatter))
-
-    def view(self):
-        """The tab: controls, status, and the prediction against the measurement."""
-        p, w = self.param, pn.widgets
-        source = html.escape(provenance.shown(self.data.source))
-        test = w.Select.from_param(p.test, width=140)
-
-        def accept(value):
-            return value
-        return pn.Row(pn.Column(
-            pn.pane.HTML("<b>Training experiments</b>"),
-            _guarded(w.CheckBoxGroup.from_param(p.train, inline=True), accept, self.refuse),
-            _guarded(test, _option_check(test), self.refuse),
-            pn.pane.HTML(p.refused.rx.pipe(_error_html), width=290),
-            pn.pane.HTML("<b>Model inputs</b> (Eq. 9: k from temperatures, b from rises)"),
-            _guarded(w.RadioButtonGroup.from_param(p.inputs, width=290), accept, self.refuse),
-            pn.pane.HTML("<b>Decoupled model</b> (Xu et al. 2022, Eq. 9)"),
-            _guarded(w.RadioButtonGroup.from_param(p.kind, width=290), accept, self.refuse),
-            _csv_button("prediction (CSV)", "thermal_prediction.csv", self._csv, width=140),
-            pn.Row(pn.indicators.LoadingSpinner(value=p.busy, visible=p.busy, size=22),
-                   pn.pane.HTML(p.status.rx.pipe(lambda s: f'<div class="mt-note">'
-                                                 f'{html.escape(s)}</div>'), width=260)),
-            _note(f"Data: {source}" + (
-                " - the paper's reconstruction (data/thermal/README.md), not measurements."
-                if self.reconstructed else " - not the paper's reconstruction: no comparison "
-                "with the paper.")), width=310),
-            self.plots)
+            "sliders.", sizing_mode="stretch_width"), self.dmap, basis=360))
 
 
 # -- The app and the server ------------------------------------------------------------------------
 
 def create_app():
     """The explorer's three tabs, a new independent app per call (one per browser session)."""
-    pn.extension(raw_css=[_CSS])
+    pn.extension("tabulator", raw_css=[CSS])
     tabs = {"machine": MachineTab(), "spindle": SpindleTab(), "thermal": ThermalTab()}
     header = pn.pane.HTML(
         "<h2 style='margin:4px 0'>mtaccuracy explorer</h2><div class='mt-note'>Closed-form "
         "sensitivity of the papers' machines, what a probe layout does to each harmonic, and "
         "the thermal model of notebook 04. Hover over a plot for its values.</div>")
-    app = pn.Column(header, pn.Tabs(*((k.capitalize(), t.view()) for k, t in tabs.items())),
-                    sizing_mode="stretch_width")
-    app.tabs = tabs
+    views = pn.Tabs(*((k.capitalize(), t.view()) for k, t in tabs.items()), dynamic=True)
+    state, problems = EU.UrlState(), pn.pane.HTML("", sizing_mode="stretch_width")
+    chapter = pn.pane.HTML("", sizing_mode="stretch_width")
+    machine, spindle = tabs["machine"], tabs["spindle"]
+
+    def show_chapter(*_):
+        tab = EU.TABS[views.active]
+        key = machine.setup.key if tab == "machine" else (
+            "probe file" if tab == "spindle" and spindle.file_read else tab)
+        url = EU.chapter_url(key)
+        chapter.object = (f'<div class="mt-note">What this tab shows, in the book: <a '
+                          f'data-role="chapter" href="{html.escape(url)}" target="_blank" '
+                          f'rel="noopener">{html.escape(EU.CHAPTERS[key])}</a> (online once '
+                          f'the repository is published; make book builds it here)</div>'
+                          if url else "")
+
+    location = pn.state.location if pn.state.curdoc is not None else None
+    if location is not None:                 # a served session: the link's state, checked
+        location.sync(state, {n: n for n in ("tab", "machine", "topology", "pose", "view",
+                                             "ranges", "probes")})
+        refused = state.apply(tabs, active=lambda i: setattr(views, "active", i))
+        problems.object = error_html("The link's state was not all applied: " + "; ".join(
+            refused)) if refused else ""
+
+    def remember(*_):
+        state.read(tabs)
+        state.tab = EU.TABS[views.active]
+        show_chapter()
+    machine.on_update.append(remember)
+    spindle.param.watch(remember, ["probe2", "probe3", "probe4", "file_read"])
+    views.param.watch(remember, "active")
+    remember()
+    app = pn.Column(header, problems, chapter, views, sizing_mode="stretch_width")
+    app.tabs, app.url_state, app.views = tabs, state, views
     return app
 
 
@@ -728,33 +490,56 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def serve(*, port: int = 0, address: str = LOOPBACK, show: bool = False):
-    """A server of :func:`create_app` on 127.0.0.1 (port 0: a free one) and its URL, not started."""
+def _too_many():
+    return pn.pane.HTML(f"<p>The explorer serves {ES.MAX_SESSIONS} sessions at once: close "
+                        "another tab, then reload this one.</p>")
+
+
+def serve(*, port: int = 0, address: str = LOOPBACK, show: bool = False,
+          token: str | None = None, max_sessions: int = ES.MAX_SESSIONS):
+    """A server of :func:`create_app` on 127.0.0.1 (port 0: a free one) and its URL, not started.
+
+    Every request needs ``token`` (None: a random one; :mod:`~mtaccuracy.apps.explore_server`),
+    which the URL returned carries; at most ``max_sessions`` sessions at once; the websocket
+    takes the server's own origins only, whatever ``BOKEH_ALLOW_WS_ORIGIN`` says.
+    """
     check_address(address)
     if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
         raise ValueError(f"port must be an integer in 0..65535, got {port!r}")
+    token = ES.new_token() if token is None else ES.checked_token(token)
+    ES.own_origins()
+    app = ES.SessionCap(max_sessions).gate(create_app, _too_many)
     for attempt in range(5):
         chosen = port or free_port()
         try:
-            server = pn.serve(create_app, port=chosen, address=LOOPBACK,
+            server = pn.serve(app, port=chosen, address=LOOPBACK,
                               websocket_origin=[f"{LOOPBACK}:{chosen}", f"localhost:{chosen}"],
-                              show=show, start=False, verbose=False,
-                              title="mtaccuracy explorer")
+                              show=False, start=False, verbose=False,
+                              title="mtaccuracy explorer", auth_provider=ES.TokenAuth(
+                                  token, chosen),
+                              websocket_max_message_size=2 * EF.MAX_UPLOAD_BYTES)
             break
         except OSError:
             if port or attempt == 4:       # a port asked for is taken; or no luck, 5 times
                 raise
-    return server, f"http://{LOOPBACK}:{chosen}/"
+    url = f"http://{LOOPBACK}:{chosen}/?token={token}"
+    if show:
+        import webbrowser  # only with --show
+        server.io_loop.add_callback(webbrowser.open, url)
+    return server, url
 
 
 def main(argv=None) -> int:
-    """``python -m mtaccuracy.apps.explore [--port N] [--show/--no-show] [--from-env]``."""
+    """``python -m mtaccuracy.apps.explore [--port N] [--token T] [--show] [--from-env]``."""
     ap = argparse.ArgumentParser(prog="python -m mtaccuracy.apps.explore",
                                  description="Serve the mtaccuracy explorer on 127.0.0.1.")
     ap.add_argument("--port", type=int, default=0,
                     help="port on 127.0.0.1 (default 0: a free one)")
     ap.add_argument("--show", action=argparse.BooleanOptionalAction, default=False,
                     help="open the page in the default browser (default: --no-show)")
+    ap.add_argument("--token", default=None,
+                    help="the token every request needs (16 to 128 letters, digits, - or _; "
+                         "default: a random one, printed in the URL)")
     ap.add_argument("--from-env", action="store_true",
                     help="take further arguments from $EXPLORE_ARGS (make explore), split like "
                          "a shell would, never evaluated by one")
@@ -767,7 +552,7 @@ def main(argv=None) -> int:
             return 2
     args = ap.parse_args(argv)
     try:
-        server, url = serve(port=args.port, show=args.show)
+        server, url = serve(port=args.port, show=args.show, token=args.token)
     except (ValueError, OSError) as exc:
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
         print(f"explore: cannot serve on {LOOPBACK}:{args.port}: {reason}", file=sys.stderr)

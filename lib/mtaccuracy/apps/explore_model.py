@@ -8,9 +8,12 @@ Error ranges: every error is uniform on ``+- h_i``; the default ``h_i`` are note
 ``position_range_um`` and ``angular_range_arcsec``, notebook 02's ``range_factor`` x the
 acceptance values of its ``ranges_file``, the half widths of notebook 03's ``[0, r]`` ranges
 (the same variance), and +-5 um, +-3 arcsec for a typed topology (the explorer's choice, about
-notebook 06's illustrative ranges).  Two sliders scale them: the largest translational half
-range (um) and the largest angular one (arcsec); the others keep their ratio to it.  Indices of
-the linear model depend only on the ratios of the variances, so the distribution does not matter.
+notebook 06's illustrative ranges).  Every error's half range can be set on its own
+(:func:`ranges_table`, :func:`checked_half_ranges`, or a ranges file read as notebook 06 reads it:
+:func:`ranges_from_file`); two sliders scale a group: the largest translational half range (um)
+and the largest angular one (arcsec), the others keeping their ratio to it
+(:func:`scaled_group`).  Indices of the linear model depend only on the ratios of the variances,
+so the distribution does not matter.
 """
 
 from __future__ import annotations
@@ -270,6 +273,93 @@ def error_half_ranges(setup: MachineSetup, position_um: float | None = None,
     return setup.half_range * scale
 
 
+#: One error's half range in the ranges table: 0 (the error held at its mean) to 10 mm in µm
+#: or 10 000 arcsec (an angle beyond the 0.01 rad the library's reader takes).
+ERROR_RANGE_BOUNDS = (0.0, 10_000.0)
+
+
+def range_units(setup: MachineSetup) -> list[str]:
+    """The ranges table's unit of each error: ``"µm"`` (translational) or ``"arcsec"``."""
+    return ["µm" if t else "arcsec" for t in setup.translational]
+
+
+def _per_unit(setup: MachineSetup) -> np.ndarray:
+    """mm or rad per table unit, per error (1e-3 for µm, :data:`ARCSEC` for arcsec)."""
+    return np.where(setup.translational, 1e-3, ARCSEC)
+
+
+def ranges_table(setup: MachineSetup, half_range=None) -> pd.DataFrame:
+    """The ranges table: one row per error, its half range and the notebook's, in µm or arcsec.
+
+    ``half_range`` (mm, rad; None: the notebook's) must pass :func:`checked_half_ranges`.
+    """
+    half = setup.half_range if half_range is None else checked_half_ranges(setup, half_range)
+    unit = _per_unit(setup)
+    return pd.DataFrame({
+        "error": setup.names, "unit": range_units(setup),
+        "half_range": half / unit, "notebook": setup.half_range / unit})
+
+
+def checked_half_ranges(setup: MachineSetup, half_range, *, in_table_units: bool = False):
+    """Every error's half range (mm, rad) checked: ``d`` finite numbers in the table's bounds.
+
+    ``half_range`` is in mm and rad, or in µm and arcsec (the table's) when ``in_table_units``.
+    A wrong count, a value that is not a finite number or one outside :data:`ERROR_RANGE_BOUNDS`
+    (in the table's units) raises a ValueError naming the error and its bounds.
+    """
+    values = list(np.ravel(np.asarray(half_range, dtype=object)))
+    d = len(setup.names)
+    if len(values) != d:
+        raise ValueError(f"the ranges table has {d} errors, got {len(values)} half ranges")
+    unit = _per_unit(setup)
+    shown = np.array([checked_number(
+        v if in_table_units else (v / u if isinstance(v, numbers.Real) and not isinstance(
+            v, bool | np.bool_) else v),
+        f"the half range of {n}", low=ERROR_RANGE_BOUNDS[0], high=ERROR_RANGE_BOUNDS[1],
+        unit=f" {un}") for v, u, n, un in zip(values, unit, setup.names, range_units(setup),
+                                            strict=True)])
+    return shown * unit if in_table_units else np.array(values, dtype=float)   # as given
+
+
+def scaled_group(setup: MachineSetup, half_range, *, translational: bool, largest: float):
+    """``half_range`` (mm, rad) with one group's largest half range set to ``largest``.
+
+    The group (translational errors in µm, else angular ones in arcsec) keeps its ratios; a
+    group whose errors are all 0 gets ``largest`` for each.  ``largest`` must lie in
+    :data:`RANGE_BOUNDS` (the group sliders).
+    """
+    half = checked_half_ranges(setup, half_range)
+    name, unit = (("the position-error half range", " µm") if translational
+                  else ("the angular-error half range", " arcsec"))
+    largest = checked_number(largest, name, low=RANGE_BOUNDS[0], high=RANGE_BOUNDS[1], unit=unit)
+    group = setup.translational == translational
+    if not group.any():
+        return half
+    per = _per_unit(setup)
+    top = (half[group] / per[group]).max()
+    out = half.copy()
+    out[group] = half[group] * (largest / top) if top > 0 else largest * per[group]
+    return out
+
+
+def ranges_from_file(setup: MachineSetup, path) -> np.ndarray:
+    """Every error's half range (mm, rad) from a ranges file, read as notebook 06 reads it.
+
+    :func:`mtaccuracy.machines.readers.read_ranges` against the setup's catalogue (its
+    refusals, naming the file and the line, unchanged); a range ``[low, high]`` becomes the half
+    width ``(high - low) / 2`` (the same variance; the indices of the linear model do not
+    depend on the mean), then :func:`checked_half_ranges`.
+    """
+    low, high = read_ranges(path, setup.machine)
+    return checked_half_ranges(setup, (high - low) / 2.0)
+
+
+def _half(setup, half_range, position_um, angular_arcsec) -> np.ndarray:
+    if half_range is None:
+        return error_half_ranges(setup, position_um, angular_arcsec)
+    return checked_half_ranges(setup, half_range)
+
+
 def pose_of(setup: MachineSetup, values: dict | None = None) -> dict:
     """The library's pose (mm, rad, tool offsets) from slider values (missing: the start).
 
@@ -306,9 +396,14 @@ class PoseIndices:
 
 def indices_at_pose(setup: MachineSetup, values: dict | None = None,
                     position_um: float | None = None,
-                    angular_arcsec: float | None = None) -> PoseIndices:
-    """The first-order model's Sobol indices at one pose, from the closed-form Jacobian."""
-    sd = error_half_ranges(setup, position_um, angular_arcsec) / np.sqrt(3.0)
+                    angular_arcsec: float | None = None, *,
+                    half_range=None) -> PoseIndices:
+    """The first-order model's Sobol indices at one pose, from the closed-form Jacobian.
+
+    ``half_range``: every error's (mm, rad; :func:`checked_half_ranges`), else the two group
+    sliders' (:func:`error_half_ranges`).
+    """
+    sd = _half(setup, half_range, position_um, angular_arcsec) / np.sqrt(3.0)
     jac = setup.machine.jacobian(pose_of(setup, values))                  # (1, q, d)
     idx = S.linear_indices(jac, sd=sd)[0]                                  # (d, q)
     first = S.first_order_outputs(jac, sd**2)[0]
@@ -354,7 +449,7 @@ def default_map_axes(setup: MachineSetup) -> tuple[str, str]:
 
 def dominant_map(setup: MachineSetup, values: dict | None = None, axes=None,
                  steps: int = GRID_STEPS, position_um: float | None = None,
-                 angular_arcsec: float | None = None) -> DominantMap:
+                 angular_arcsec: float | None = None, *, half_range=None) -> DominantMap:
     """The dominant error over a ``steps`` x ``steps`` grid of two axes, in one Jacobian call."""
     steps = checked_number(steps, "the map's grid steps", low=STEPS_BOUNDS[0],
                            high=STEPS_BOUNDS[1], integer=True)
@@ -368,7 +463,7 @@ def dominant_map(setup: MachineSetup, values: dict | None = None, axes=None,
     grid[a1] = uu.ravel()
     if a2 != a1:
         grid[a2] = vv.ravel()
-    var = error_half_ranges(setup, position_um, angular_arcsec) ** 2 / 3.0
+    var = _half(setup, half_range, position_um, angular_arcsec) ** 2 / 3.0
     jac = setup.machine.jacobian(pose_of(setup, grid))                     # (G, q, d)
     dom = S.dominant_errors(jac, var)                                      # (G, q)
     idx = S.indices_at_poses(jac, var=var)                                 # (G, d, q)
@@ -380,10 +475,12 @@ def dominant_map(setup: MachineSetup, values: dict | None = None, axes=None,
 
 def slider_update(setup: MachineSetup, values: dict | None = None, *, axes=None,
                   steps: int = GRID_STEPS, position_um: float | None = None,
-                  angular_arcsec: float | None = None) -> tuple[PoseIndices, DominantMap]:
+                  angular_arcsec: float | None = None,
+                  half_range=None) -> tuple[PoseIndices, DominantMap]:
     """What one move of a Machine-tab slider computes: the indices at the pose and the map."""
-    return (indices_at_pose(setup, values, position_um, angular_arcsec),
-            dominant_map(setup, values, axes, steps, position_um, angular_arcsec))
+    half = _half(setup, half_range, position_um, angular_arcsec)
+    return (indices_at_pose(setup, values, half_range=half),
+            dominant_map(setup, values, axes, steps, half_range=half))
 
 
 # -- Spindle: what a probe layout does to each harmonic --------------------------------------------
