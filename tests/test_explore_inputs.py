@@ -297,7 +297,9 @@ def test_each_tab_links_its_chapter(tmp_path):
     assert EU.chapter_url("vertical_xyfz", cff) == \
         "https://example.org/book/chapters/03_guo2016_spearman_21_errors.html"
     assert EU.chapter_url("thermal", tmp_path / "none.cff") == ""
-    assert set(EU.CHAPTERS.values()) == {p.stem for p in (ROOT / "notebooks").glob("*.ipynb")}
+    notebooks = {p.stem for p in (ROOT / "notebooks").glob("*.ipynb")}
+    assert set(EU.CHAPTERS.values()) <= notebooks               # each link is a chapter
+    assert set(EU.CHAPTERS.values()) >= notebooks - {"08_your_measurements"}  # no tab: 08
 
 
 def test_a_crafted_upload_is_refused_before_panel_decodes_it(caplog):

@@ -344,6 +344,36 @@ def explore_browser() -> dict:
                 f"{t.max():.0f} ms); server update {server}; plots' data in by {last:.0f} ms")
 
 
+def measure_identifiability() -> dict:
+    """The test x error identifiability table of notebook 06's five-axis machine, ten tests."""
+    from ..compendium.notebook import ROOT
+    from ..machines import iso, readers
+    from ..measure import identifiability as ident
+    from ..measure import instruments
+    from ..measure.motions import motion_model
+    from ..papers import your_machine, your_measurements
+
+    p = your_machine.Parameters
+    axes, ranges = (ROOT / p.param[n].default for n in ("axis_table", "ranges_file"))
+    travels, pivots, refs = readers.read_axis_table(axes, p.topology, with_references=True)
+    machine = iso.iso_machine(p.topology, pivots=pivots, travels=travels, references=refs,
+                              tool_offsets=("tool_x", "tool_y", "tool_z"))
+    model = motion_model(machine, degree=2)
+    prior = your_measurements.prior_sd(model, readers.read_ranges(ranges, machine))
+    plan = instruments.standard_plan(model, tool=120.0)
+    ten = [t for t in plan if t.name.split()[0] in ("laser", "circle")]
+    ten += [t for t in plan if t.name.startswith(("rotary ballbar C", "R-test C"))]
+    ten = ten[:10]
+
+    def table():
+        return ident.identifiability_table([t.design() for t in ten], prior_sd=prior)
+
+    seconds, out = timed(table)
+    return dict(time=seconds, note=f"{len(ten)} tests, {sum(t.n_obs for t in ten)} readings, "
+                f"{model.n_params} parameters; designs included; plan: "
+                f"{(out['plan'] == 'seen').sum()} seen")
+
+
 class Row(NamedTuple):
     """One row of the table: paper, task, what is measured, size, target, measuring function."""
 
@@ -398,6 +428,8 @@ def _rows():
               "3 machines, 25 x 25 grid", "<= 0.1 s", explore_update)
     yield Row("explorer", "explore_browser", "slider move to new numbers, Chromium",
               "AC double turntable, 1280 px", "<= 0.1 s median", explore_browser)
+    yield Row("measure", "measure_identifiability", "test x error table, five-axis machine",
+              "10 tests, 67 parameters", "<= 1 s", measure_identifiability)
     for name, (n, degrees, ot_degree, _) in PCE_CASES.items():
         for m in ("omp", "lars"):
             yield Row("PCE bench", f"pce_{name}_{m}", f"{name} ({m})",
