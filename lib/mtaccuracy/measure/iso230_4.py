@@ -16,7 +16,7 @@ the fix; :func:`evaluate_iso230_4` evaluates.
   circles enclosing the path, both about the **least-squares centre** of that direction's path
   (the limacon fit d ~ r + c_a cos theta + c_b sin theta; the linearisation errs by c**2 / (2R),
   1e-6 um for a 10 um offset on R = 50 mm): G = max - min of the residuals.
-- ``H``: circular hysteresis, the largest radial difference |d_ccw - d_cw| between the two
+- ``H``: circular hysteresis, the largest radial difference ``|d_ccw - d_cw|`` between the two
   paths, both about the **instrument's centre** (one set-up, so H does not see the centre
   offset); the cw path is interpolated (periodic, linear in theta) at the ccw path's angles.
 - ``F_max``, ``F_min``: the largest and smallest radial deviation from the nominal radius R
@@ -25,7 +25,7 @@ the fix; :func:`evaluate_iso230_4` evaluates.
 **Diagnostics** by one least-squares fit of both directions at once, the first-order radial
 signature of each error (d = e . u, u = (cos theta, sin theta), e the tool's position error
 in the plane; s = +1 ccw, -1 cw; the second-order remainder of the exact
-d = |R u + e| - R is at most |e|**2 / (2R))::
+``d = |R u + e| - R`` is at most ``|e|**2 / (2R)``)::
 
     r0 (bar length, mean scale; a nuisance)       d = r0
     centre_a, centre_b (um, nuisance): the path's

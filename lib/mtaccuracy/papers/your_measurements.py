@@ -191,9 +191,12 @@ def circle_figure(data):
         ax.plot(np.append(th, th[0]), np.append(dev[i], dev[i][0]) + ring, style, lw=1,
                 label=label)
         ax2.plot(np.rad2deg(th), dev[i], style, lw=1, label=label)
-    ax.set_yticks([ring], [f"R = {data.radius_mm:g} mm"], fontsize=7)
+    full = np.linspace(0.0, 2 * np.pi, 361)
+    ax.plot(full, np.full(full.size, ring), color="0.55", lw=0.7)
+    ax.set_yticks([])
     ax.set_ylim(0, ring + dev.max() * 1.1)
-    ax.set_title(f"{data.plane}: deviation about a ring of R (µm to scale)", fontsize=9)
+    ax.set_title(f"{data.plane}: deviations about the grey ring, R = {data.radius_mm:g} mm "
+                 "(µm, to scale)", fontsize=9)
     ax2.set_xlabel(f"angle from +{data.plane[0]} towards +{data.plane[1]} (°)")
     ax2.set_ylabel("radial deviation (µm)")
     ax2.set_xticks(range(0, 361, 45))
