@@ -24,7 +24,8 @@ from ..measure.motions import MotionModel
 from .figure import Caption
 from .zheng2024.measurement import visibility_table
 
-__all__ = ["circle_machine", "coefficient_prior_sd", "circle_table", "CIRCLE_SEES"]
+__all__ = ["circle_machine", "coefficient_prior_sd", "circle_table", "visible_peak",
+           "CIRCLE_SEES"]
 
 CIRCLE_SEES = Caption(
     "circle_xy_sees", "Beyond the paper",
@@ -147,3 +148,35 @@ def circle_table(test: Measurement, *, prior_sd, shrink: float = 100.0) -> pd.Da
                              "structure": "n/a", "structure_combination": why,
                              "at_ranges": "n/a", "at_ranges_combination": why})
     return pd.DataFrame(rows)
+
+
+def visible_peak(test: Measurement, *, parameters) -> pd.Series:
+    """The largest change of a reading per unit of each parameter, beyond the nuisances.
+
+    The part of the parameter's effect the test's set-up cannot absorb: its column of readings
+    less its least-squares fit by the nuisances (for a circle: the centre and the bar length),
+    largest in magnitude over the readings.  Times an error's size it is the largest reading
+    that error alone can leave in the evaluated trace.
+
+    Parameters
+    ----------
+    test : Measurement
+        The test.
+    parameters : sequence of str
+        Names of the model's parameters (``test.model.names``).
+
+    Returns
+    -------
+    pandas.Series
+        Per parameter, reading units (um) per parameter unit (mm or rad), indexed by name.
+    """
+    d = test.design()
+    unknown = [p for p in parameters if p not in d.errors]
+    if unknown:
+        raise ValueError(f"visible_peak: unknown parameters {unknown}; the model's are "
+                         f"{', '.join(d.errors[:6])} ...")
+    A = d.A[:, [d.errors.index(p) for p in parameters]]
+    if d.N.shape[1]:
+        A = A - d.N @ np.linalg.lstsq(d.N, A, rcond=None)[0]
+    return pd.Series(np.abs(A).max(axis=0), index=pd.Index(list(parameters), name="parameter"),
+                     name="peak")
