@@ -20,7 +20,8 @@ import pytest
 
 from mtaccuracy import errors
 from mtaccuracy.measure import instruments, motions
-from mtaccuracy.papers import guo2016, guo2016_measurement as gm
+from mtaccuracy.papers import guo2016
+from mtaccuracy.papers import guo2016_measurement as gm
 from mtaccuracy.papers.parameters import ParameterError
 
 R, T, NP = 80.0, 200.0, 24

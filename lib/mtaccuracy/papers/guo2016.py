@@ -737,7 +737,7 @@ def pose_grid_figure(g: np.ndarray, rho_grid: np.ndarray, top_idx: np.ndarray, *
 
     gy, gz = np.meshgrid(g, g, indexing="ij")
     leaders = sorted({names[j] for j in np.unique(top_idx)}, key=names.index)
-    from matplotlib.colors import ListedColormap
+    from matplotlib.colors import ListedColormap  # the compendium extra, as plt above
 
     palette = [colours[k % len(colours)] for k in range(max(len(leaders), 2))]
     cmap = ListedColormap(palette)

@@ -117,8 +117,9 @@ def circle_table(test: Measurement, *, prior_sd, shrink: float = 100.0) -> pd.Da
         One row per chain error (catalogue order) and degree 0..``model.degree``: ``symbol``,
         ``degree``, ``parameter`` (the model's name, ``""`` for a dropped term),
         ``structure`` and ``structure_combination`` (any size, noise-free:
-        :func:`~mtaccuracy.papers.zheng2024.measurement.structural_prior_sd`), ``at_ranges`` and ``at_ranges_combination`` (at ``prior_sd``); a term the
-        model drops has status ``"n/a"`` and its reason as combination.
+        :func:`~mtaccuracy.papers.zheng2024.measurement.structural_prior_sd`), ``at_ranges``
+        and ``at_ranges_combination`` (at ``prior_sd``); a term the model drops, or that a
+        constant error does not have, has status ``"n/a"`` and the reason as combination.
     """
     model = test.model
     d = test.design()

@@ -35,8 +35,9 @@ __all__ = ["STATUSES", "STRUCTURAL_GAIN", "structural_prior_sd", "visibility_tab
 
 #: The statuses, in the order of the figure's legend.
 STATUSES = ("seen", "combination", "blind")
-#: The structural prior moves the readings this many times their noise (:func:`structural_prior_sd`):
-#: two errors whose effects differ by less than about 1e-5 of their size count as one combination.
+#: The structural prior moves the readings this many times their noise
+#: (:func:`structural_prior_sd`): two errors whose effects differ by less than about 1e-5 of
+#: their size count as one combination.
 STRUCTURAL_GAIN = 1e6
 #: An error whose effect left after the nuisances is below this share of its effect is absorbed
 #: by them (far above rounding, 1e-16; far below any real effect).
@@ -106,7 +107,8 @@ def visibility_table(designs: Sequence[Design], *, symbols: Sequence[str], prior
     Parameters
     ----------
     designs : sequence of Design
-        The tests (:meth:`mtaccuracy.measure.instruments.Measurement.design`), of one machine.
+        The tests (:meth:`mtaccuracy.measure.instruments.Measurement.design`), of one machine,
+        each with its own name (none named ``plan``).
     symbols : sequence of str
         The errors to report (e.g. a paper's key errors), in the order wanted; each an error
         of the designs.
@@ -131,6 +133,11 @@ def visibility_table(designs: Sequence[Design], *, symbols: Sequence[str], prior
     designs = list(designs)
     if not designs:
         raise ValueError("visibility_table needs at least one test")
+    seen = [d.name for d in designs] + [plan]
+    twice = sorted({n for n in seen if seen.count(n) > 1})
+    if twice:
+        raise ValueError(f"visibility_table: tests named twice {twice} (the plan is {plan!r}): "
+                         "give each test its own name")
     idx = _order(designs[0], symbols)
     rows, whole = [], None
     for d in [*designs, combine(designs, name=plan)]:
