@@ -1,4 +1,5 @@
-"""Notebook 01's measurement question (``papers.zheng2024.measurement``), checked independently.
+"""Notebooks 01 and 03's status tables (``papers.visibility``) and notebook 01's measurement
+question (``papers.zheng2024.measurement``), checked independently.
 
 * A ballbar worked by hand (readings ``R (sx cos^2 t + sy sin^2 t + a sin t cos t)``, centre and
   bar length as nuisances, and an error with no effect): its statuses follow from numpy's SVD of
@@ -23,6 +24,7 @@ import pytest  # noqa: E402
 from mtaccuracy.machines import build  # noqa: E402
 from mtaccuracy.measure import instruments, motions  # noqa: E402
 from mtaccuracy.measure.design import Design  # noqa: E402
+from mtaccuracy.papers import visibility as V  # noqa: E402
 from mtaccuracy.papers import zheng2024  # noqa: E402
 from mtaccuracy.papers.zheng2024 import measurement as M  # noqa: E402
 
@@ -62,23 +64,23 @@ def test_hand_ballbar_statuses_follow_from_the_svd_and_not_from_units():
     d = _ballbar()
     want = _svd_statuses(d)
     assert want == {"sx": "combination", "sy": "combination", "a": "seen", "idle": "blind"}
-    table, plan = M.visibility_table([d], symbols=list(d.errors))
+    table, plan = V.visibility_table([d], symbols=list(d.errors))
     got = table[table.test == "plan"].set_index("symbol")
     assert got.status.to_dict() == want
     assert got.combination["sx"] == "sx + sy" == got.combination["sy"]     # the mean scale
     assert plan.rank == 2
     # new units for every column (um vs m, urad vs rad): the structure is the same
     d2 = _ballbar(scale=(1e-6, 1e3, 1e6, 1.0))
-    t2, _ = M.visibility_table([d2], symbols=list(d2.errors))
+    t2, _ = V.visibility_table([d2], symbols=list(d2.errors))
     assert t2[t2.test == "plan"].status.tolist() == list(want.values())
 
 
 def test_structural_priors_equalise_the_columns_left_after_the_nuisances():
     d = _ballbar(scale=(1.0, 1e3, 1e-2, 1.0))
-    prior = M.structural_prior_sd(d)
+    prior = V.structural_prior_sd(d)
     P = (d.A - d.N @ np.linalg.lstsq(d.N, d.A, rcond=None)[0]) / SIGMA
     lengths = np.linalg.norm(P * prior, axis=0)
-    assert lengths[:3] == pytest.approx(M.STRUCTURAL_GAIN, rel=1e-9)
+    assert lengths[:3] == pytest.approx(V.STRUCTURAL_GAIN, rel=1e-9)
     assert prior[3] == 1.0                                             # absorbed: blind anyway
 
 
@@ -88,7 +90,7 @@ def test_the_prior_decides_at_the_derived_threshold():
     d = _ballbar()
     critical = np.sqrt(99.0) * SIGMA / (1e3 * R * np.sqrt(d.n_obs / 8))
     for factor, want in ((0.7, "blind"), (1.4, "seen")):
-        table, _ = M.visibility_table([d], symbols=["a"],
+        table, _ = V.visibility_table([d], symbols=["a"],
                                       prior_sd=[1e-12, 1e-12, factor * critical, 1.0])
         assert table.status.tolist() == [want, want]                    # the test and the plan
 
@@ -138,8 +140,8 @@ def test_blind_key_errors_are_exactly_the_rigid_motions_of_the_workpiece(paper_p
     keys = pd.read_csv(zheng2024.__file__.rsplit("lib/", 1)[0]
                        + "data/papers/zheng2024_table2_key_errors.csv").symbol.unique().tolist()
     keys = [k for k in machine.error_names if k in keys]
-    table, plan = M.visibility_table(designs, symbols=keys, prior_sd=sd)
-    summary = M.per_error_summary(table)
+    table, plan = V.visibility_table(designs, symbols=keys, prior_sd=sd)
+    summary = V.per_error_summary(table)
     blind = set(summary.index[summary.status == "blind"])
     rng = np.random.default_rng(7)
     pose = {k: rng.uniform(*machine.travels[k], 30) for k in ("x", "y", "z", "A", "C")}
@@ -158,25 +160,25 @@ def test_linear_axis_tests_see_nothing_of_constant_errors(paper_plan):
     for d in linear:
         P = d.A - d.N @ np.linalg.lstsq(d.N, d.A, rcond=None)[0]
         assert np.abs(P).max() <= 1e-9 * np.abs(d.A).max()       # all absorbed by the set-up
-    table, _ = M.visibility_table(linear, symbols=list(machine.error_names), prior_sd=sd)
+    table, _ = V.visibility_table(linear, symbols=list(machine.error_names), prior_sd=sd)
     assert set(table.status) == {"blind"}
 
 
 def test_bad_input_is_refused_with_the_name():
     d = _ballbar()
     with pytest.raises(ValueError, match=r"\['nope'\] are not errors"):
-        M.visibility_table([d], symbols=["sx", "nope"])
+        V.visibility_table([d], symbols=["sx", "nope"])
     with pytest.raises(ValueError, match="at least one test"):
-        M.visibility_table([], symbols=["sx"])
+        V.visibility_table([], symbols=["sx"])
     with pytest.raises(ValueError, match="no rows of the plan"):
-        M.per_error_summary(pd.DataFrame({"test": ["t"], "symbol": ["sx"], "status": ["seen"],
+        V.per_error_summary(pd.DataFrame({"test": ["t"], "symbol": ["sx"], "status": ["seen"],
                                           "combination": [""]}))
-    table, _ = M.visibility_table([d], symbols=["sx"])
+    table, _ = V.visibility_table([d], symbols=["sx"])
     with pytest.raises(ValueError, match="colours needs a colour"):
-        M.status_matrix_figure(table, colours={"seen": "#000000"}, title="t")
+        V.status_matrix_figure(table, colours={"seen": "#000000"}, title="t")
     with pytest.raises(ValueError, match="unknown status"):
-        M.status_matrix_figure(table.assign(status="maybe"),
-                               colours=dict.fromkeys(M.STATUSES, "#000000"), title="t")
+        V.status_matrix_figure(table.assign(status="maybe"),
+                               colours=dict.fromkeys(V.STATUSES, "#000000"), title="t")
 
 
 def test_status_matrix_draws_one_cell_per_row_and_column_and_a_legend():
@@ -184,9 +186,9 @@ def test_status_matrix_draws_one_cell_per_row_and_column_and_a_legend():
 
     d = _ballbar()
     with pytest.raises(ValueError, match="named twice.*ballbar"):
-        M.visibility_table([d, _ballbar(n=12)], symbols=list(d.errors))
-    table, _ = M.visibility_table([d, _ballbar(n=12, name="short")], symbols=list(d.errors))
-    fig = M.status_matrix_figure(table.iloc[:-1], colours=dict(zip(M.STATUSES, (
+        V.visibility_table([d, _ballbar(n=12)], symbols=list(d.errors))
+    table, _ = V.visibility_table([d, _ballbar(n=12, name="short")], symbols=list(d.errors))
+    fig = V.status_matrix_figure(table.iloc[:-1], colours=dict(zip(V.STATUSES, (
         "#CC6677", "#332288", "#DDDDDD"), strict=True)), title="t", highlight=["a"])
     ax = fig.axes[0]
     assert [t.get_text() for t in ax.get_yticklabels()] == list(d.errors)

@@ -8,7 +8,7 @@ motions as Legendre polynomials over them (:func:`mtaccuracy.measure.motions.mot
 and the circle of :func:`mtaccuracy.measure.instruments.circle`.  :func:`circle_table` gives,
 per error and Legendre term, what the circle sees structurally (any size, noise-free) and at
 the paper's ranges with a stated noise (:func:`coefficient_prior_sd`), through
-:func:`mtaccuracy.papers.zheng2024.measurement.visibility_table`.
+:func:`mtaccuracy.papers.visibility.visibility_table`.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from ..machines.chain import ChainMachine
 from ..measure.instruments import Measurement
 from ..measure.motions import MotionModel
 from .figure import Caption
-from .zheng2024.measurement import visibility_table
+from .visibility import visibility_table
 
 __all__ = ["circle_machine", "coefficient_prior_sd", "circle_table", "visible_peak",
            "CIRCLE_SEES"]
@@ -117,7 +117,7 @@ def circle_table(test: Measurement, *, prior_sd, shrink: float = 100.0) -> pd.Da
         One row per chain error (catalogue order) and degree 0..``model.degree``: ``symbol``,
         ``degree``, ``parameter`` (the model's name, ``""`` for a dropped term),
         ``structure`` and ``structure_combination`` (any size, noise-free:
-        :func:`~mtaccuracy.papers.zheng2024.measurement.structural_prior_sd`), ``at_ranges``
+        :func:`~mtaccuracy.papers.visibility.structural_prior_sd`), ``at_ranges``
         and ``at_ranges_combination`` (at ``prior_sd``); a term the model drops, or that a
         constant error does not have, has status ``"n/a"`` and the reason as combination.
     """
