@@ -2,7 +2,9 @@
 
 The paper's printed equations against the matrix product, the model-free eigenvalue test of the
 printed Fig. 3 panels, the exchangeable pairs of every output (Et included), the units-slip
-reading of the printed Eq. 12, and what the model says about the XY circle test (Table 2).
+reading of the printed Eq. 12, and what the model says about the XY circle test (Table 2);
+what an XY circle can confirm once the errors vary along the axes is
+:mod:`mtaccuracy.papers.guo2016_measurement`'s (Section 7b).
 
 The machine itself (Fig. 2, Eqs. 1-10) is :class:`mtaccuracy.machines.vertical_xyfz.VerticalXYFZ`.
 The paper then expands its Eq. 10 to second order and prints the result as Eqs. 11-13.

@@ -42,6 +42,7 @@ STRUCTURAL_GAIN = 1e6
 #: by them (far above rounding, 1e-16; far below any real effect).
 _ABSORBED = 1e-9
 
+
 def _order(design: Design, symbols: Sequence[str]) -> list[int]:
     symbols = list(symbols)
     unknown = [s for s in symbols if s not in design.errors]

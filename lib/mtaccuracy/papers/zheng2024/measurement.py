@@ -38,7 +38,6 @@ MEASURE = Caption(
     "ballbar and R-tests on A and C), then the plan together (rank {rank} of 41).")
 
 
-
 def workpiece_motion_residual(machine, *, symbols: Sequence[str],
                               pose: Mapping) -> pd.DataFrame:
     """How far each error's effect on the tool tip is from a rigid motion of the workpiece.
