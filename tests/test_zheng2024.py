@@ -197,7 +197,8 @@ CAPTION_FIELDS = dict(
     n_reference=100000, key_threshold=0.05, where="test point 2 (x=-200.0 mm)", gap_pce=2e-6,
     gap_mcs=9e-4, gap_lhs=9e-4, pce_largest=2000, r_base="0.9 to 7.5 %", r_runs="10.3 to 66.7 %",
     n_ishigami=300, n_g=1000, err_legendre=5e-6, err_hermite=0.24, n_below=10, err_g=0.11,
-    validation_g=0.31, warned="triggers a warning", loo_last=0.015, terms_last=120, terms_best=4)
+    validation_g=0.31, warned="triggers a warning", loo_last=0.015, terms_last=120, terms_best=4,
+    sd_text="1.7 µm, 8.4 µrad", sigma=0.5, tool=100.0, shrink=100.0, n_tests=33, rank=10)
 
 
 def test_figures_follow_the_book_and_state_only_numbers_the_run_fills_in():
@@ -205,7 +206,8 @@ def test_figures_follow_the_book_and_state_only_numbers_the_run_fills_in():
 
     assert list(zheng2024.FIGURES) == [
         "fig04_indices_per_test_point", "fig05_position_total_sobol",
-        "fig06_attitude_total_sobol", "fig07_convergence", "pce_benchmarks"]
+        "fig06_attitude_total_sobol", "fig07_convergence", "pce_benchmarks",
+        "beyond_key_errors_by_test"]
     # the captions declared beside the functions that draw them are the chapter's
     assert zheng2024.FIGURES["fig04_indices_per_test_point"] is zheng2024.FIG04
     assert zheng2024.FIGURES["fig05_position_total_sobol"] is zheng2024.FIG05

@@ -2,7 +2,9 @@
 
 The paper's printed equations against the matrix product, the model-free eigenvalue test of the
 printed Fig. 3 panels, the exchangeable pairs of every output (Et included), the units-slip
-reading of the printed Eq. 12, and what the model says about the XY circle test (Table 2).
+reading of the printed Eq. 12, and what the model says about the XY circle test (Table 2);
+what an XY circle can confirm once the errors vary along the axes is
+:mod:`mtaccuracy.papers.guo2016_measurement`'s (Section 7b).
 
 The machine itself (Fig. 2, Eqs. 1-10) is :class:`mtaccuracy.machines.vertical_xyfz.VerticalXYFZ`.
 The paper then expands its Eq. 10 to second order and prints the result as Eqs. 11-13.
@@ -28,6 +30,7 @@ import sympy as sp
 from ..errors import three_axis_catalogue
 from ..machines.vertical_xyfz import AXES, TOOL_OFFSETS
 from .figure import Caption, figures
+from .guo2016_measurement import CIRCLE_SEES
 from .parameters import NotebookParameters, OutputFolder, ParameterError
 
 __all__ = ["printed_closed_form", "PRINTED_EQ8_ROW3", "PRINTED_UNBALANCED", "symbols",
@@ -515,6 +518,15 @@ class Parameters(NotebookParameters):
                                         doc="random designs: eigenvalue bound, any 8 of 21")
     alpha_bound = param.Number(0.001, bounds=(0.0, 0.5), inclusive_bounds=(False, False),
                                doc="chance that the eigenvalue test rejects a genuine design")
+    # Section 7b: the XY circle on the chain with error motions that vary along the travels
+    circle_radius_mm = param.Number(100.0, bounds=(1.0, 1000.0),
+                                    doc="XY circle (ballbar) radius in mm; not given in the paper")
+    circle_travel_mm = param.Number(250.0, bounds=(1.0, 5000.0),
+                                    doc="half travel of each axis about the pose (mm), not given")
+    ballbar_noise_um = param.Number(0.2, bounds=(0.0, 100.0), inclusive_bounds=(False, True),
+                                    doc="noise of one ballbar reading (µm)")
+    motion_degree = param.Integer(1, bounds=(1, 2),
+                                  doc="Legendre degree of the error motions (1: scale errors)")
     output_dir = OutputFolder("figures/03_guo2016_spearman_21_errors",
                               doc="where figures and tables are written")
 
@@ -531,6 +543,11 @@ class Parameters(NotebookParameters):
         if n_grid > 101:
             raise ParameterError(f"{self.stem}: the pose grid would have {n_grid} points per "
                                  f"axis; at most 101 (raise grid_step_mm)")
+        if self.circle_radius_mm > self.circle_travel_mm:
+            raise ParameterError(f"{self.stem}: the XY circle (circle_radius_mm "
+                                 f"{self.circle_radius_mm:g}) must lie within the travels "
+                                 f"(circle_travel_mm {self.circle_travel_mm:g}): raise "
+                                 "circle_travel_mm or lower the radius")
         if (min(self.n_bound_designs, self.n_bound_designs_all) + 1) * self.alpha_bound < 1:
             raise ParameterError(f"{self.stem}: the eigenvalue test cannot reach p <= "
                                  f"alpha_bound with so few designs: need n_bound_designs, "
@@ -751,4 +768,4 @@ def pose_grid_figure(g: np.ndarray, rho_grid: np.ndarray, top_idx: np.ndarray, *
     return fig
 
 
-FIGURES = figures(FIG3, EIGENVALUE_BOUND, POSE_GRID)
+FIGURES = figures(FIG3, EIGENVALUE_BOUND, POSE_GRID, CIRCLE_SEES)

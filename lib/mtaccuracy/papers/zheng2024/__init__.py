@@ -18,6 +18,8 @@ written by hand for this paper.  Its modules, each one concern (every name is al
 ``scorecard``       tables tidied, numbers printed, Fig. 7's convergence as text
 ``figures``         the figures drawn here with their captions (:data:`FIG04`,
                     :data:`FIG05`, :data:`FIG06`) and :data:`FIGURES`, in the book's order
+``measurement``     which standard test sees each key error (:func:`visibility_table`), its
+                    status matrix (:func:`status_matrix_figure`, caption :data:`MEASURE`)
 ==================  ========================================================================
 
 and here, the notebook's parameters (:class:`Parameters`).
@@ -44,6 +46,16 @@ from .checks import (
     relative_scatter,
 )
 from .figures import FIG04, FIG05, FIG06, FIGURES, bars_figure, fig04_figure
+from .measurement import (
+    MEASURE,
+    STATUSES,
+    STRUCTURAL_GAIN,
+    per_error_summary,
+    status_matrix_figure,
+    structural_prior_sd,
+    visibility_table,
+    workpiece_motion_residual,
+)
 from .pose_search import (
     POSE_SYMMETRIES,
     canonical_pose,
@@ -78,7 +90,9 @@ __all__ = ["POSE_SYMMETRIES", "pose_orbit", "canonical_pose", "rank_poses",
            "fig04_figure", "group_shares", "relative_scatter", "pce_fit_quality",
            "key_relative_difference", "published_relative_difference", "READINGS",
            "both_sizes", "convergence_text", "fluctuation_text",
-           "FIG04", "FIG05", "FIG06", "FIGURES", "Parameters"]
+           "FIG04", "FIG05", "FIG06", "FIGURES", "Parameters",
+           "MEASURE", "STATUSES", "STRUCTURAL_GAIN", "per_error_summary", "status_matrix_figure",
+           "structural_prior_sd", "visibility_table", "workpiece_motion_residual"]
 
 
 class Parameters(NotebookParameters):
@@ -136,6 +150,11 @@ class Parameters(NotebookParameters):
                                   doc="more designs at 1e5 model runs (Section 3.3)")
     key_threshold = param.Number(0.05, bounds=(0.0, 1.0), inclusive_bounds=(False, False),
                                  doc="key error: normalised total index above this (paper: 0.05)")
+    # Section 9: the standard tests on the paper's machine (its tool length is not stated)
+    measure_tool_mm = param.Number(100.0, bounds=(0.0, 1000.0),
+                                   doc="tool length of the standard tests (mm)")
+    measure_noise_um = param.Number(0.5, bounds=(0.0, 100.0), inclusive_bounds=(False, True),
+                                    doc="noise of one length reading (µm; angular: 1 µrad)")
     output_dir = OutputFolder("figures/01_zheng2024_pce_sobol_41_errors",
                               doc="where figures and tables are written")
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..figure import Caption, figures
+from .measurement import MEASURE
 
 __all__ = ["FIG04", "FIG05", "FIG06", "bars_figure", "fig04_figure", "FIGURES"]
 
@@ -186,4 +187,5 @@ FIGURES = figures(
             "along the OMP path the corrected leave-one-out error keeps falling (to "
             "{loo_last:.3f} at {terms_last} terms) while the 5-fold validation error is smallest "
             "at {terms_best} terms and then turns up."),
+    MEASURE,
 )
