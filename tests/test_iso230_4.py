@@ -145,6 +145,13 @@ def test_G_of_a_known_ellipse_and_H_F():
     assert res.value("H") == pytest.approx(3.0, abs=1e-9)
     assert res.value("F_max") == pytest.approx(d_cw.max(), abs=1e-12)
     assert res.value("F_min") == pytest.approx(-4.0, abs=1e-9)
+    # both paths in one zone about their common centre (the instrument's: both are symmetric):
+    # the ellipse's +4 um at 0 deg to its -4 um at 90 deg; the cw path (-1 um there) lies inside
+    assert res.value("G_b") == pytest.approx(8.0, abs=1e-9)
+    lifted = iso230_4.evaluate_iso230_4(frame(thb, ccw, np.concatenate([d_ccw, d_cw + 5.0])))
+    assert lifted.value("G_b") == pytest.approx(4.0 + 5.0 + 4.0, abs=1e-9)   # cw 5 um out
+    one = iso230_4.evaluate_iso230_4(frame(thb, ccw, np.concatenate([d_ccw, d_ccw])))
+    assert one.value("G_b") == pytest.approx(one.value("G_ccw"), abs=1e-12)  # one path twice
 
 
 def test_G_is_blind_to_the_centre_offset_H_to_nothing_common():
@@ -190,7 +197,7 @@ def test_axes_named_from_the_plane():
     d, _ = exact(th, ccw, backlash=(3.0, 0.0))
     res = iso230_4.evaluate_iso230_4(frame(th, ccw, d, plane="ZX"))
     q = res.to_df()["quantity"].tolist()
-    assert q == ["G_cw", "G_ccw", "H", "F_max", "F_min", "squareness", "scale_mismatch",
+    assert q == ["G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "squareness", "scale_mismatch",
                  "servo_mismatch", "backlash_Z", "backlash_X", "centre_Z", "centre_X"]
     assert res.value("backlash_Z") == pytest.approx(3.0, rel=2e-3)
     assert list(res.to_df().columns) == ["quantity", "value", "unit", "standard_uncertainty"]

@@ -16,6 +16,8 @@ the fix; :func:`evaluate_iso230_4` evaluates.
   circles enclosing the path, both about the **least-squares centre** of that direction's path
   (the limacon fit d ~ r + c_a cos theta + c_b sin theta; the linearisation errs by c**2 / (2R),
   1e-6 um for a 10 um offset on R = 50 mm): G = max - min of the residuals.
+- ``G_b``: bidirectional circular deviation (ISO 230-4:2005), the same zone enclosing both
+  paths about their common least-squares centre.
 - ``H``: circular hysteresis, the largest radial difference ``|d_ccw - d_cw|`` between the two
   paths, both about the **instrument's centre** (one set-up, so H does not see the centre
   offset); the cw path is interpolated (periodic, linear in theta) at the ccw path's angles.
@@ -285,7 +287,7 @@ class Iso230_4Result:
     radius_mm, feed_mm_per_min : float
         The test's nominal radius (mm) and feed (mm/min).
     table : DataFrame
-        ``quantity, value, unit, standard_uncertainty``: ``G_cw``, ``G_ccw``, ``H``,
+        ``quantity, value, unit, standard_uncertainty``: ``G_cw``, ``G_ccw``, ``G_b``, ``H``,
         ``F_max``, ``F_min`` (um; no uncertainty: NaN), ``squareness`` (urad),
         ``scale_mismatch`` (um/m), ``servo_mismatch`` (ms), ``backlash_<a>``,
         ``backlash_<b>``, ``centre_<a>``, ``centre_<b>`` (um).
@@ -309,6 +311,8 @@ class Iso230_4Result:
         return {
             "G_cw": "minimum radial zone of the cw path about its least-squares centre",
             "G_ccw": "minimum radial zone of the ccw path about its least-squares centre",
+            "G_b": "bidirectional circular deviation: the radial zone enclosing both paths "
+                   "about their common least-squares centre",
             "H": "largest |d_ccw - d_cw| at one angle, both about the instrument's centre",
             "F_max": "largest radial deviation from the nominal radius, about the "
                      "instrument's centre, both directions",
@@ -414,6 +418,7 @@ def evaluate_iso230_4(data) -> Iso230_4Result:
     cw_at_ccw = np.interp(ang[ccw], ang[~ccw], d[~ccw], period=360.0)
     rows = [("G_cw", _lsc_zone(ang[~ccw], d[~ccw]), "um", np.nan),
             ("G_ccw", _lsc_zone(ang[ccw], d[ccw]), "um", np.nan),
+            ("G_b", _lsc_zone(ang, d), "um", np.nan),
             ("H", float(np.abs(d[ccw] - cw_at_ccw).max()), "um", np.nan),
             ("F_max", float(d.max()), "um", np.nan), ("F_min", float(d.min()), "um", np.nan)]
     fitted = {name: (float(c), unit, float(s))
