@@ -496,3 +496,76 @@ def test_each_paper_marks_one_key_figure_that_its_run_writes(stem):
     assert (ROOT / "figures" / stem / f"{keys[0]}.png").is_file()
     fig = book.key_figure(stem, ROOT / "figures" / stem, set())
     assert fig is not None and fig["figure"] == keys[0]
+
+
+# ------------------------------------------------------------- conclusions link their evidence
+
+def _bullets_and_links(markdown: str) -> tuple[list[list[str]], list[str]]:
+    """The links of each top-level list item of ``markdown`` (a nested item's count as its
+    parent's), and every link of the text, as CommonMark (markdown-it, MyST's parser) reads
+    them."""
+    from markdown_it import MarkdownIt
+
+    bullets, links, depth = [], [], 0
+    for tok in MarkdownIt("commonmark").parse(markdown):
+        if tok.type == "list_item_open":
+            depth += 1
+            if depth == 1:
+                bullets.append([])
+        elif tok.type == "list_item_close":
+            depth -= 1
+        for child in tok.children or []:
+            if child.type == "link_open":
+                links.append(child.attrs["href"])
+                if depth:
+                    bullets[-1].append(child.attrs["href"])
+    return bullets, links
+
+
+def _evidence_problems(stem: str, conclusion: str, folder: Path) -> list[str]:
+    """What is wrong with a conclusion's evidence: a bullet without a link, a link that is not
+    ``../figures/<stem>/<file>`` of a file the run wrote and its record lists."""
+    files = provenance.read(folder).get("files", {})
+    bullets, links = _bullets_and_links(conclusion)
+    found = [f"bullet {i + 1} links no evidence" for i, b in enumerate(bullets) if not b]
+    prefix = f"../figures/{stem}/"
+    for href in links:
+        name = href.removeprefix(prefix)
+        if not href.startswith(prefix) or "/" in name:
+            found.append(f"{href}: not a file of figures/{stem}/")
+        elif name not in files or not (folder / name).is_file():
+            found.append(f"{href}: not written by the run (not in its provenance.json)")
+    return found
+
+
+def test_the_evidence_check_names_a_bare_bullet_and_a_dangling_link(tmp_path):
+    """Fault injection for the check below: a bullet without a link, a link outside the
+    folder, one to a file the record does not list, one to a listed file that is gone."""
+    folder = tmp_path / GUO
+    _write_run(folder, _guo_figures())
+    (folder / "mine.csv").write_text("a\n1\n")  # the user's: not in the record
+    good = f"[rows](../figures/{GUO}/reproduction.csv)"
+    assert _evidence_problems(GUO, f"Intro.\n\n* A claim. {good}\n* B\n  * nested {good}\n",
+                              folder) == []
+    text = (f"* A claim.\n* B [x](../figures/{GUO}/mine.csv)\n* C [y](https://example.org)\n"
+            f"* D [z](../figures/{GUO}/gone.png)\n")
+    assert _evidence_problems(GUO, text, folder) == [
+        "bullet 1 links no evidence",
+        f"../figures/{GUO}/mine.csv: not written by the run (not in its provenance.json)",
+        "https://example.org: not a file of figures/" + GUO + "/",
+        f"../figures/{GUO}/gone.png: not written by the run (not in its provenance.json)"]
+    (folder / "reproduction.csv").unlink()
+    assert _evidence_problems(GUO, f"* A. {good}", folder) == [
+        f"{good[7:-1]}: not written by the run (not in its provenance.json)"]
+
+
+@pytest.mark.parametrize("stem", STEMS)
+def test_every_conclusion_bullet_links_evidence_the_run_wrote(stem):
+    """Every bullet of a notebook's "What we conclude" ends with links to the figures or tables
+    that support it, each a file of its own ``figures/<stem>/`` that its run recorded: the
+    relative link resolves from ``notebooks/`` (JupyterLab, GitHub) and from the book's
+    ``chapters/`` alike."""
+    conclusion = book.notebook_parts(NOTEBOOKS / f"{stem}.ipynb")["conclusion"]
+    bullets, _ = _bullets_and_links(conclusion)
+    assert len(bullets) >= 2, f"{stem}: its conclusion has {len(bullets)} bullets"
+    assert _evidence_problems(stem, conclusion, ROOT / "figures" / stem) == []
