@@ -569,3 +569,14 @@ def test_every_conclusion_bullet_links_evidence_the_run_wrote(stem):
     bullets, _ = _bullets_and_links(conclusion)
     assert len(bullets) >= 2, f"{stem}: its conclusion has {len(bullets)} bullets"
     assert _evidence_problems(stem, conclusion, ROOT / "figures" / stem) == []
+
+
+def test_a_conclusions_evidence_cross_references_the_figures_its_chapter_shows():
+    text = ("x [Fig. 5](../figures/01_x/fig05_a.png), [t<b>.csv](../figures/01_x/t.csv), "
+            "[Fig. 9](../figures/01_x/gone.png), [other](../figures/02_y/f.png)")
+    out = book.evidence_links(text, "01_x", {"fig05_a"})
+    assert "{ref}`Fig. 5 <01-fig05_a>`" in out                       # the figure shown
+    assert '<a href="../figures/01_x/t.csv">t&lt;b&gt;.csv</a>' in out   # a table, escaped
+    assert '<a href="../figures/01_x/gone.png">Fig. 9</a>' in out       # not shown: the file
+    assert "[other](../figures/02_y/f.png)" in out                      # another chapter's
+    assert book.figure_label("03_guo", "fig03 a.b") == "03-fig03-a-b"

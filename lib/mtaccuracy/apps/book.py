@@ -361,6 +361,29 @@ def sweep_lines(stem: str, folder: Path, bad: set[str]) -> list[str]:
     return lines
 
 
+def figure_label(stem: str, figure: str) -> str:
+    """The label of a figure in its chapter (its ``:name:``), for cross-references."""
+    return f"{stem[:2]}-{re.sub(r'[^A-Za-z0-9_-]', '-', figure)}"
+
+
+def evidence_links(text: str, stem: str, shown: set[str]) -> str:
+    """A conclusion's evidence links as the chapter shows them.
+
+    The notebook links its run's files (``[Fig. 5](../figures/<stem>/<name>.png)``), which
+    resolve in JupyterLab, on GitHub and from the book's pages alike; MyST would make them
+    downloads.  In the chapter a figure it shows becomes a cross-reference to that figure (its
+    label, :func:`figure_label`) and any other file a plain link to the copy in the site."""
+    def link(m):
+        label, name = m.group(1), m.group(2)
+        fig = name.removesuffix(".png")
+        if name.endswith(".png") and fig in shown:
+            return f"{{ref}}`{label} <{figure_label(stem, fig)}>`"
+        return (f'<a href="../figures/{html.escape(stem)}/{html.escape(name)}">'
+                f"{html.escape(label)}</a>")
+
+    return re.sub(rf"\[([^\]]+)\]\(\.\./figures/{re.escape(stem)}/([^)\s]+)\)", link, text)
+
+
 def chapter(stem: str, figures: Path, index: dict, broken: dict) -> str:
     """One notebook's chapter (MyST Markdown), written into ``<src>/chapters/``."""
     paper = index.get(stem, {})
@@ -388,18 +411,19 @@ def chapter(stem: str, figures: Path, index: dict, broken: dict) -> str:
                   f"{html.escape(why)}; run <code>make {again} NB={stem[:2]}</code> again.</p>",
                   ""]
     lines += opening_lines(stem, index, figures, broken)
-    if parts["conclusion"]:
-        lines += ["## What we conclude", "", ":::{container} conclusion", parts["conclusion"],
-                  ":::", ""]
     figs = [f for f in chapter_figures(stem, folder, side)[0]
             if f"{f['figure']}.png" not in bad and (folder / f"{f['figure']}.png").is_file()]
+    if parts["conclusion"]:
+        lines += ["## What we conclude", "", ":::{container} conclusion",
+                  evidence_links(parts["conclusion"], stem, {f["figure"] for f in figs}),
+                  ":::", ""]
     if figs:
         lines += ["## Figures", ""]
     for f in figs:
         png = folder / f"{f['figure']}.png"
         url = f"../figures/{stem}/{quote(png.name)}"
         lines += [f"```{{figure}} {url}", f":alt: {_fig_alt(f['label'], f['caption'])}",
-                  f":name: {stem[:2]}-{re.sub(r'[^A-Za-z0-9_-]', '-', f['figure'])}",
+                  f":name: {figure_label(stem, f['figure'])}",
                   f":target: {url}", "",
                   f"**{md_text(f['label'])}.** {md_text(f['caption'])}", "```", ""]
         svg = png.with_suffix(".svg")
