@@ -580,3 +580,5 @@ def test_a_conclusions_evidence_cross_references_the_figures_its_chapter_shows()
     assert '<a href="../figures/01_x/gone.png">Fig. 9</a>' in out       # not shown: the file
     assert "[other](../figures/02_y/f.png)" in out                      # another chapter's
     assert book.figure_label("03_guo", "fig03 a.b") == "03-fig03-a-b"
+    assert book.site_links("see [Fig. <1>](../figures/01_x/a.png) and [w](https://x.org)") == \
+        'see <a href="../figures/01_x/a.png">Fig. &lt;1&gt;</a> and [w](https://x.org)'

@@ -681,6 +681,19 @@ def _copy_outputs(folder: Path, side: dict, target: Path, bad: set[str], prefix:
             shutil.copy(f, target / name)
 
 
+#: A notebook's Markdown link to a file of a run (``[Fig. 5](../figures/<stem>/<file>)``).
+_FILE_LINK = re.compile(r"\[([^\]]+)\]\((\.\./figures/[^)\s]+)\)")
+
+
+def site_links(text: str) -> str:
+    """A notebook's links to its run's files as plain links to their copies in the site.
+
+    MyST would make them downloads (a second copy of every figure, opened as a file, not shown
+    by the browser)."""
+    return _FILE_LINK.sub(lambda m: f'<a href="{html.escape(m.group(2))}">'
+                                    f"{html.escape(m.group(1))}</a>", text)
+
+
 def write_source(src: Path, figures: Path, stems: list[str], broken: dict) -> None:
     """The pages' source: conf.py, generated Markdown, copied notebooks, MathJax and DataTables.
 
@@ -709,6 +722,11 @@ def write_source(src: Path, figures: Path, stems: list[str], broken: dict) -> No
                                                      encoding="utf-8")
         nb = safe_notebook(NOTEBOOKS / f"{stem}.ipynb", [
             (p, w) for p, w in broken.get(stem, []) if p == NOTEBOOKS / f"{stem}.ipynb"])
+        for cell in nb.get("cells", []):     # the run's files open in the site, not as downloads
+            if cell.get("cell_type") == "markdown":
+                text = "".join(cell["source"]) if isinstance(cell["source"], list) else \
+                    cell["source"]
+                cell["source"] = site_links(text)
         (src / "notebooks" / f"{stem}.ipynb").write_text(json.dumps(nb, indent=1),
                                                          encoding="utf-8")
     for name, text in api_pages().items():
