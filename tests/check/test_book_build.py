@@ -370,3 +370,22 @@ def test_a_figure_enlarges_to_its_full_png(built, browser):
         full = page.evaluate("document.images[0].naturalWidth")
         assert full > 2 * shown                      # the file is larger than what was shown
     assert not problems, problems
+
+
+def test_a_chapters_figures_take_the_right_margin_on_a_desktop(built, browser):
+    """At 1280 px a chapter's figures span the text and the contents column (936 px, against
+    688 for the text): their 9 pt labels show at 8 pt or more when the figure is at most 1645 px
+    wide (150 dpi); the contents column folds away while a figure is in view, its chevron drawn
+    by the theme's own icon font."""
+    site, problems = built[0], []
+    with _serve(site) as url, _page(browser, WIDTHS["desktop"], problems) as page:
+        page.goto(url + f"chapters/{PAPERS[2]}.html")
+        text = page.locator("article p").first.bounding_box()["width"]
+        fig = page.locator("figure.full-width").first
+        fig.scroll_into_view_if_needed()
+        page.wait_for_timeout(600)
+        assert fig.bounding_box()["width"] > 1.3 * text
+        chevron = page.locator(".onthispage").first.evaluate(
+            "e => getComputedStyle(e, '::after').fontFamily")
+        assert "Font Awesome 7" in chevron
+    assert not problems, problems

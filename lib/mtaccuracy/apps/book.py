@@ -424,7 +424,7 @@ def chapter(stem: str, figures: Path, index: dict, broken: dict) -> str:
         url = f"../figures/{stem}/{quote(png.name)}"
         lines += [f"```{{figure}} {url}", f":alt: {_fig_alt(f['label'], f['caption'])}",
                   f":name: {figure_label(stem, f['figure'])}",
-                  f":target: {url}", "",
+                  f":target: {url}", ":figclass: full-width", "",
                   f"**{md_text(f['label'])}.** {md_text(f['caption'])}", "```", ""]
         svg = png.with_suffix(".svg")
         links = [f'<a href="{html.escape(url)}">full size</a>']
