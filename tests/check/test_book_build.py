@@ -9,8 +9,10 @@ request elsewhere fails the test).  Screenshots go to ``.test-output/book/``.
 """
 
 import contextlib
+import fcntl
 import functools
 import html
+import json
 import os
 import re
 import threading
@@ -44,8 +46,23 @@ def book_figures() -> Path:
 
 
 @pytest.fixture(scope="session")
-def built(tmp_path_factory, book_figures):
-    return (*book.build(tmp_path_factory.mktemp("book-build"), book_figures), book_figures)
+def built(tmp_path_factory, book_figures, worker_id):
+    """The book, built once per test run: the first xdist worker to ask builds it (under a file
+    lock in the run's shared folder), the others wait and read its result, so that two
+    workers do not build the same book side by side on two cores."""
+    base = tmp_path_factory.getbasetemp()
+    shared = base.parent if worker_id != "master" else base     # this run's, never an old one
+    out, result = shared / "book-build", shared / "book-build.json"
+    with open(shared / "book-build.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not result.exists():
+            site, broken, warnings = book.build(out, book_figures)
+            result.write_text(json.dumps({
+                "site": str(site), "warnings": warnings,
+                "broken": {k: [[str(f), why] for f, why in v] for k, v in broken.items()}}))
+    said = json.loads(result.read_text())
+    broken = {k: [(Path(f), why) for f, why in v] for k, v in said["broken"].items()}
+    return Path(said["site"]), broken, said["warnings"], book_figures
 
 
 def test_the_book_builds_from_what_is_committed_without_a_warning(built):
