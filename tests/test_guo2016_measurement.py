@@ -122,12 +122,12 @@ def test_priors_are_the_ranges_widths_and_bad_input_is_refused(circle):
     ranges = {"positioning": (0.0, 3.0), "straightness": (0.0, 4.0),
               "angular": (0.0, 3.2e-5), "squareness": (0.0, 1.9)}
     bounds = errors.uniform_bounds(cat, ranges)
-    prior = gm.coefficient_prior_sd(model, bounds)
+    prior = model.prior_sd(bounds)
     j = model.names.index("dx(x)[1]")
     assert prior[j] == pytest.approx(3e-3 / np.sqrt(12))               # mm
     assert prior[model.names.index("S_xy")] == pytest.approx(1.9e-6 / np.sqrt(12))
     with pytest.raises(ValueError, match=r"bounds must be \(2, 21\)"):
-        gm.coefficient_prior_sd(model, np.asarray(bounds).T)
+        model.prior_sd(np.asarray(bounds).T)
     with pytest.raises(ValueError, match="prior_sd must be"):
         gm.circle_table(circle, prior_sd=prior[:-1])
     with pytest.raises(ValueError, match="travel_mm must be a finite number > 0"):

@@ -99,7 +99,7 @@ def test_a_file_of_another_machine_or_with_unmatched_angles_is_refused(model, tm
 def test_priors_follow_the_ranges_and_the_units_read_um_and_urad(model):
     bounds = np.zeros((2, model.machine.n_errors))
     bounds[0], bounds[1] = -np.arange(1, model.machine.n_errors + 1), 0.0
-    sd = YM.prior_sd(model, bounds)
+    sd = model.prior_sd(bounds)
     j = model.names.index("EXX[2]")
     assert sd[j] == pytest.approx((model.column[j] + 1) / np.sqrt(12.0))
     units = YM.reader_units(model)

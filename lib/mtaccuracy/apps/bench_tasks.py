@@ -351,7 +351,7 @@ def measure_identifiability() -> dict:
     from ..measure import identifiability as ident
     from ..measure import instruments
     from ..measure.motions import motion_model
-    from ..papers import your_machine, your_measurements
+    from ..papers import your_machine
 
     p = your_machine.Parameters
     axes, ranges = (ROOT / p.param[n].default for n in ("axis_table", "ranges_file"))
@@ -359,7 +359,7 @@ def measure_identifiability() -> dict:
     machine = iso.iso_machine(p.topology, pivots=pivots, travels=travels, references=refs,
                               tool_offsets=("tool_x", "tool_y", "tool_z"))
     model = motion_model(machine, degree=2)
-    prior = your_measurements.prior_sd(model, readers.read_ranges(ranges, machine))
+    prior = model.prior_sd(readers.read_ranges(ranges, machine))
     plan = instruments.standard_plan(model, tool=120.0)
     ten = [t for t in plan if t.name.split()[0] in ("laser", "circle")]
     ten += [t for t in plan if t.name.startswith(("rotary ballbar C", "R-test C"))]

@@ -46,6 +46,7 @@ from numpy.polynomial import legendre
 from .. import validate
 from ..machines.chain import ChainMachine
 from ..machines.topology import DIRECTION, LINEAR, ROTARY
+from ..sensitivity.linear import uniform_moments
 
 
 class MotionModel:
@@ -194,6 +195,31 @@ class MotionModel:
                              f"values (mm, rad) in the order {', '.join(self.names[:4])}, ...; "
                              f"got shape {e.shape}")
         return e
+
+    def prior_sd(self, bounds) -> np.ndarray:
+        """Each parameter's prior standard deviation: its error's uniform range over sqrt(12).
+
+        Every Legendre coefficient of an error motion takes its error's range (a range is
+        given for an error, not for its shape along the travel: a scale term ``EXX[1]``, the
+        deviation at the end of the travel from the middle, as large as the positioning
+        error).
+
+        Parameters
+        ----------
+        bounds : (2, n_errors) array_like
+            The chain errors' uniform ranges, lows then highs, mm or rad, catalogue order (as
+            :func:`mtaccuracy.machines.readers.read_ranges` or
+            :func:`mtaccuracy.errors.uniform_bounds` returns them); checked by
+            :func:`mtaccuracy.sensitivity.uniform_moments`.
+
+        Returns
+        -------
+        (n_params,) ndarray
+            mm or rad, one per :attr:`names`.
+        """
+        uniform_moments(bounds, self.machine.n_errors)          # the check, one place
+        b = np.asarray(bounds, dtype=float)
+        return (b[1] - b[0])[self.column] / np.sqrt(12.0)
 
     def chain_errors(self, params, pose: Mapping) -> np.ndarray:
         """The chain's errors at each pose: every error motion evaluated at its axis' position.

@@ -7,7 +7,7 @@ the errors *vary* along the path, so the question needs errors that vary: the pa
 motions as Legendre polynomials over them (:func:`mtaccuracy.measure.motions.motion_model`),
 and the circle of :func:`mtaccuracy.measure.instruments.circle`.  :func:`circle_table` gives,
 per error and Legendre term, what the circle sees structurally (any size, noise-free) and at
-the paper's ranges with a stated noise (:func:`coefficient_prior_sd`), through
+the paper's ranges with a stated noise (priors: ``MotionModel.prior_sd``), through
 :func:`mtaccuracy.papers.visibility.visibility_table`.
 """
 
@@ -20,11 +20,10 @@ from ..errors import three_axis_catalogue
 from ..machines import vertical_xyfz
 from ..machines.chain import ChainMachine
 from ..measure.instruments import Measurement
-from ..measure.motions import MotionModel
 from .figure import Caption
 from .visibility import visibility_table
 
-__all__ = ["circle_machine", "coefficient_prior_sd", "circle_table", "visible_peak",
+__all__ = ["circle_machine", "circle_table", "visible_peak",
            "CIRCLE_SEES"]
 
 CIRCLE_SEES = Caption(
@@ -71,34 +70,6 @@ def circle_machine(*, travel_mm: float, centre=(0.0, 0.0, 0.0)) -> ChainMachine:
                                  for a, v in zip(vertical_xyfz.AXES, c, strict=True)})
 
 
-def coefficient_prior_sd(model: MotionModel, bounds) -> np.ndarray:
-    """Each parameter's prior standard deviation: its error's uniform range over sqrt(12).
-
-    A Legendre coefficient of an error motion gets the error's range: a scale term ``dx(x)[1]``
-    (the deviation at the end of the travel from the middle) as large as the paper's
-    positioning error, a constant as the paper's constant.
-
-    Parameters
-    ----------
-    model : MotionModel
-        The machine's parameters.
-    bounds : (2, n_errors) array_like
-        The chain errors' uniform ranges, lows then highs, mm or rad, catalogue order (as
-        :func:`mtaccuracy.errors.uniform_bounds` returns them).
-
-    Returns
-    -------
-    (n_params,) ndarray
-        mm or rad, one per ``model.names``.
-    """
-    b = np.asarray(bounds, dtype=float)
-    if b.shape != (2, model.machine.n_errors) or not np.all(np.isfinite(b)) or not np.all(
-            b[1] > b[0]):
-        raise ValueError(f"bounds must be (2, {model.machine.n_errors}): lows then highs, "
-                         f"finite, high > low (mm, rad); got shape {b.shape}")
-    return (b[1] - b[0])[model.column] / np.sqrt(12.0)
-
-
 def circle_table(test: Measurement, *, prior_sd, shrink: float = 100.0) -> pd.DataFrame:
     """Per error and Legendre term: what the test sees, structurally and at the given priors.
 
@@ -107,7 +78,8 @@ def circle_table(test: Measurement, *, prior_sd, shrink: float = 100.0) -> pd.Da
     test : Measurement
         The circle (any test of the model).
     prior_sd : (n_params,) array_like
-        The parameters' prior standard deviations, mm or rad (:func:`coefficient_prior_sd`).
+        The parameters' prior standard deviations, mm or rad
+        (:meth:`mtaccuracy.measure.motions.MotionModel.prior_sd`).
     shrink : float, default 100
         The factor of :func:`mtaccuracy.measure.identifiability.identifiability`.
 

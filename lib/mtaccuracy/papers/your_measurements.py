@@ -21,7 +21,7 @@ from .figure import Caption, figures
 from .parameters import InputFile, OutputFolder
 from .your_machine import MachineInputs
 
-__all__ = ["Parameters", "prior_sd", "reader_units", "is_shipped_example", "status_figure",
+__all__ = ["Parameters", "reader_units", "is_shipped_example", "status_figure",
            "positioning_figure", "circle_figure", "FIGURES", "STATUSES"]
 
 #: The shipped example files (simulated, ``data/measure/README.md`` states their truth).
@@ -53,29 +53,6 @@ class Parameters(MachineInputs):
         # the plan's design (1.4k readings x 67 parameters) and the replicates' estimates:
         # 0.3 GB measured at the defaults, a replicate adds 10 kB
         return 5e8 + 1e4 * self.n_replicates
-
-
-def prior_sd(model, bounds) -> np.ndarray:
-    """Each parameter's prior standard deviation, from its error's range (mm, rad).
-
-    An error uniform on ``[low, high]`` has the standard deviation ``(high - low) / sqrt(12)``;
-    each Legendre coefficient of an error motion takes its error's (an assumption: a range is
-    given for an error, not for its shape along the travel).
-
-    Parameters
-    ----------
-    model : MotionModel
-        The parameters (:func:`mtaccuracy.measure.motions.motion_model`).
-    bounds : (2, n_errors) array_like
-        The machine's error ranges, low and high (mm, rad), as
-        :func:`mtaccuracy.machines.readers.read_ranges` returns them.
-
-    Returns
-    -------
-    (n_params,) ndarray
-    """
-    b = np.asarray(bounds, dtype=float)
-    return ((b[1] - b[0]) / np.sqrt(12.0))[model.column]
 
 
 def reader_units(model) -> dict:
