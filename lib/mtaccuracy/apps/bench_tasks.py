@@ -347,19 +347,16 @@ def explore_browser() -> dict:
 def measure_identifiability() -> dict:
     """The test x error identifiability table of notebook 06's five-axis machine, ten tests."""
     from ..compendium.notebook import ROOT
-    from ..machines import iso, readers
     from ..measure import identifiability as ident
     from ..measure import instruments
     from ..measure.motions import motion_model
     from ..papers import your_machine
 
     p = your_machine.Parameters
-    axes, ranges = (ROOT / p.param[n].default for n in ("axis_table", "ranges_file"))
-    travels, pivots, refs = readers.read_axis_table(axes, p.topology, with_references=True)
-    machine = iso.iso_machine(p.topology, pivots=pivots, travels=travels, references=refs,
-                              tool_offsets=("tool_x", "tool_y", "tool_z"))
-    model = motion_model(machine, degree=2)
-    prior = model.prior_sd(readers.read_ranges(ranges, machine))
+    m = your_machine.read_machine(p.topology, *(ROOT / p.param[n].default
+                                                for n in ("axis_table", "ranges_file")))
+    model = motion_model(m.machine, degree=2)
+    prior = model.prior_sd(m.bounds)
     plan = instruments.standard_plan(model, tool=120.0)
     ten = [t for t in plan if t.name.split()[0] in ("laser", "circle")]
     ten += [t for t in plan if t.name.startswith(("rotary ballbar C", "R-test C"))]

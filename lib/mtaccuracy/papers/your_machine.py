@@ -6,15 +6,59 @@ on, the notebook's parameters (:class:`Parameters`) and its figures' captions (:
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import matplotlib.pyplot as plt
 import numpy as np
 import param
 
+from ..machines import iso, readers
 from ..machines.topology import LINEAR, ROTARY, parse_topology
 from .figure import Caption, figures
 from .parameters import InputFile, NotebookParameters, OutputFolder, ParameterError
 
-__all__ = ["swept_axis", "chain_figure", "chain_caption", "conclusion_numbers"]
+__all__ = ["read_machine", "swept_axis", "chain_figure", "chain_caption", "conclusion_numbers"]
+
+
+class ReaderMachine(NamedTuple):
+    """A reader's machine as :func:`read_machine` builds it from the three inputs."""
+
+    machine: object           # ChainMachine
+    bounds: np.ndarray        # (2, n_errors) the errors' ranges, mm and rad
+    travels: dict             # pose name -> (low, high), mm or rad
+    pivots: dict              # rotary axis -> (3,) pivot, mm
+    references: dict          # linear axis -> Abbe reference, mm
+
+
+def read_machine(topology: str, axis_table, ranges_file, *, name: str = "your_machine"
+                 ) -> ReaderMachine:
+    """A reader's machine from its topology, axis table and ranges file (notebooks 06, 08).
+
+    The axis table is checked against the topology, then the machine is built with its ISO
+    230-1 catalogue (:func:`mtaccuracy.machines.iso.iso_machine`, tool offsets ``tool_x``,
+    ``tool_y``, ``tool_z``), then the ranges file is checked against that catalogue: each
+    refusal names its file and line (:mod:`mtaccuracy.machines.readers`).
+
+    Parameters
+    ----------
+    topology : str
+        The chain from the workpiece to the tool.
+    axis_table, ranges_file : str or os.PathLike
+        The two files (``data/machines/README.md``).
+    name : str
+        The machine's name.
+
+    Returns
+    -------
+    ReaderMachine
+        The machine, its errors' ranges, and the axis table's travels, pivots and references.
+    """
+    travels, pivots, references = readers.read_axis_table(axis_table, topology,
+                                                          with_references=True)
+    machine = iso.iso_machine(topology, pivots=pivots, travels=travels, references=references,
+                              tool_offsets=("tool_x", "tool_y", "tool_z"), name=name)
+    return ReaderMachine(machine, readers.read_ranges(ranges_file, machine), travels, pivots,
+                         references)
 
 
 def swept_axis(topology: str) -> str | None:

@@ -12,22 +12,18 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
-import pandas as pd
 import param
-from matplotlib.colors import ListedColormap
-from matplotlib.patches import Patch
 
+from .. import sensitivity as S
 from .figure import Caption, figures
 from .parameters import InputFile, OutputFolder
 from .your_machine import MachineInputs
 
-__all__ = ["Parameters", "reader_units", "is_shipped_example", "status_figure",
-           "positioning_figure", "circle_figure", "FIGURES", "STATUSES"]
+__all__ = ["Parameters", "reader_units", "sobol_weights", "is_shipped_example",
+           "positioning_figure", "circle_figure", "FIGURES"]
 
 #: The shipped example files (simulated, ``data/measure/README.md`` states their truth).
 EXAMPLE_FOLDER = Path(__file__).resolve().parents[3] / "data" / "measure"
-#: The statuses of :func:`mtaccuracy.measure.identifiability.identifiability`, figure order.
-STATUSES = ("seen", "combination", "blind")
 
 
 class Parameters(MachineInputs):
@@ -73,46 +69,50 @@ def reader_units(model) -> dict:
                                                             strict=True)}
 
 
+def sobol_weights(machine, bounds, *, travels: dict, tool_length_mm: float, seed: int,
+                  n_poses: int = 500) -> np.ndarray:
+    """Each error's importance over the workspace, as notebook 06's atlas measures it.
+
+    The closed-form (linear) Sobol index of each error (``sensitivity.indices_at_poses``,
+    errors uniform on ``bounds``) averaged over ``n_poses`` random poses in
+    the travels, the largest over the tool tip's Px, Py, Pz: the weights of
+    :func:`mtaccuracy.measure.identifiability.next_test` (index a parameter's by
+    ``MotionModel.column``).
+
+    Parameters
+    ----------
+    machine : ChainMachine
+        With tool offsets ``tool_x``, ``tool_y``, ``tool_z`` (:func:`.your_machine.read_machine`).
+    bounds : (2, n_errors) array_like
+        The errors' ranges, mm and rad.
+    travels : dict
+        Pose name -> (low, high), mm or rad.
+    tool_length_mm : float
+        The tool tip below the spindle nose, mm.
+    seed : int
+        Of the random poses.
+    n_poses : int
+        How many.
+
+    Returns
+    -------
+    (n_errors,) ndarray
+    """
+    rng = np.random.default_rng(seed)
+    where = {k: rng.uniform(lo, hi, n_poses) for k, (lo, hi) in travels.items()}
+    where.update(tool_x=np.zeros(n_poses), tool_y=np.zeros(n_poses),
+                 tool_z=np.full(n_poses, -float(tool_length_mm)))
+    idx = np.asarray(S.indices_at_poses(machine.jacobian(where),
+                                        var=S.uniform_moments(bounds)[1]))   # (P, D, 6)
+    return idx[:, :, :3].mean(axis=0).max(axis=1)
+
+
 def is_shipped_example(path, name: str) -> bool:
     """Whether ``path`` holds the shipped example ``name`` (by content, wherever it lies)."""
     try:
         return Path(path).read_bytes() == (EXAMPLE_FOLDER / name).read_bytes()
     except OSError:
         return False
-
-
-def status_figure(table: pd.DataFrame, *, colours, names=None):
-    """Which test sees which parameter: a matrix of statuses, tests down, parameters across.
-
-    Parameters
-    ----------
-    table : DataFrame
-        :func:`mtaccuracy.measure.identifiability.identifiability_table`: one row per
-        parameter, a status column per test and ``plan`` (the plan's).
-    colours : sequence of 3 colours
-        For :data:`STATUSES` (a colour-blind-safe palette: the compendium's).
-    names : sequence of str, optional
-        The parameters to show (default all).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    names = list(names if names is not None else table.index)
-    tests = [c for c in table.columns if c != "plan" and not c.startswith("plan_")] + ["plan"]
-    codes = np.array([[STATUSES.index(table.loc[n, t]) for n in names] for t in tests])
-    fig, ax = plt.subplots(figsize=(max(8.0, 0.16 * len(names) + 3.5), 0.24 * len(tests) + 2.2))
-    ax.imshow(codes, cmap=ListedColormap(list(colours)[:3]), vmin=-0.5, vmax=2.5,
-              aspect="auto", interpolation="nearest")
-    ax.set_xticks(range(len(names)), names, rotation=90, fontsize=7)
-    ax.set_yticks(range(len(tests)), [t if t != "plan" else "ALL TESTS (the plan)"
-                                      for t in tests], fontsize=7)
-    ax.axhline(len(tests) - 1.5, color="k", lw=1.2)
-    ax.grid(False)
-    ax.legend(handles=[Patch(color=c, label=s) for c, s in zip(colours, STATUSES, strict=False)],
-              loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=3, fontsize=8, frameon=False)
-    fig.tight_layout()
-    return fig
 
 
 def positioning_figure(result):
@@ -187,8 +187,8 @@ FIGURES = figures(
             "Which standard test sees which parameter of the machine `{topology}` (error motions "
             "as Legendre polynomials of degree {degree} over the travels, {n_params} parameters; "
             "priors from {ranges_file}): seen (the tests shrink its prior variance at least "
-            "{shrink:g}-fold), seen only in a combination with others, or blind. The last row is "
-            "the whole plan of {n_tests} tests: rank {rank}, {n_seen} seen, {n_combination} in "
+            "{shrink:g}-fold), seen only in a combination with others, or blind. The last column "
+            "is the whole plan of {n_tests} tests: rank {rank}, {n_seen} seen, {n_combination} in "
             "combinations, {n_blind} blind. Simulated designs, no measurement.", key=True),
     Caption("simulated_recovery", "Figure 2",
             "A simulated measurement of the whole plan (truth drawn from the priors, seed "
