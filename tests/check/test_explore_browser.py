@@ -18,15 +18,11 @@ the range and the probes in a new page, and a crafted link names its bad parts.
 Waits are bounded.
 """
 
-import queue
 import re
-import subprocess
-import sys
-import threading
-import time
 
 import pytest
 
+from mtaccuracy.apps.explore_bench import NotStarted, served
 from mtaccuracy.compendium.notebook import ROOT
 
 playwright = pytest.importorskip("playwright.sync_api")
@@ -37,36 +33,15 @@ TIMEOUT_MS = 30_000
 
 @pytest.fixture
 def server(tmp_path):
-    """The explorer in a subprocess; yields its URL; terminated whatever happens."""
+    """The explorer in a subprocess (``explore_bench.served``, as the bench serves it); yields
+    its URL; terminated whatever happens; its log must show no traceback."""
     log = tmp_path / "server.log"
     with open(log, "w") as err:
-        proc = subprocess.Popen([sys.executable, "-m", "mtaccuracy.apps.explore",
-                                 "--port", "0", "--no-show"], stdout=subprocess.PIPE,
-                                stderr=err, text=True, cwd=tmp_path)
-    lines: queue.Queue = queue.Queue()
-    reader = threading.Thread(target=lambda: [lines.put(li) for li in proc.stdout], daemon=True)
-    reader.start()
-    try:
-        deadline = time.monotonic() + START_TIMEOUT_S
-        url = None
-        while url is None and time.monotonic() < deadline and proc.poll() is None:
-            try:
-                found = re.search(r"http://127\.0\.0\.1:\d+/\?token=[\w-]+",
-                                  lines.get(timeout=0.5))
-            except queue.Empty:
-                continue
-            url = found.group(0) if found else None
-        if url is None:
-            pytest.fail(f"the explorer did not print its URL within {START_TIMEOUT_S} s "
-                        f"(exit code {proc.poll()}): {log.read_text()[-2000:]}")
-        yield url
-    finally:
-        proc.terminate()
         try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(timeout=10)
+            with served(timeout_s=START_TIMEOUT_S, cwd=tmp_path, stderr=err) as (_, url):
+                yield url
+        except NotStarted as exc:
+            pytest.fail(f"{exc}: {log.read_text()[-2000:]}")
     text = log.read_text()           # what the page sent, crafted values included: no traceback
     assert "Traceback" not in text and "ERROR" not in text, text[-3000:]
 

@@ -13,9 +13,12 @@ are not counted.
 
 from __future__ import annotations
 
+import contextlib
+import queue
 import re
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -51,20 +54,52 @@ _ARM = """([el, status]) => {
 }"""
 
 
-def _start(timeout_s: float = 90.0):
+class NotStarted(RuntimeError):
+    """The explorer did not print its URL in time (:func:`served`)."""
+
+
+@contextlib.contextmanager
+def served(*, timeout_s: float = 60.0, cwd=None, stderr=subprocess.DEVNULL):
+    """The explorer in a subprocess on 127.0.0.1 at a free port; yields ``(process, URL)``.
+
+    The URL, with its token, is read from the server's output by a thread, so the wait is
+    bounded even when the server prints nothing; the server is terminated (then killed) on
+    leaving, whatever happened.  The bench and the browser tests share it.
+
+    Parameters
+    ----------
+    timeout_s : float
+        How long to wait for the URL, s.
+    cwd : path, optional
+        The server's working folder.
+    stderr : file, optional
+        Where the server's log goes (default: discarded).
+    """
     proc = subprocess.Popen([sys.executable, "-m", "mtaccuracy.apps.explore", "--port", "0",
-                             "--no-show"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                            text=True)
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        line = proc.stdout.readline()
-        found = re.search(r"http://127\.0\.0\.1:\d+/\?token=[\w-]+", line or "")
-        if found:
-            return proc, found.group(0)
-        if proc.poll() is not None:
-            break
-    proc.kill()
-    raise RuntimeError("the explorer did not print its URL")
+                             "--no-show"], stdout=subprocess.PIPE, stderr=stderr, text=True,
+                            cwd=cwd)
+    lines: queue.Queue = queue.Queue()
+    threading.Thread(target=lambda: [lines.put(li) for li in proc.stdout], daemon=True).start()
+    try:
+        deadline, url = time.monotonic() + timeout_s, None
+        while url is None and time.monotonic() < deadline and proc.poll() is None:
+            try:
+                found = re.search(r"http://127\.0\.0\.1:\d+/\?token=[\w-]+",
+                                  lines.get(timeout=0.5))
+            except queue.Empty:
+                continue
+            url = found.group(0) if found else None
+        if url is None:
+            raise NotStarted(f"the explorer did not print its URL within {timeout_s:g} s "
+                               f"(exit code {proc.poll()})")
+        yield proc, url
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=10)
 
 
 def slider_latency(moves: int = MOVES, warmup: int = WARMUP) -> dict:
@@ -80,8 +115,7 @@ def slider_latency(moves: int = MOVES, warmup: int = WARMUP) -> dict:
         from playwright.sync_api import sync_playwright  # optional: the bench says so
     except ImportError:
         return {"skipped": "Playwright is not installed"}
-    proc, url = _start()
-    try:
+    with served(timeout_s=90.0) as (_, url):
         with sync_playwright() as p:
             browser = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
             page = browser.new_page(viewport={"width": 1280, "height": 900})
@@ -109,12 +143,6 @@ def slider_latency(moves: int = MOVES, warmup: int = WARMUP) -> dict:
                     if found:
                         server.append(int(found.group(1)))
             browser.close()
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
     return {"times": times, "median": float(np.median(times)), "server_ms": server,
             "last": last}
 
