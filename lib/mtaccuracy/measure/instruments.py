@@ -297,6 +297,14 @@ def _targets(model, axis, targets, n_targets):
     return t
 
 
+def _along(model, axis, targets, n_targets, at, tool):
+    """A linear axis' test poses: its targets (mm), the fixed pose of the others, and the
+    poses with the axis at each target (laser, straightness, angular)."""
+    q = _targets(model, axis, targets, n_targets)
+    base = _base(model, at, tool)
+    return q, base, _poses(base, q.size, **{model.machine._axis_pose[axis]: q})
+
+
 def _direction(model, base, axis):
     """The nominal direction of a linear axis' move in the workpiece frame at ``base``."""
     m = model.machine
@@ -348,13 +356,11 @@ def laser_positioning(machine, *, axis: str, targets=None, n_targets: int = 11,
     """
     model = _as_model(machine)
     axis = _axis(model, axis, LINEAR)
-    q = _targets(model, axis, targets, n_targets)
-    base = _base(model, at, tool)
-    name = model.machine._axis_pose[axis]
+    q, base, poses = _along(model, axis, targets, n_targets, at, tool)
     g = _direction(model, base, axis)
     labels = [f"laser {axis} {v:g} mm" for v in q]
-    return _make(model, f"laser {axis}", _poses(base, q.size, **{name: q}), offset, g,
-                 "workpiece", 0.0, np.ones(q.size), ("laser zero (um)",), labels, sigma)
+    return _make(model, f"laser {axis}", poses, offset, g, "workpiece", 0.0, np.ones(q.size),
+                 ("laser zero (um)",), labels, sigma)
 
 
 def straightness(machine, *, axis: str, direction: str, targets=None, n_targets: int = 11,
@@ -389,19 +395,17 @@ def straightness(machine, *, axis: str, direction: str, targets=None, n_targets:
     if direction not in LINEAR or direction == axis:
         raise ValueError(f"straightness of {axis}: direction must be another linear axis "
                          f"letter (X, Y, Z), got {direction!r}")
-    q = _targets(model, axis, targets, n_targets)
-    base = _base(model, at, tool)
+    q, base, poses = _along(model, axis, targets, n_targets, at, tool)
     e_a = _direction(model, base, axis)
     g = _E[DIRECTION[direction]] if direction not in model.machine.topology.axes \
         else _direction(model, base, direction)
     g = g - (g @ e_a) * e_a
     g = g / np.linalg.norm(g)
-    name = model.machine._axis_pose[axis]
     mid = 0.5 * (q.min() + q.max())
     N = np.stack([np.ones(q.size), 1e-3 * (q - mid)], axis=1)
     labels = [f"straightness E{direction}{axis} {v:g} mm" for v in q]
-    return _make(model, f"straightness {axis} in {direction.lower()}",
-                 _poses(base, q.size, **{name: q}), offset, g, "workpiece", 0.0, N,
+    return _make(model, f"straightness {axis} in {direction.lower()}", poses, offset, g,
+                 "workpiece", 0.0, N,
                  ("reference offset (um)", "reference slope (urad)"), labels, sigma)
 
 
@@ -434,12 +438,10 @@ def angular(machine, *, axis: str, about: str, targets=None, n_targets: int = 11
     about = str(about).lower()
     if about not in ("x", "y", "z"):
         raise ValueError(f"angular test of {axis}: about must be x, y or z, got {about!r}")
-    q = _targets(model, axis, targets, n_targets)
-    base = _base(model, at, tool)
-    name = model.machine._axis_pose[axis]
+    q, _, poses = _along(model, axis, targets, n_targets, at, tool)
     labels = [f"angular {axis} about {about} {v:g} mm" for v in q]
-    return _make(model, f"angular {axis} about {about}", _poses(base, q.size, **{name: q}),
-                 0.0, _E["xyz".index(about)], "angle", 0.0, np.ones(q.size),
+    return _make(model, f"angular {axis} about {about}", poses, 0.0, _E["xyz".index(about)],
+                 "angle", 0.0, np.ones(q.size),
                  ("angular zero (urad)",), labels, sigma)
 
 
