@@ -41,7 +41,14 @@ def pytest_configure(config):
         config._mtaccuracy_guard = _snapshot()
 
 
+#: Tests that run a notebook through the whole workflow (a minute on one core): scheduled first,
+#: so that an xdist worker starts them while the other runs the rest, instead of one worker
+#: ending the run alone with them.
+SLOW_FIRST = ("tests/test_workflow.py::test_reproduce_runs_a_changed_notebook_once_and_publishes",)
+
+
 def pytest_collection_modifyitems(config, items):
+    items.sort(key=lambda item: not item.nodeid.startswith(SLOW_FIRST))   # stable: else as is
     if config.getoption("--check-dir"):
         return
     skip = pytest.mark.skip(reason="needs make check (--check-dir)")
